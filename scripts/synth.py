@@ -1,0 +1,36 @@
+#!/usr/bin/env python3
+"""make synth: Yosys synth_intel_alm -family cyclonev on every synthesisable
+core of rtl/manifest.toml; writes build/synth/resources.{md,json} and prints
+the table."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from concurrent.futures import ThreadPoolExecutor
+
+from torqueloop import eda
+from torqueloop.hdl import load_manifest
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("cores", nargs="*", help="only these cores (default: all with synth = true)")
+    ap.add_argument("-j", "--jobs", type=int, default=2)
+    args = ap.parse_args()
+    cores = load_manifest()
+    chosen = [cores[n] for n in args.cores] if args.cores else [c for c in cores.values() if c.synth]
+    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        rows = list(pool.map(eda.synth_cyclonev, chosen))
+    md = eda.write_synth_table(rows)
+    print(md.read_text())
+    print(f"[synth] table written to {md.relative_to(eda.REPO_ROOT)} (and resources.json)")
+    bad = [r["core"] for r in rows if "error" in r]
+    for r in rows:
+        if "error" in r:
+            print(f"[synth] {r['core']} failed:\n{r['error']}", file=sys.stderr)
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
