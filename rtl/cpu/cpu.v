@@ -1,0 +1,250 @@
+`default_nettype none
+// torqueloop CPU: RV32IM + Zicsr, machine mode only, multi-cycle with the
+// next instruction fetch overlapped with the completing cycle.
+//
+// Port contract (shared with the SoC in rtl/soc): instruction and data bus
+// with the same handshake.  The master holds *_req and the request fields
+// stable until the slave pulses *_ack for one cycle; *_rdata and *_err are
+// valid with *_ack.  A slave acks at the earliest in the cycle after it
+// first sees *_req and must not start a new transfer in its ack cycle
+// (the CPU may keep *_req high through the ack cycle and into the next
+// request).  Any number of wait states works.  Reset is synchronous, active
+// high; interrupt lines are levels synchronous to clk.
+//
+// Control (see docs/cpu.md for the cycle counts):
+//   FETCH  : hold the instruction request (address pc) until ack.
+//   EXEC   : decode the instruction register, read rs1/rs2, ALU / branch /
+//            CSR / trap decision.  Single-cycle instructions complete here.
+//            Loads and stores raise dbus_req in this cycle already.
+//   MEM    : wait for dbus_ack (load write-back, or access fault).
+//   MULDIV : wait for the multiply/divide unit.
+// In the cycle an instruction completes (or traps), pc takes the next pc and
+// the fetch of the next instruction is requested in that same cycle, so a
+// zero-wait-state bus gives 2 cycles per ALU instruction.
+// Interrupts are taken in EXEC before the instruction executes (mepc = its
+// pc); multi-cycle instructions run to completion first, so they are never
+// half-done when a trap is taken.
+module cpu #(
+    parameter [31:0] RESET_PC = 32'h0000_0000,
+    parameter [31:0] HART_ID  = 32'd0
+) (
+    input  wire        clk,
+    input  wire        rst,
+    output wire        ibus_req,
+    output wire [31:0] ibus_addr,
+    input  wire        ibus_ack,
+    input  wire [31:0] ibus_rdata,
+    input  wire        ibus_err,
+    output wire        dbus_req,
+    output wire [31:0] dbus_addr,
+    output wire        dbus_we,
+    output wire [3:0]  dbus_be,
+    output wire [31:0] dbus_wdata,
+    input  wire        dbus_ack,
+    input  wire [31:0] dbus_rdata,
+    input  wire        dbus_err,
+    input  wire        irq_timer,
+    input  wire        irq_external,
+    input  wire        irq_software,
+    input  wire [63:0] mtime,
+    output wire        retire
+);
+    localparam [1:0] S_FETCH = 2'd0, S_EXEC = 2'd1, S_MEM = 2'd2, S_MULDIV = 2'd3;
+    reg [1:0]  state;
+    reg [31:0] pc;
+
+    wire in_fetch = state == S_FETCH;
+    wire in_exec  = state == S_EXEC;
+    wire in_mem   = state == S_MEM;
+    wire in_md    = state == S_MULDIV;
+
+    // ---- fetch -------------------------------------------------------------
+    wire        complete;
+    reg  [31:0] next_pc;
+    wire [31:0] insn;
+    wire        fetched, fetch_fault;
+    cpu_fetch u_fetch (
+        .clk(clk), .launch(complete && !rst), .next_pc(next_pc),
+        .waiting(in_fetch && !rst), .pc(pc),
+        .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
+        .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
+        .insn(insn), .fetched(fetched), .fault(fetch_fault)
+    );
+
+    // ---- decode and register file --------------------------------------------
+    wire [4:0]  rd, rs1, rs2;
+    wire [2:0]  funct3;
+    wire [31:0] imm;
+    wire is_lui, is_auipc, is_jal, is_jalr, is_branch, is_load, is_store;
+    wire alu_use_imm, alu_alt, is_muldiv, is_csr, csr_writes, is_ecall, is_ebreak;
+    wire is_mret, writes_rd, dec_illegal;
+    cpu_decode u_decode (
+        .insn(insn), .rd(rd), .rs1(rs1), .rs2(rs2), .funct3(funct3), .imm(imm),
+        .is_lui(is_lui), .is_auipc(is_auipc), .is_jal(is_jal), .is_jalr(is_jalr),
+        .is_branch(is_branch), .is_load(is_load), .is_store(is_store),
+        .alu_use_imm(alu_use_imm), .alu_alt(alu_alt), .is_muldiv(is_muldiv),
+        .is_csr(is_csr), .csr_writes(csr_writes), .is_ecall(is_ecall),
+        .is_ebreak(is_ebreak), .is_mret(is_mret),
+        .writes_rd(writes_rd), .illegal(dec_illegal)
+    );
+
+    wire        rf_we;
+    reg  [31:0] rf_wdata;
+    wire [31:0] rs1_val, rs2_val;
+    cpu_regfile u_regfile (
+        .clk(clk), .we(rf_we), .waddr(rd), .wdata(rf_wdata),
+        .raddr1(rs1), .rdata1(rs1_val), .raddr2(rs2), .rdata2(rs2_val)
+    );
+
+    // ---- execute -------------------------------------------------------------
+    wire [31:0] alu_result;
+    wire        branch_taken;
+    cpu_alu u_alu (
+        .funct3(funct3), .alt(alu_alt), .a(rs1_val), .b(alu_use_imm ? imm : rs2_val),
+        .result(alu_result), .cmp_a(rs1_val), .cmp_b(rs2_val), .branch_taken(branch_taken)
+    );
+
+    wire [31:0] pc_plus4 = pc + 32'd4;
+    wire [31:0] pc_imm   = pc + imm;          // JAL, branches, AUIPC
+    wire [31:0] eff_addr = rs1_val + imm;     // loads, stores (S-imm), JALR
+    wire        jumps    = is_jal || is_jalr || (is_branch && branch_taken);
+    wire [31:0] jump_target = is_jalr ? {eff_addr[31:1], 1'b0} : pc_imm;
+    // Without the C extension every target must be 4-byte aligned; bit 0 is
+    // already zero for all three kinds of jump.
+    wire        target_misaligned = jumps && jump_target[1];
+
+    // ---- load/store ------------------------------------------------------------
+    wire        mem_misaligned;
+    wire [31:0] load_data;
+    cpu_lsu u_lsu (
+        .funct3(funct3), .off(eff_addr[1:0]), .store_data(rs2_val),
+        .misaligned(mem_misaligned), .be(dbus_be), .wdata(dbus_wdata),
+        .rdata(dbus_rdata), .load_data(load_data)
+    );
+
+    // ---- CSRs and traps -----------------------------------------------------------
+    wire [31:0] csr_rdata, trap_target, mepc;
+    wire        csr_illegal, irq_pending;
+    wire [3:0]  irq_code;
+    reg         trap, trap_irq;
+    reg  [3:0]  trap_code;
+    reg  [31:0] trap_tval;
+
+    wire ex_illegal = dec_illegal || (is_csr && csr_illegal);
+    always @(*) begin
+        trap      = 1'b0;
+        trap_irq  = 1'b0;
+        trap_code = 4'd0;
+        trap_tval = 32'd0;
+        case (state)
+            S_FETCH: if (fetch_fault) begin
+                trap = 1'b1; trap_code = 4'd1; trap_tval = pc;
+            end
+            S_EXEC: begin
+                trap = 1'b1;
+                if (irq_pending) begin
+                    trap_irq = 1'b1; trap_code = irq_code;
+                end else if (ex_illegal) begin
+                    trap_code = 4'd2; trap_tval = insn;
+                end else if (is_ecall) begin
+                    trap_code = 4'd11;
+                end else if (is_ebreak) begin
+                    trap_code = 4'd3; trap_tval = pc;
+                end else if (target_misaligned) begin
+                    trap_code = 4'd0; trap_tval = jump_target;
+                end else if ((is_load || is_store) && mem_misaligned) begin
+                    trap_code = is_store ? 4'd6 : 4'd4; trap_tval = eff_addr;
+                end else begin
+                    trap = 1'b0;
+                end
+            end
+            S_MEM: if (dbus_ack && dbus_err) begin
+                trap = 1'b1; trap_code = is_store ? 4'd7 : 4'd5; trap_tval = eff_addr;
+            end
+            default: ;
+        endcase
+    end
+
+    wire exec_go  = in_exec && !trap;
+    wire exec_mem = exec_go && (is_load || is_store);
+    wire exec_md  = exec_go && is_muldiv;
+
+    cpu_csr #(.HART_ID(HART_ID)) u_csr (
+        .clk(clk), .rst(rst),
+        .addr(insn[31:20]), .op(funct3[1:0]),
+        .src(funct3[2] ? {27'd0, rs1} : rs1_val),
+        .writes(csr_writes), .commit(exec_go && is_csr),
+        .rdata(csr_rdata), .illegal(csr_illegal),
+        .trap(trap && !rst), .trap_irq(trap_irq), .trap_code(trap_code), .trap_pc(pc),
+        .trap_tval(trap_tval), .trap_target(trap_target),
+        .mret(exec_go && is_mret), .mepc_out(mepc),
+        .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
+        .irq_pending(irq_pending), .irq_code(irq_code),
+        .retire(retire), .mtime(mtime)
+    );
+
+    // ---- multiply / divide ------------------------------------------------------
+    wire        md_done;
+    wire [31:0] md_result;
+    /* verilator lint_off PINCONNECTEMPTY */
+    cpu_muldiv u_muldiv (
+        .clk(clk), .rst(rst), .start(exec_md && !rst), .funct3(funct3),
+        .a(rs1_val), .b(rs2_val), .busy(), .done(md_done), .result(md_result)
+    );
+    /* verilator lint_on PINCONNECTEMPTY */
+
+    // ---- completion, write-back, next pc --------------------------------------------
+    assign complete = trap || (exec_go && !is_load && !is_store && !is_muldiv) ||
+                      (in_mem && dbus_ack) || (in_md && md_done);
+    assign retire   = complete && !trap && !rst;
+    assign rf_we    = retire && writes_rd;
+
+    always @(*) begin
+        if (trap)
+            next_pc = trap_target;
+        else if (in_exec && is_mret)
+            next_pc = mepc;
+        else if (in_exec && jumps)
+            next_pc = jump_target;
+        else
+            next_pc = pc_plus4;
+    end
+
+    always @(*) begin
+        if (in_mem)
+            rf_wdata = load_data;
+        else if (in_md)
+            rf_wdata = md_result;
+        else if (is_lui)
+            rf_wdata = imm;
+        else if (is_auipc)
+            rf_wdata = pc_imm;
+        else if (is_jal || is_jalr)
+            rf_wdata = pc_plus4;
+        else if (is_csr)
+            rf_wdata = csr_rdata;
+        else
+            rf_wdata = alu_result;
+    end
+
+    assign dbus_req  = !rst && (exec_mem || in_mem);
+    assign dbus_addr = eff_addr;
+    assign dbus_we   = is_store;
+
+    always @(posedge clk) begin
+        if (rst) begin
+            state <= S_FETCH;
+            pc    <= RESET_PC;
+        end else if (complete) begin
+            state <= S_FETCH;
+            pc    <= next_pc;
+        end else begin
+            case (state)
+                S_FETCH: if (fetched) state <= S_EXEC;
+                S_EXEC:  state <= exec_mem ? S_MEM : S_MULDIV;
+                default: ;
+            endcase
+        end
+    end
+endmodule
+`default_nettype wire
