@@ -120,7 +120,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     load_config(args.out, divider=div)  # what we write must be what the readers accept
     for n, a in cfg.axes.items():
         print(f"[{n}] step 8: {a.pwm_freq_hz:.6g} Hz -> count_max {a.count_max} -> {a.achieved_hz:.6g} Hz "
-              f"({a.freq_error_pct:+.3f} %), PW0 {a.pw0_counts} / PW_F {a.pw_max_counts} counts of {1 << args.pwm_bits}")
+              f"({a.freq_error_pct:+.3f} %), PW0 {a.pw0_counts} / PW_F {a.pw_max_counts} counts of {(1 << args.pwm_bits) - 1}")
     print(f"wrote {args.out}")
     return EXIT_OK
 

@@ -30,6 +30,7 @@ SCHEMA = "torqueloop-characterization"
 SCHEMA_VERSION = 1
 CLK_HZ = 50_000_000  # DE0-CV CLOCK_50
 PWM_BITS = 10  # gamma = 2^10, paper eq. (2)
+DIV_BITS = 16  # freq_div's divisor register width (its DIV_BITS default)
 
 _AXIS_RE = re.compile(r"^[a-z][a-z0-9_]{0,15}$")
 
@@ -69,25 +70,37 @@ def _eq4_count_max(f_motor_hz: float, clk_hz: int, pwm_bits: int) -> int:
     return max(1, int(math.floor(clk_hz / (f_motor_hz * (1 << pwm_bits)) + 0.5)))
 
 
-def _eq4_achieved_hz(count_max: int, clk_hz: int, pwm_bits: int) -> float:
-    return clk_hz / (count_max * (1 << pwm_bits))
+def _carrier_hz(count_max: int, clk_hz: int, pwm_bits: int) -> float:
+    # pwm_torque makes one carrier period from 2^bits - 1 ticks (docs/pwm_torque.md)
+    return clk_hz / (count_max * ((1 << pwm_bits) - 1))
 
 
-# Used until the frequency-divider core's reference model is available; the
-# file records which model produced its numbers.
-PAPER_EQ4 = FunctionDivider("paper eq. (4), nearest count (torqueloop.characterize fallback)", _eq4_count_max, _eq4_achieved_hz)
+# Used only while torqueloop.ref.freq_div is absent; the file records which
+# model produced its numbers.
+PAPER_EQ4 = FunctionDivider(
+    "paper eq. (4) with a (2^bits - 1)-tick period (torqueloop.characterize fallback)",
+    _eq4_count_max, _carrier_hz,
+)
 
 
 def default_divider() -> DividerModel:
-    """The frequency-divider core's reference model if it exists, else eq. (4)."""
+    """The frequency-divider core's reference model (torqueloop.ref.freq_div):
+    its eq. (4) Count_max and the carrier frequency pwm_torque then produces."""
     try:
-        from torqueloop.ref import freq_div  # type: ignore[attr-defined]
+        from torqueloop.ref import freq_div
     except ImportError:
         return PAPER_EQ4
-    adapt = getattr(freq_div, "characterize_divider", None)
-    if callable(adapt):
-        return adapt()
-    return PAPER_EQ4
+    return FunctionDivider(
+        "torqueloop.ref.freq_div: count_max (eq. 4), carrier_hz",
+        lambda f, clk, bits: freq_div.count_max(f, clk, bits),
+        lambda n, clk, bits: freq_div.carrier_hz(n, clk, bits),
+    )
+
+
+def pwm_full_scale(pwm_bits: int) -> int:
+    """M: duty counts per carrier period (pwm_torque: a period is 2^bits - 1
+    ticks, duty M is constantly on; docs/pwm_torque.md)."""
+    return (1 << pwm_bits) - 1
 
 
 # ---------------------------------------------------------------- the file
@@ -105,7 +118,7 @@ class AxisConfig:
     freq_error_pct: float
     """100 (achieved - chosen) / chosen."""
     pw0_counts: int
-    """eq. (1) dead zone PW0 in PWM counts (of 2^pwm_bits per period)."""
+    """eq. (1) dead zone PW0 in duty counts (of 2^pwm_bits - 1 per period)."""
     pw_max_counts: int
     """eq. (1) PW_F in counts: where the fitted line reaches tau_max."""
     tau_max_nm: float
@@ -150,11 +163,11 @@ def axis_config(
     f = c.freq_hz
     cm = div.count_max(f, clk_hz, pwm_bits)
     ach = div.achieved_hz(cm, clk_hz, pwm_bits)
-    full = 1 << pwm_bits
+    full = pwm_full_scale(pwm_bits)
     # PW0 rounded up: the first non-zero command must already move the motor
     # (eq. 1 maps it to PW0); one count too many is 0.1 % of torque.
     pw0 = int(math.ceil(lin.pw0_pct / 100.0 * full - 1e-9))
-    pwmax = min(full - 1, int(math.floor(lin.pwf_pct / 100.0 * full + 0.5)))
+    pwmax = min(full, int(math.floor(lin.pwf_pct / 100.0 * full + 0.5)))
     if pw0 >= pwmax:
         raise ValueError(f"PW0 {pw0} counts is not below PW_F {pwmax} counts: no usable torque range")
 
@@ -182,7 +195,8 @@ def axis_config(
     inputs = [inp(result.freq_sweep.source)] + [
         inp(a.duty_sweep.source) for a in result.attempts if a.duty_sweep is not None
     ]
-    checks = {ch.name: _sig(ch.value) for ch in lin.checks}
+    # fixed decimals: values near zero must not carry platform-dependent noise
+    checks = {ch.name: round(float(ch.value), 6) + 0.0 for ch in lin.checks}
     return AxisConfig(
         motor=result.freq_sweep.motor,
         pwm_freq_hz=_sig(f),
@@ -308,7 +322,7 @@ def load_config(
 
     ``source``: a path, JSON text, or an already parsed mapping.  Checks the
     schema and version, every field's type, the ranges the RTL needs
-    (1 <= count_max < 2^32, 0 <= pw0_counts < pw_max_counts < 2^pwm_bits),
+    (1 <= count_max < 2^DIV_BITS, 0 <= pw0_counts < pw_max_counts <= 2^pwm_bits - 1),
     and that achieved_hz and freq_error_pct are what count_max really gives
     (so a hand-edited count cannot silently disagree with its frequency);
     ``|freq_error_pct| <= max_freq_error_pct``.
@@ -358,12 +372,12 @@ def load_config(
         _typed(w, a, _AXIS_FIELDS)
         if a["pwm_freq_hz"] <= 0:
             raise ConfigError(f"{w}pwm_freq_hz: must be > 0, got {a['pwm_freq_hz']}")
-        if not 1 <= a["count_max"] < (1 << 32):
-            raise ConfigError(f"{w}count_max: must be 1 .. 2^32-1, got {a['count_max']}")
-        full = 1 << bits
-        if not 0 <= a["pw0_counts"] < a["pw_max_counts"] <= full - 1:
+        if not 1 <= a["count_max"] < (1 << DIV_BITS):
+            raise ConfigError(f"{w}count_max: must be 1 .. 2^{DIV_BITS}-1 (freq_div register), got {a['count_max']}")
+        full = pwm_full_scale(bits)
+        if not 0 <= a["pw0_counts"] < a["pw_max_counts"] <= full:
             raise ConfigError(
-                f"{w}pw0_counts/pw_max_counts: need 0 <= pw0 < pw_max <= {full - 1}, "
+                f"{w}pw0_counts/pw_max_counts: need 0 <= pw0 < pw_max <= {full}, "
                 f"got {a['pw0_counts']} / {a['pw_max_counts']}"
             )
         ach = div.achieved_hz(a["count_max"], clk, bits)
