@@ -1,0 +1,104 @@
+"""The register map (rtl/soc/regmap.toml) and its generated views."""
+
+from __future__ import annotations
+
+import subprocess
+import tomllib
+
+import pytest
+
+from torqueloop import regmap
+from torqueloop.hdl import REPO_ROOT
+
+
+def test_generated_files_are_up_to_date():
+    """A stale rtl/soc/regmap.vh, C header, regs.py or docs/registers.md fails here:
+    run `python scripts/gen_regmap.py` and commit."""
+    for rel, text in regmap.generate().items():
+        path = REPO_ROOT / rel
+        assert path.exists(), f"{rel} missing: run scripts/gen_regmap.py"
+        assert path.read_text() == text, f"{rel} is stale: run scripts/gen_regmap.py"
+
+
+def test_fixed_memory_map_matches_the_cpu_contract():
+    rm = regmap.load()
+    assert rm.region("BOOT_ROM").base == 0x0000_0000 and rm.region("BOOT_ROM").size == 4096
+    assert rm.region("RAM").base == 0x8000_0000
+    assert rm.region("PERIPH").base == 0x4000_0000
+    t = rm.block("TIMER")
+    assert t.base == 0x4000_0000
+    assert [(r.name, r.offset) for r in t.registers[:4]] == [
+        ("MTIME_LO", 0x0), ("MTIME_HI", 0x4), ("MTIMECMP_LO", 0x8), ("MTIMECMP_HI", 0xC)]
+
+
+def test_python_module_agrees_with_the_source():
+    from torqueloop import regs
+    rm = regmap.load()
+    table = {(r.block, r.name): r for r in regs.REGISTERS}
+    assert len(table) == sum(len(b.registers) for b in rm.blocks)
+    for b in rm.blocks:
+        for r in b.registers:
+            g = table[(b.name, r.name)]
+            assert g.addr == b.base + r.offset
+            assert g.reset == r.reset
+            assert g.rw_mask | g.ro_mask | g.w1c_mask | g.wo_mask == sum(f.mask for f in r.fields)
+
+
+def test_c_header_compiles_and_places_registers(tmp_path):
+    """The C header is valid C11 and its addresses are the map's (checked by the
+    compiler with static asserts, freestanding, as the firmware builds)."""
+    rm = regmap.load()
+    checks = []
+    for b in rm.blocks:
+        for r in b.registers:
+            checks.append(f"_Static_assert(TL_{b.name}_{r.name}_ADDR == {b.base + r.offset:#x}u, \"{b.name}.{r.name}\");")
+    src = tmp_path / "t.c"
+    src.write_text('#include "torqueloop_regs.h"\n' + "\n".join(checks)
+                   + "\nvoid f(void) { TL_GPIO_LEDR = TL_GPIO_LEDR_LEDR_MSK; }\n")
+    for cc in ("gcc", "riscv64-unknown-elf-gcc"):
+        proc = subprocess.run([cc, "-std=c11", "-ffreestanding", "-Wall", "-Wextra", "-Werror", "-c",
+                               "-I", str(REPO_ROOT / "firmware" / "include"), str(src), "-o",
+                               str(tmp_path / f"{cc}.o")], capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stderr
+
+
+def _load_text(text: str) -> regmap.RegMap:
+    return regmap.parse(tomllib.loads(text))
+
+
+_BASE = """
+[meta]
+name = "t"
+version = 1
+clk_hz = 1
+[[region]]
+name = "PERIPH"
+base = 0x4000_0000
+size = 0x8000
+"""
+
+
+@pytest.mark.parametrize("bad, why", [
+    ('[[block]]\nname="A"\nbase=0x4000_0000\n[[block.reg]]\nname="R"\noffset=0\n'
+     'field=[{name="X",bits=[3,0],access="rw"},{name="Y",bits=[4,3],access="rw"}]', "overlap"),
+    ('[[block]]\nname="A"\nbase=0x4000_0000\n[[block.reg]]\nname="R"\noffset=2\n'
+     'field=[{name="X",bits=[3,0],access="rw"}]', "offset"),
+    ('[[block]]\nname="A"\nbase=0x4000_0000\n[[block.reg]]\nname="R"\noffset=0\n'
+     'field=[{name="X",bits=[3,0],access="rw",reset=16}]', "fit"),
+    ('[[block]]\nname="A"\nbase=0x4000_0000\n[[block.reg]]\nname="R"\noffset=0\n'
+     'field=[{name="X",bits=[3,0],access="rx"}]', "access"),
+    ('[[block]]\nname="A"\nbase=0x5000_0000\n[[block.reg]]\nname="R"\noffset=0\n'
+     'field=[{name="X",bits=[3,0],access="rw"}]', "PERIPH"),
+    ('[[block]]\nname="A"\nbase=0x4000_0000\n[[block.reg]]\nname="R"\noffset=0\n'
+     'field=[{name="X",bits=[3,0],access="rw"}]\n[[block.reg]]\nname="S"\noffset=0\n'
+     'field=[{name="X",bits=[3,0],access="rw"}]', "offset"),
+])
+def test_checker_rejects_broken_maps(bad, why):
+    with pytest.raises(regmap.RegMapError, match=why):
+        _load_text(_BASE + bad)
+
+
+def test_ram_fits_the_device_with_room_to_spare():
+    """64 KiB is 64 of the 5CEBA4's 308 M10K blocks (1 KiB of data each in x32 mode)."""
+    ram = regmap.load().region("RAM").size
+    assert ram // 1024 <= 308 // 2
