@@ -64,6 +64,12 @@ module cpu_sim_top #(
 
     // ---- RAM: port A instruction fetch, port B data (or the loader in reset) ----
     reg [31:0] ram [0:RAM_WORDS-1];
+    // Zeroed like .bss expects, and so that no simulator reads X.
+    integer k;
+    initial begin
+        for (k = 0; k < RAM_WORDS; k = k + 1)
+            ram[k] = 32'd0;
+    end
     wire [31:0] i_off = ibus_addr - RAM_BASE;
     wire [31:0] d_off = dbus_addr - RAM_BASE;
     /* verilator lint_off UNUSEDSIGNAL */
@@ -148,8 +154,12 @@ module cpu_sim_top #(
     end
 
     // ---- tohost watch and counters ----------------------------------------------
+    // The store to tohost is accepted at one edge and retires in the ack cycle
+    // after it; the counters stop after that cycle so they include the store.
+    reg tohost_seen;
     always @(posedge clk) begin
         if (rst) begin
+            tohost_seen  <= 1'b0;
             tohost_hit   <= 1'b0;
             tohost_value <= 32'd0;
             cycles       <= 64'd0;
@@ -157,8 +167,10 @@ module cpu_sim_top #(
         end else if (!tohost_hit) begin
             cycles  <= cycles + 64'd1;
             instret <= instret + {63'd0, retire};
-            if (d_go && dbus_we && dbus_addr == tohost_addr && dbus_wdata != 32'd0) begin
-                tohost_hit   <= 1'b1;
+            if (tohost_seen)
+                tohost_hit <= 1'b1;
+            if (!tohost_seen && d_go && dbus_we && dbus_addr == tohost_addr && dbus_wdata != 32'd0) begin
+                tohost_seen  <= 1'b1;
                 tohost_value <= dbus_wdata;
             end
         end
