@@ -1,0 +1,145 @@
+"""The simulated characterisation bench, RTL side: freq_div + pwm_torque
+(char_bench_top) driven with Count_max and duty settings; the IBT-2 pins are
+watched and each setting's pin waveform over one whole PWM period is
+returned (times of every pin change).  torqueloop.characterize.simbench
+feeds those waveforms to the plant's dynamometer model.
+
+cocotb side: the ``capture`` test reads a job (JSON list of settings) from
+$CHAR_BENCH_JOB and writes the waveforms to $CHAR_BENCH_RESULT.
+pytest side: ``test_char_bench`` is the end-to-end check that a written
+characterisation configuration reproduces the chosen frequency and the dead
+zone on the PWM pins.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import cocotb
+import pytest
+from cocotb.clock import Clock
+from cocotb.simtime import get_sim_time
+from cocotb.triggers import ClockCycles, FallingEdge, First, ReadOnly, RisingEdge
+
+CLK_NS = 20  # CLOCK_50
+PINS = ("rpwm", "lpwm", "r_en", "l_en")
+
+
+def _pins(dut) -> tuple[int, ...]:
+    return tuple(int(getattr(dut, p).value) for p in PINS)
+
+
+def _now_ps() -> int:
+    return int(round(get_sim_time(unit="ps")))
+
+
+async def _one_period(dut) -> dict:
+    """Pin waveform from one period start to the next."""
+    await RisingEdge(dut.period_start)
+    await ReadOnly()
+    t0 = _now_ps()
+    segs: list[list[int]] = [[0, *_pins(dut)]]
+    while True:
+        await First(RisingEdge(dut.period_start), *(getattr(dut, p).value_change for p in PINS))
+        await ReadOnly()
+        t = _now_ps()
+        if t > t0 and int(dut.period_start.value) == 1:
+            break
+        p = _pins(dut)
+        if list(p) != segs[-1][1:]:
+            segs.append([t - t0, *p])
+    return {"period_ps": t - t0, "segments_ps": segs}
+
+
+@cocotb.test()
+async def capture(dut):
+    job = json.loads(Path(os.environ["CHAR_BENCH_JOB"]).read_text())
+    cocotb.start_soon(Clock(dut.clk, CLK_NS, unit="ns").start())
+    dut.rst.value = 1
+    dut.div_we.value = 0
+    dut.div_in.value = 0
+    dut.cmd.value = 0
+    dut.pw0.value = 0
+    dut.pw_max.value = 0
+    dut.enable.value = 0
+    await ClockCycles(dut.clk, 4)
+    await FallingEdge(dut.clk)
+    dut.rst.value = 0
+    dut.enable.value = 1
+    out = []
+    for k, s in enumerate(job):
+        # The divisor applies at once (the running period finishes at the new
+        # tick rate); the duty is double-buffered and taken at a period start
+        # from inputs at least PIPE_CLOCKS = 3 clocks old.  So: write, wait 4
+        # clocks, and record from the next period start to the one after.
+        await FallingEdge(dut.clk)
+        dut.div_in.value = s["count_max"]
+        dut.div_we.value = 1
+        dut.cmd.value = s["cmd"]
+        dut.pw0.value = s.get("pw0", 0)
+        dut.pw_max.value = s.get("pw_max", 1023)
+        await FallingEdge(dut.clk)
+        dut.div_we.value = 0
+        await ClockCycles(dut.clk, 4)
+        rec = await _one_period(dut)
+        assert int(dut.div.value) == s["count_max"], f"setting {k}: divisor register reads {int(dut.div.value)}"
+        out.append({**s, **rec})
+        dut._log.info(
+            "setting %d/%d: count_max %d cmd %d -> period %.1f us, %d pin changes",
+            k + 1, len(job), s["count_max"], s["cmd"], rec["period_ps"] / 1e6, len(rec["segments_ps"]),
+        )
+    Path(os.environ["CHAR_BENCH_RESULT"]).write_text(json.dumps(out))
+
+
+# ---------------------------------------------------------------- pytest entry
+
+
+def _paper_like_config(tmp_path: Path):
+    """A configuration the method writes from sweeps whose answers are known:
+    step-5 crossings at the paper's 450 Hz and 200 Hz, dead zones of 12 % and 8 %."""
+    import numpy as np
+
+    from torqueloop.characterize import (
+        BenchConstants, Sweep, Thresholds, axis_config, build_config, characterize_motor, write_config,
+    )
+    from torqueloop.characterize.config import default_divider
+
+    bench = BenchConstants(0.025, 90.0, 12.0)
+    axes = {}
+    for name, f_opt, tau_max, pw0 in (("x", 450.0, 2.4, 12.0), ("z", 200.0, 2.08, 8.0)):
+        f = np.arange(50.0, 501.0, 25.0)
+        t = tau_max / 2 * (1 + 0.3 * (f_opt - f) / f_opt)
+        fs = Sweep("frequency", name, bench, f, t, t, duty_pct=50.0, stall_torque_nm=tau_max)
+        d = np.arange(1.0, 100.0, 2.0)
+        ds = Sweep("duty", name, bench, d, np.maximum(0.0, tau_max * (d - pw0) / (100 - pw0)), 0.02 * d,
+                   freq_hz=f_opt)
+        axes[name] = axis_config(characterize_motor(fs, [ds]), divider=default_divider())
+    cfg = build_config(axes, Thresholds())
+    write_config(tmp_path / "cfg.json", cfg)
+    return cfg
+
+
+@pytest.mark.parametrize("sim", ["verilator"])
+def test_char_bench(sim, tmp_path):
+    """A written configuration's Count_max, PW0 and PW_F on the RTL's pins give
+    the chosen frequency within the error the file states, and the dead zone."""
+    from torqueloop.characterize import load_config
+    from torqueloop.characterize.simbench import check_config_on_pins
+
+    _paper_like_config(tmp_path)
+    cfg = load_config(tmp_path / "cfg.json")
+    for name, a in cfg.axes.items():
+        got = check_config_on_pins(cfg, name, sim=sim, work=tmp_path / f"pins_{name}")
+        f_pins = got["freq_hz"]
+        # the pins give exactly the divider's carrier ...
+        assert f_pins == pytest.approx(a.achieved_hz, rel=1e-6), (name, got)
+        assert got["freq_hz_full"] == pytest.approx(a.achieved_hz, rel=1e-6), (name, got)
+        # ... which is the chosen frequency within the error the file states
+        err_pct = 100.0 * (f_pins - a.pwm_freq_hz) / a.pwm_freq_hz
+        assert abs(err_pct - a.freq_error_pct) < 1e-3, (name, err_pct, a.freq_error_pct)
+        assert abs(err_pct) <= 0.6, (name, err_pct)
+        # the smallest command lands on the dead-zone edge, the largest on PW_F
+        assert a.pw0_counts <= got["duty_counts_cmd1"] <= a.pw0_counts + 1, (name, got)
+        assert got["duty_counts_full"] == a.pw_max_counts, (name, got)

@@ -1,0 +1,126 @@
+"""The simulated characterisation bench: the lab's sweeps with no hardware.
+
+Two pin sources feed the same measurement:
+
+* ``"rtl"`` - the project's own frequency divider and PWM block
+  (rtl/motion/freq_div, rtl/motion/pwm_torque, wrapped in
+  tb/char_bench/char_bench_top.v) run in a cocotb simulation; the IBT-2 pin
+  waveform of one whole period per setting is captured;
+* ``"model"`` - the same waveform computed from the cores' documented
+  behaviour (a period of Count_max x (2^N - 1) clocks, RPWM high for
+  duty x Count_max clocks), for quick runs; the RTL source checks it.
+
+The RTL part lives here; the dynamometer part (pin waveform in, force and
+current out) comes from the plant (sim_models).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal, Sequence
+
+from torqueloop.hdl import REPO_ROOT
+
+from .config import CLK_HZ, PWM_BITS, Config, pwm_full_scale
+
+TB_DIR = REPO_ROOT / "tb" / "char_bench"
+CLK_PS = 20_000  # CLOCK_50
+PinSource = Literal["rtl", "model"]
+
+
+@dataclass(frozen=True)
+class PinWaveform:
+    """IBT-2 pins over one PWM period: ``segments`` are (start time s, pins)
+    with pins = (rpwm, lpwm, r_en, l_en), each held until the next start;
+    the waveform repeats with ``period_s``."""
+
+    count_max: int
+    duty_counts: int
+    period_s: float
+    segments: tuple[tuple[float, tuple[int, int, int, int]], ...]
+
+    @property
+    def freq_hz(self) -> float:
+        return 1.0 / self.period_s
+
+    @property
+    def high_s(self) -> float:
+        """Time RPWM is high in the period."""
+        t = 0.0
+        for k, (start, pins) in enumerate(self.segments):
+            end = self.segments[k + 1][0] if k + 1 < len(self.segments) else self.period_s
+            if pins[0]:
+                t += end - start
+        return t
+
+
+def model_waveform(count_max: int, duty_counts: int, clk_hz: int = CLK_HZ, pwm_bits: int = PWM_BITS) -> PinWaveform:
+    """What freq_div + pwm_torque make for a forward duty (docs/pwm_torque.md):
+    a period of M ticks of Count_max clocks, RPWM high for ``duty`` ticks."""
+    m = pwm_full_scale(pwm_bits)
+    tick_s = max(1, count_max) / clk_hz
+    period = m * tick_s
+    on, off = (1, 0, 1, 1), (0, 0, 1, 1)
+    if duty_counts <= 0:
+        segs: tuple = ((0.0, off),)
+    elif duty_counts >= m:
+        segs = ((0.0, on),)
+    else:
+        segs = ((0.0, on), (duty_counts * tick_s, off))
+    return PinWaveform(count_max, duty_counts, period, segs)
+
+
+def _rtl_waveforms(settings: Sequence[dict], sim: str, work: Path) -> list[dict]:
+    from torqueloop.simrun import run
+
+    work.mkdir(parents=True, exist_ok=True)
+    job, result = work / "job.json", work / "result.json"
+    job.write_text(json.dumps(list(settings)))
+    result.unlink(missing_ok=True)
+    if str(TB_DIR) not in sys.path:
+        sys.path.insert(0, str(TB_DIR))  # the cocotb module is found through sys.path
+    run(
+        "pwm_torque", sim, "test_char_bench",
+        toplevel="char_bench_top",
+        extra_verilog=[REPO_ROOT / "rtl" / "motion" / "freq_div.v", TB_DIR / "char_bench_top.v"],
+        testcase="capture",
+        extra_env={"CHAR_BENCH_JOB": str(job.resolve()), "CHAR_BENCH_RESULT": str(result.resolve())},
+    )
+    return json.loads(result.read_text())
+
+
+def rtl_waveforms(settings: Sequence[tuple[int, int]], sim: str = "verilator", work: Path | None = None,
+                  pw0: int = 0, pw_max: int | None = None) -> list[PinWaveform]:
+    """Pin waveforms of the RTL for (count_max, cmd) settings.  With the
+    default pw0 = 0 and pw_max = M the command is the duty in counts."""
+    m = pwm_full_scale(PWM_BITS)
+    pm = m if pw_max is None else pw_max
+    work = work or (REPO_ROOT / "build" / "char_bench" / sim)
+    raw = _rtl_waveforms([{"count_max": n, "cmd": c, "pw0": pw0, "pw_max": pm} for n, c in settings], sim, work)
+    out = []
+    for r in raw:
+        segs = tuple((s[0] * 1e-12, (s[1], s[2], s[3], s[4])) for s in r["segments_ps"])
+        w = PinWaveform(r["count_max"], 0, r["period_ps"] * 1e-12, segs)
+        # duty in counts as the pins show it: high time over one tick (Count_max clocks)
+        duty = round(w.high_s / (r["count_max"] * CLK_PS * 1e-12))
+        out.append(PinWaveform(r["count_max"], duty, w.period_s, segs))
+    return out
+
+
+def check_config_on_pins(cfg: Config, axis: str, sim: str = "icarus", work: Path | None = None) -> dict[str, float]:
+    """Program an axis's Count_max, PW0 and PW_F from a configuration into
+    the RTL and measure its pins: carrier frequency, and the duty counts of
+    the smallest (cmd 1) and the full (cmd M) command."""
+    a = cfg.axes[axis]
+    m = pwm_full_scale(cfg.pwm_bits)
+    wf = rtl_waveforms([(a.count_max, 1), (a.count_max, m)], sim=sim, work=work,
+                       pw0=a.pw0_counts, pw_max=a.pw_max_counts)
+    return {
+        "freq_hz": wf[0].freq_hz,
+        "freq_hz_full": wf[1].freq_hz,
+        "duty_counts_cmd1": wf[0].duty_counts,
+        "duty_counts_full": wf[1].duty_counts,
+    }
