@@ -20,11 +20,15 @@ import json
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal, Sequence
+from typing import Callable, Literal, Sequence
+
+import numpy as np
 
 from torqueloop.hdl import REPO_ROOT
 
 from .config import CLK_HZ, PWM_BITS, Config, pwm_full_scale
+from .data import BenchConstants, Sweep, read_sweep, write_sweep
+from .method import MotorResult, Thresholds, characterize_motor
 
 TB_DIR = REPO_ROOT / "tb" / "char_bench"
 CLK_PS = 20_000  # CLOCK_50
@@ -124,3 +128,116 @@ def check_config_on_pins(cfg: Config, axis: str, sim: str = "icarus", work: Path
         "duty_counts_cmd1": wf[0].duty_counts,
         "duty_counts_full": wf[1].duty_counts,
     }
+
+
+# ---------------------------------------------------------------- the sweeps
+
+
+@dataclass(frozen=True)
+class Reading:
+    """What the lab writes down at one setting."""
+
+    force_n: float
+    current_a: float
+    current_std_a: float
+
+
+@dataclass(frozen=True)
+class SweepPlan:
+    """The paper's sweeps (section VI: 50-500 Hz at 12 V; duty 1-99 %)."""
+
+    freqs_hz: tuple[float, ...] = tuple(float(f) for f in range(50, 501, 25))
+    duty_pcts: tuple[float, ...] = (1.0, *(float(d) for d in range(3, 100, 3)))
+    wheel_radius_m: float = 0.025
+    theta_deg: float = 90.0
+    supply_v: float = 12.0
+
+
+Measure = Callable[[PinWaveform], Reading]
+
+
+def _waveforms(settings: list[tuple[int, int]], source: PinSource, sim: str, work: Path) -> list[PinWaveform]:
+    if source == "rtl":
+        return rtl_waveforms(settings, sim=sim, work=work)
+    return [model_waveform(n, c) for n, c in settings]
+
+
+def _progress(msg: str) -> None:
+    print(f"[simbench] {msg}", flush=True)
+
+
+def record_frequency_sweep(measure: Measure, plan: SweepPlan, motor: str, source: PinSource = "model",
+                           sim: str = "verilator", work: Path | None = None) -> Sweep:
+    """Steps 2-4 on the simulated bench: the stall reading (duty M, constantly
+    on) and the 50 % sweep.  50 % of the 1023-count period is not a whole
+    count: 512 counts (50.05 %) is used and written as the sweep's duty."""
+    from torqueloop.ref import freq_div
+
+    m = pwm_full_scale(PWM_BITS)
+    half = (m + 1) // 2
+    counts = [freq_div.count_max(f, CLK_HZ, PWM_BITS) for f in plan.freqs_hz]
+    settings = [(counts[0], m)] + [(n, half) for n in counts]
+    _progress(f"{motor}: frequency sweep, {len(counts)} frequencies + stall, pins from {source}")
+    wfs = _waveforms(settings, source, sim, (work or REPO_ROOT / "build" / "char_bench") / f"{motor}_freq")
+    rd = [measure(w) for w in wfs]
+    bench = BenchConstants(plan.wheel_radius_m, plan.theta_deg, plan.supply_v)
+    k = float(bench.torque_nm(1.0))
+    return Sweep(
+        "frequency", motor, bench,
+        x=np.array([w.freq_hz for w in wfs[1:]]),
+        torque_nm=np.array([r.force_n * k for r in rd[1:]]),
+        current_a=np.array([r.current_a for r in rd[1:]]),
+        current_std_a=np.array([r.current_std_a for r in rd[1:]]),
+        duty_pct=100.0 * half / m,
+        stall_torque_nm=rd[0].force_n * k, stall_current_a=rd[0].current_a,
+        force_given=True,
+    )
+
+
+def record_duty_sweep(measure: Measure, plan: SweepPlan, motor: str, freq_hz: float,
+                      source: PinSource = "model", sim: str = "verilator", work: Path | None = None) -> Sweep:
+    """Step 6 on the simulated bench at the board frequency nearest ``freq_hz``."""
+    from torqueloop.ref import freq_div
+
+    m = pwm_full_scale(PWM_BITS)
+    n = freq_div.count_max(freq_hz, CLK_HZ, PWM_BITS)
+    duties = sorted({max(1, min(m - 1, int(round(d / 100.0 * m)))) for d in plan.duty_pcts})
+    _progress(f"{motor}: duty sweep at {freq_hz:.4g} Hz (count_max {n}), {len(duties)} duties, pins from {source}")
+    wfs = _waveforms([(n, d) for d in duties], source, sim,
+                     (work or REPO_ROOT / "build" / "char_bench") / f"{motor}_duty_{n}")
+    rd = [measure(w) for w in wfs]
+    bench = BenchConstants(plan.wheel_radius_m, plan.theta_deg, plan.supply_v)
+    k = float(bench.torque_nm(1.0))
+    return Sweep(
+        "duty", motor, bench,
+        x=np.array([100.0 * w.duty_counts / m for w in wfs]),
+        torque_nm=np.array([r.force_n * k for r in rd]),
+        current_a=np.array([r.current_a for r in rd]),
+        current_std_a=np.array([r.current_std_a for r in rd]),
+        freq_hz=wfs[0].freq_hz,
+        force_given=True,
+    )
+
+
+def run_bench(measure: Measure, out_dir: Path, motor: str, plan: SweepPlan = SweepPlan(),
+              th: Thresholds = Thresholds(), source: PinSource = "model", sim: str = "verilator",
+              max_duty_sweeps: int = 4) -> MotorResult:
+    """A lab's session on the simulated bench: record the frequency sweep,
+    ask the method where to record a duty sweep, record it, repeat until the
+    method passes, fails, or ``max_duty_sweeps`` were recorded.  Every sweep
+    is written to ``out_dir`` as the lab's CSV files."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    fs = record_frequency_sweep(measure, plan, motor, source, sim)
+    fpath = out_dir / "freq_sweep.csv"
+    write_sweep(fpath, fs, comment=f"simulated bench ({source} pins), motor {motor}")
+    fs = read_sweep(fpath)  # the method reads what a lab would hand it
+    duty: list[Sweep] = []
+    while True:
+        r = characterize_motor(fs, duty, th)
+        if r.status != "need_duty_sweep" or len(duty) >= max_duty_sweeps:
+            return r
+        assert r.next_freq_hz is not None
+        ds = record_duty_sweep(measure, plan, motor, r.next_freq_hz, source, sim)
+        dpath = out_dir / f"duty_sweep_{ds.freq_hz:.0f}hz.csv"
+        write_sweep(dpath, ds, comment=f"simulated bench ({source} pins), motor {motor}")
+        duty.append(read_sweep(dpath))
