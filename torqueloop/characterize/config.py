@@ -10,8 +10,9 @@ the firmware/RTL build call it and get either a validated :class:`Config`
 or a :class:`ConfigError` naming the field and the reason.
 
 The divider arithmetic (eq. 4 and the frequency it really produces) is a
-dependency, :class:`DividerModel`, so that the numbers written here are the
-ones the frequency-divider core's own reference model computes.
+dependency, :class:`DividerModel`; the default is the frequency-divider
+core's own reference model (torqueloop.ref.freq_div), so the numbers
+written here are the ones the RTL produces.
 """
 
 from __future__ import annotations
@@ -24,13 +25,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping, Protocol
 
+from torqueloop.ref import freq_div
+
 from .method import MotorResult, Thresholds
 
 SCHEMA = "torqueloop-characterization"
 SCHEMA_VERSION = 1
 CLK_HZ = 50_000_000  # DE0-CV CLOCK_50
 PWM_BITS = 10  # gamma = 2^10, paper eq. (2)
-DIV_BITS = 16  # freq_div's divisor register width (its DIV_BITS default)
+DIV_BITS = freq_div.FreqDivParams().div_bits  # the divisor register width
 
 _AXIS_RE = re.compile(r"^[a-z][a-z0-9_]{0,15}$")
 
@@ -64,35 +67,12 @@ class FunctionDivider:
         return float(self.achieved_hz_fn(count_max, clk_hz, pwm_bits))
 
 
-def _eq4_count_max(f_motor_hz: float, clk_hz: int, pwm_bits: int) -> int:
-    # eq. (2)-(4): f_pwm = f_motor * 2^bits, Count_max = T_pwm / T_FPGA = clk / f_pwm,
-    # rounded to the nearest whole clock count (an integer divider can do no better).
-    return max(1, int(math.floor(clk_hz / (f_motor_hz * (1 << pwm_bits)) + 0.5)))
-
-
-def _carrier_hz(count_max: int, clk_hz: int, pwm_bits: int) -> float:
-    # pwm_torque makes one carrier period from 2^bits - 1 ticks (docs/pwm_torque.md)
-    return clk_hz / (count_max * ((1 << pwm_bits) - 1))
-
-
-# Used only while torqueloop.ref.freq_div is absent; the file records which
-# model produced its numbers.
-PAPER_EQ4 = FunctionDivider(
-    "paper eq. (4) with a (2^bits - 1)-tick period (torqueloop.characterize fallback)",
-    _eq4_count_max, _carrier_hz,
-)
-
-
 def default_divider() -> DividerModel:
     """The frequency-divider core's reference model (torqueloop.ref.freq_div):
     its eq. (4) Count_max and the carrier frequency pwm_torque then produces."""
-    try:
-        from torqueloop.ref import freq_div
-    except ImportError:
-        return PAPER_EQ4
     return FunctionDivider(
         "torqueloop.ref.freq_div: count_max (eq. 4), carrier_hz",
-        lambda f, clk, bits: freq_div.count_max(f, clk, bits),
+        lambda f, clk, bits: freq_div.count_max(f, clk, bits, DIV_BITS),
         lambda n, clk, bits: freq_div.carrier_hz(n, clk, bits),
     )
 
