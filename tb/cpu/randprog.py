@@ -47,7 +47,7 @@ def generate(seed: int, count: int) -> str:
     n = 0
     while n < count:
         kind = rng.choices(["rr", "ri", "sh", "md", "ld", "st", "br", "jal", "jalr", "lui", "csr", "corner"],
-                           [12, 8, 4, 8, 6, 6, 5, 2, 2, 2, 1, 3])[0]
+                           [12, 8, 4, 6, 6, 6, 5, 2, 2, 2, 1, 8])[0]
         if kind == "rr":
             out.append(f"    {rng.choice(ALU_RR)} {reg()}, {src()}, {src()}")
         elif kind == "ri":
@@ -62,7 +62,7 @@ def generate(seed: int, count: int) -> str:
             a, b = rng.choice(FREE), rng.choice(FREE)
             out.append(f"    li x{a}, {rng.choice(CORNERS)}")
             out.append(f"    li x{b}, {rng.choice([0, -1, 1, -(1 << 31)])}")
-            out.append(f"    {rng.choice(MULDIV)} {reg()}, x{a}, x{b}")
+            out.append(f"    {rng.choice(MULDIV[4:] if rng.random() < 0.6 else MULDIV)} {reg()}, x{a}, x{b}")
             n += 2
         elif kind in ("ld", "st"):
             op, size = rng.choice(list((LOADS if kind == "ld" else STORES).items()))

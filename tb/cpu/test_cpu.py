@@ -62,11 +62,32 @@ async def random_streams_match_iss(dut):
         dut._log.info("  %d cycles, %d instructions, CPI %.2f", res.cycles, res.instret, res.cycles / res.instret)
 
 
+#: directed programs: name -> (sources, linked with crt0)
+DIRECTED = {
+    "traps": (["traps.S"], False),
+    "muldiv_corners": (["muldiv_corners.S"], False),
+    "bench": (["bench.c"], True),
+}
+
+
+@cocotb.test()
+async def directed_programs_match_iss(dut):
+    """Exceptions/CSRs, M-extension corner cases and compiled C, against the ISS."""
+    tb = CpuTb(dut)
+    names = os.environ.get("CPU_DIRECTED", ",".join(DIRECTED)).split(",")
+    for k, name in enumerate(names):
+        srcs, crt0 = DIRECTED[name]
+        elf = build(name, [PROGS / s for s in srcs], tag=TAG, crt0=crt0)
+        res = await check_against_iss(tb, elf, wait_states=bool(k & 1))
+        dut._log.info("%s: %d cycles, %d instructions, CPI %.2f (wait states %s)", name, res.cycles,
+                      res.instret, res.cycles / res.instret, bool(k & 1))
+
+
 @pytest.mark.parametrize("sim", sims_for("cpu_sim_top", langs=("verilog",)))
 def test_cpu(sim):
     env = {"CPU_PROG_TAG": sim}
     if sim == "icarus":
-        env.update(CPU_RANDOM_PROGS="2", CPU_RANDOM_LEN="300")
+        env.update(CPU_RANDOM_PROGS="2", CPU_RANDOM_LEN="300", CPU_DIRECTED="traps,muldiv_corners")
     else:
         env.update(CPU_RANDOM_PROGS="6", CPU_RANDOM_LEN="3000")
     run("cpu_sim_top", sim, "test_cpu", extra_env=env)

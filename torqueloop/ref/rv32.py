@@ -517,10 +517,14 @@ def load_elf(mem: Memory, elf: Elf) -> None:
 
 
 def run_to_tohost(sim: Rv32, tohost: int, max_steps: int) -> tuple[int, int]:
-    """Step until a non-zero word is stored to ``tohost``; return (value, steps)."""
-    for n in range(1, max_steps + 1):
+    """Step until a non-zero word is stored to ``tohost``; return (value, retired
+    instructions), not counting steps that took a trap."""
+    retired = 0
+    for _ in range(max_steps):
         sim.step()
+        if sim.last_trap is None:
+            retired += 1
         st = sim.last_store
         if st is not None and st[0] == tohost and st[2] != 0:
-            return st[2], n
+            return st[2], retired
     raise TimeoutError(f"no tohost write within {max_steps} steps (pc {sim.pc:#x})")

@@ -1,0 +1,60 @@
+# Every M-extension operation on every pair of corner operands
+# (0, 1, -1, 2, -2, 2^31-1, -2^31, 0x55555555, 0xAAAAAAAB, 7, -7), results
+# in the signature: division by zero, -2^31 / -1 and the MULH sign cases.
+    .section .text.init, "ax"
+    .globl _start
+_start:
+    la      x31, results
+    la      x30, operands
+    li      x29, 11             # operand count
+    li      x1, 0               # i
+1:  li      x2, 0               # j
+2:  slli    x3, x1, 2
+    add     x3, x3, x30
+    lw      x4, 0(x3)           # a
+    slli    x3, x2, 2
+    add     x3, x3, x30
+    lw      x5, 0(x3)           # b
+    mul     x6, x4, x5
+    sw      x6, 0(x31)
+    mulh    x6, x4, x5
+    sw      x6, 4(x31)
+    mulhsu  x6, x4, x5
+    sw      x6, 8(x31)
+    mulhu   x6, x4, x5
+    sw      x6, 12(x31)
+    div     x6, x4, x5
+    sw      x6, 16(x31)
+    divu    x6, x4, x5
+    sw      x6, 20(x31)
+    rem     x6, x4, x5
+    sw      x6, 24(x31)
+    remu    x6, x4, x5
+    sw      x6, 28(x31)
+    mul     x0, x4, x5          # rd = x0 stays zero
+    div     x0, x4, x5
+    sw      x0, 32(x31)
+    div     x4, x4, x5          # rd = rs1
+    sw      x4, 36(x31)
+    addi    x31, x31, 40
+    addi    x2, x2, 1
+    blt     x2, x29, 2b
+    addi    x1, x1, 1
+    blt     x1, x29, 1b
+    li      x1, 1
+    la      x2, tohost
+    sw      x1, 0(x2)
+3:  j       3b
+
+    .section .data
+operands:
+    .word   0, 1, -1, 2, -2, 0x7fffffff, 0x80000000, 0x55555555, 0xaaaaaaab, 7, -7
+
+    .section .signature, "aw", @progbits
+results: .zero 11 * 11 * 40
+
+    .section .tohost, "aw", @progbits
+    .align  6
+    .globl  tohost
+tohost: .word 0
+    .word   0
