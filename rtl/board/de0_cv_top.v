@@ -1,0 +1,189 @@
+// de0_cv_top: the torqueloop SoC on the Terasic DE0-CV (Cyclone V 5CEBA4F23C7N).
+//
+// Port names are Terasic's, so constraints/de0_cv_top.qsf assigns each bit
+// to the board pin of the same name.  What each GPIO header pin carries is
+// defined once, in constraints/pins.toml; the "GPIO header map" block below
+// is generated from it (scripts/gen_quartus.py) and checked by
+// scripts/check_constraints.py, together with every pin, I/O standard and
+// the timing constraints.  Wiring to the IBT-2 modules, the encoders and
+// the RN-XV: docs/hardware.md.
+//
+// Around the SoC (rtl/soc/soc.v) this adds only what is board-specific:
+//   - RESET_N through reset_sync (asynchronous assertion, synchronous release);
+//   - drive_interlock between the SoC's bridge outputs and the IBT-2 pins: the
+//     drives run only after SW[0] has been moved up (with no stop and no fault
+//     present) and stop at once on KEY[0] or a bridge fault, independently of
+//     the processor and of the SoC's own safety latch (SYS.SAFETY);
+//   - KEY[0] as the e-stop input of the SoC as well (active high there);
+//   - LEDR[9] = drives armed, LEDR[8] = stop or fault since the last arming;
+//     LEDR[7:0], HEX0-HEX5 belong to the firmware (GPIO registers).
+// The SoC synchronises every board input it reads (KEY, SW, encoders, UART,
+// e-stop, faults); the interlock's own inputs go through sync_2ff here.
+// The SoC's PWM+DIR outputs (for bridges with a direction input) are not
+// used on the IBT-2 and not brought out.
+`default_nettype none
+
+module de0_cv_top #(
+    parameter ROM_INIT = "",   // boot ROM image ($readmemh, one 32-bit word per line)
+    parameter RAM_INIT = ""    // RAM image; empty when the program arrives over the UART
+) (
+    input  wire        CLOCK_50,
+    input  wire        RESET_N,
+    input  wire [3:0]  KEY,
+    input  wire [9:0]  SW,
+    output wire [9:0]  LEDR,
+    output wire [6:0]  HEX0,
+    output wire [6:0]  HEX1,
+    output wire [6:0]  HEX2,
+    output wire [6:0]  HEX3,
+    output wire [6:0]  HEX4,
+    output wire [6:0]  HEX5,
+    inout  wire [35:0] GPIO_0,
+    inout  wire [35:0] GPIO_1
+);
+
+    // Board frequency: the SoC's CLK_HZ default (regmap) must be 50 MHz too.
+    localparam integer AXES = 2;
+
+    wire clk = CLOCK_50;
+    wire rst;
+
+    reset_sync #(.STAGES(2)) u_reset_sync (.clk(clk), .arst_n(RESET_N), .rst_out(rst));
+
+    // ---- raw pin-level nets of the GPIO headers (unsynchronised) ----
+    wire [AXES-1:0] ibt2_rpwm_pin;
+    wire [AXES-1:0] ibt2_lpwm_pin;
+    wire [AXES-1:0] ibt2_r_en_pin;
+    wire [AXES-1:0] ibt2_l_en_pin;
+    wire [AXES-1:0] ibt2_fault_n_pin;   // comparator outputs, low = fault; pulled up
+    wire [AXES-1:0] enc_a_pin;
+    wire [AXES-1:0] enc_b_pin;
+    wire [AXES-1:0] enc_z_pin;
+    wire            uart_rx_pin;
+    wire            uart_tx_pin;
+    wire            uart_cts_n_pin;
+    wire            uart_rts_n_pin;
+
+    // ---- the SoC ----
+    /* verilator lint_off UNUSEDSIGNAL */
+    wire [9:0]      soc_ledr;           // [9:8] give way to the interlock's state
+    /* verilator lint_on UNUSEDSIGNAL */
+    wire [AXES-1:0] soc_rpwm, soc_lpwm, soc_r_en, soc_l_en;
+    /* verilator lint_off UNUSEDSIGNAL */
+    wire [AXES-1:0] soc_pwm, soc_dir;   // PWM+DIR mode: no IBT-2 input for it
+    /* verilator lint_on UNUSEDSIGNAL */
+
+    soc #(
+        .ROM_INIT(ROM_INIT),
+        .RAM_INIT(RAM_INIT)
+    ) u_soc (
+        .clk(clk),
+        .rst(rst),
+        .ledr(soc_ledr),
+        .sw(SW),
+        .key_n(KEY),
+        .hex0_n(HEX0),
+        .hex1_n(HEX1),
+        .hex2_n(HEX2),
+        .hex3_n(HEX3),
+        .hex4_n(HEX4),
+        .hex5_n(HEX5),
+        .rpwm(soc_rpwm),
+        .lpwm(soc_lpwm),
+        .r_en(soc_r_en),
+        .l_en(soc_l_en),
+        .pwm(soc_pwm),
+        .dir(soc_dir),
+        .bridge_fault(~ibt2_fault_n_pin),
+        .enc_a(enc_a_pin),
+        .enc_b(enc_b_pin),
+        .enc_z(enc_z_pin),
+        .uart_rx(uart_rx_pin),
+        .uart_tx(uart_tx_pin),
+        .uart_cts_n(uart_cts_n_pin),
+        .uart_rts_n(uart_rts_n_pin),
+        .estop(~KEY[0])
+    );
+
+    // ---- board-level drive interlock ----
+    // Idle levels as reset values: key released (1), switch down (0), no fault (1).
+    wire            estop_n_s;
+    wire            arm_sw_s;
+    wire [AXES-1:0] fault_n_s;
+    wire            armed, tripped;
+    /* verilator lint_off UNUSEDSIGNAL */
+    wire [AXES-1:0] fault_latched;      // for a future status register; LEDR[8] shows the sum
+    /* verilator lint_on UNUSEDSIGNAL */
+
+    sync_2ff #(.WIDTH(1), .RESET_VAL(1)) u_sync_estop (
+        .clk(clk), .rst(rst), .async_in(KEY[0]), .sync_out(estop_n_s));
+    sync_2ff #(.WIDTH(1), .RESET_VAL(0)) u_sync_arm (
+        .clk(clk), .rst(rst), .async_in(SW[0]), .sync_out(arm_sw_s));
+    sync_2ff #(.WIDTH(AXES), .RESET_VAL(1)) u_sync_fault (
+        .clk(clk), .rst(rst), .async_in(ibt2_fault_n_pin), .sync_out(fault_n_s));
+
+    drive_interlock #(.AXES(AXES), .FAULT_FILTER_CLKS(250)) u_interlock (
+        .clk(clk),
+        .rst(rst),
+        .estop(~estop_n_s),
+        .arm_sw(arm_sw_s),
+        .fault(~fault_n_s),
+        .rpwm_in(soc_rpwm),
+        .lpwm_in(soc_lpwm),
+        .r_en_in(soc_r_en),
+        .l_en_in(soc_l_en),
+        .rpwm_out(ibt2_rpwm_pin),
+        .lpwm_out(ibt2_lpwm_pin),
+        .r_en_out(ibt2_r_en_pin),
+        .l_en_out(ibt2_l_en_pin),
+        .armed(armed),
+        .tripped(tripped),
+        .fault_latched(fault_latched)
+    );
+
+    assign LEDR = {armed, tripped, soc_ledr[7:0]};
+
+    // ---- GPIO header map: generated by scripts/gen_quartus.py from constraints/pins.toml; edit there ----
+    assign GPIO_0[0]           = ibt2_rpwm_pin[0];    // pin 1: IBT-2 #1 (axis 1) RPWM
+    assign GPIO_0[1]           = ibt2_lpwm_pin[0];    // pin 2: IBT-2 #1 (axis 1) LPWM
+    assign GPIO_0[2]           = ibt2_r_en_pin[0];    // pin 3: IBT-2 #1 (axis 1) R_EN
+    assign GPIO_0[3]           = ibt2_l_en_pin[0];    // pin 4: IBT-2 #1 (axis 1) L_EN
+    assign GPIO_0[4]           = 1'bz;                // pin 5: input
+    assign ibt2_fault_n_pin[0] = GPIO_0[4];           // pin 5: IBT-2 #1 (axis 1) R_IS, L_IS via comparators
+    assign GPIO_0[5]           = 1'bz;                // pin 6: spare, tri-stated
+    assign GPIO_0[6]           = 1'bz;                // pin 7: input
+    assign enc_a_pin[0]        = GPIO_0[6];           // pin 7: encoder 1 (axis 1) A
+    assign GPIO_0[7]           = 1'bz;                // pin 8: input
+    assign enc_b_pin[0]        = GPIO_0[7];           // pin 8: encoder 1 (axis 1) B
+    assign GPIO_0[8]           = 1'bz;                // pin 9: input
+    assign enc_z_pin[0]        = GPIO_0[8];           // pin 9: encoder 1 (axis 1) Z
+    assign GPIO_0[9]           = 1'bz;                // pin 10: spare, tri-stated
+    assign GPIO_0[10]          = 1'bz;                // pin 13: input
+    assign uart_rx_pin         = GPIO_0[10];          // pin 13: RN-XV TX (XBee pin 2)
+    assign GPIO_0[11]          = uart_tx_pin;         // pin 14: RN-XV RX (XBee pin 3)
+    assign GPIO_0[12]          = 1'bz;                // pin 15: input
+    assign uart_cts_n_pin      = GPIO_0[12];          // pin 15: RN-XV RTS (XBee pin 16)
+    assign GPIO_0[13]          = uart_rts_n_pin;      // pin 16: RN-XV CTS (XBee pin 12)
+    assign GPIO_0[25:14]       = {12{1'bz}};          // pins 17-28: spare, tri-stated
+    assign GPIO_0[35:26]       = {10{1'bz}};          // pins 31-40: spare, tri-stated
+    assign GPIO_1[0]           = ibt2_rpwm_pin[1];    // pin 1: IBT-2 #2 (axis 2) RPWM
+    assign GPIO_1[1]           = ibt2_lpwm_pin[1];    // pin 2: IBT-2 #2 (axis 2) LPWM
+    assign GPIO_1[2]           = ibt2_r_en_pin[1];    // pin 3: IBT-2 #2 (axis 2) R_EN
+    assign GPIO_1[3]           = ibt2_l_en_pin[1];    // pin 4: IBT-2 #2 (axis 2) L_EN
+    assign GPIO_1[4]           = 1'bz;                // pin 5: input
+    assign ibt2_fault_n_pin[1] = GPIO_1[4];           // pin 5: IBT-2 #2 (axis 2) R_IS, L_IS via comparators
+    assign GPIO_1[5]           = 1'bz;                // pin 6: spare, tri-stated
+    assign GPIO_1[6]           = 1'bz;                // pin 7: input
+    assign enc_a_pin[1]        = GPIO_1[6];           // pin 7: encoder 2 (axis 2) A
+    assign GPIO_1[7]           = 1'bz;                // pin 8: input
+    assign enc_b_pin[1]        = GPIO_1[7];           // pin 8: encoder 2 (axis 2) B
+    assign GPIO_1[8]           = 1'bz;                // pin 9: input
+    assign enc_z_pin[1]        = GPIO_1[8];           // pin 9: encoder 2 (axis 2) Z
+    assign GPIO_1[9]           = 1'bz;                // pin 10: spare, tri-stated
+    assign GPIO_1[25:10]       = {16{1'bz}};          // pins 13-28: spare, tri-stated
+    assign GPIO_1[35:26]       = {10{1'bz}};          // pins 31-40: spare, tri-stated
+    // ---- end of the generated GPIO header map ----
+
+endmodule
+
+`default_nettype wire

@@ -1,0 +1,70 @@
+#!/usr/bin/env python3
+"""The DE0-CV Quartus project from constraints/pins.toml and rtl/manifest.toml.
+
+  gen_quartus.py --update     rewrite the committed products of the pin table:
+                              constraints/de0_cv_top.qsf and .sdc, the GPIO
+                              header block of rtl/board/de0_cv_top.v and the
+                              wiring table of docs/hardware.md
+  gen_quartus.py --diff       show what --update would change (exit 1 if anything)
+  gen_quartus.py --project    create the Quartus project in build/quartus
+                              (de0_cv_top.qpf + the committed .qsf) and, with
+                              --compile, compile it when quartus_sh is on PATH;
+                              otherwise print the command for a machine that has it
+
+make quartus (for the Makefile) = gen_quartus.py --project --compile.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+from torqueloop.hdl import REPO_ROOT
+from torqueloop.quartus import PROJECT, products, stale, write_project
+
+
+def compile_project(qpf: Path) -> int:
+    cmd = ["quartus_sh", "--flow", "compile", PROJECT]
+    rel = qpf.parent.relative_to(REPO_ROOT)
+    if shutil.which("quartus_sh") is None:
+        print(f"[quartus] project written: {qpf.relative_to(REPO_ROOT)}")
+        print("[quartus] quartus_sh is not on PATH, so nothing was compiled. On a machine with")
+        print("[quartus] Quartus Prime (Lite 18.1 or later; Cyclone V needs 14.0+), from the repo root:")
+        print(f"[quartus]   cd {rel} && {' '.join(cmd)}")
+        print("[quartus] or without Python: quartus_sh -t constraints/create_project.tcl compile")
+        print(f"[quartus] or open {rel}/{PROJECT}.qpf in the Quartus GUI and press Compile.")
+        print(f"[quartus] Bitstream: {rel}/output_files/{PROJECT}.sof (program with quartus_pgm or the GUI).")
+        return 0
+    print(f"[quartus] {' '.join(cmd)}  (in {rel})", flush=True)
+    return subprocess.run(cmd, cwd=qpf.parent).returncode
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    g = ap.add_mutually_exclusive_group(required=True)
+    g.add_argument("--update", action="store_true", help="rewrite the generated files")
+    g.add_argument("--diff", action="store_true", help="show what --update would change")
+    g.add_argument("--project", action="store_true", help="create build/quartus")
+    ap.add_argument("--compile", action="store_true", help="with --project: compile when quartus_sh exists")
+    args = ap.parse_args()
+    if args.project:
+        qpf = write_project()
+        return compile_project(qpf) if args.compile else 0
+    drift = stale(products())
+    for p, diff in drift:
+        if args.update:
+            p.path.parent.mkdir(parents=True, exist_ok=True)
+            p.path.write_text(p.text)
+            print(f"[gen_quartus] wrote {p.path.relative_to(REPO_ROOT)}")
+        else:
+            sys.stdout.write(diff)
+    if not drift:
+        print("[gen_quartus] every generated file is up to date")
+    return 1 if (drift and args.diff) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,257 @@
+"""DE0-CV constraints: the repo's files are consistent, and the checks catch
+the mistakes they exist for (a pin twice, a wrong ball, a missing I/O
+standard, an .sdc naming a port that does not exist, a SoC file left out)."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from pathlib import Path
+
+import pytest
+
+from torqueloop import board, board_check, quartus
+from torqueloop.hdl import REPO_ROOT, Core, load_manifest
+
+
+@pytest.fixture(scope="module")
+def table() -> board.PinTable:
+    return board.load_pin_table()
+
+
+@pytest.fixture(scope="module")
+def pins() -> dict[str, board.BoardPin]:
+    return board.load_board_pins()
+
+
+FAKE_SOURCES = [REPO_ROOT / "rtl/common/reset_sync.v", REPO_ROOT / "rtl/board/de0_cv_top.v"]
+
+
+# --- the header layout and the board data ----------------------------------------------------
+
+def test_header_pins_follow_the_terasic_layout():
+    assert [board.header_pin(i) for i in (0, 9, 10, 25, 26, 35)] == [1, 10, 13, 28, 31, 40]
+    gpio_pins = {board.header_pin(i) for i in range(36)}
+    assert len(gpio_pins) == 36
+    assert gpio_pins | set(board.HEADER_POWER) == set(range(1, 41))
+    assert not gpio_pins & set(board.HEADER_POWER)
+
+
+def test_board_copy_equals_shared_table():
+    c = board_check.check_board_copy()
+    if c.skipped:
+        pytest.skip(c.detail)
+    assert c.ok, c.detail
+
+
+def test_board_table_compare_catches_a_changed_ball(pins):
+    changed = dict(pins)
+    changed["LEDR[3]"] = dataclasses.replace(pins["LEDR[3]"], pin="Y4")
+    del changed["KEY[1]"]
+    problems = board.compare_board_tables(changed, pins)
+    assert any("LEDR[3]" in p and "Y4" in p for p in problems)
+    assert any("KEY[1]" in p for p in problems)
+
+
+def test_board_pin_file_rejects_a_signal_listed_twice(tmp_path):
+    f = tmp_path / "pins.csv"
+    f.write_text("# comment\nsignal,pin,io_standard\nKEY[0],U7,3.3-V LVTTL\nKEY[0],W9,3.3-V LVTTL\n")
+    with pytest.raises(ValueError, match="twice"):
+        board.load_board_pins(f)
+
+
+# --- the pin table -------------------------------------------------------------------------
+
+def test_pin_table_is_consistent(table, pins):
+    assert board.validate(table, pins) == []
+
+
+def test_every_ibt2_encoder_and_uart_signal_has_a_pin(table):
+    nets = {g.net for g in table.gpio}
+    for axis in (0, 1):
+        for n in ("ibt2_rpwm_pin", "ibt2_lpwm_pin", "ibt2_r_en_pin", "ibt2_l_en_pin",
+                  "ibt2_fault_n_pin", "enc_a_pin", "enc_b_pin", "enc_z_pin"):
+            assert f"{n}[{axis}]" in nets
+    assert {"uart_rx_pin", "uart_tx_pin", "uart_cts_n_pin", "uart_rts_n_pin"} <= nets
+    # An input a user may leave unconnected must read its idle level, not float.
+    assert all(g.pull_up for g in table.gpio if g.dir == "in")
+
+
+def _with_gpio(table: board.PinTable, gpio: list[board.GpioUse]) -> board.PinTable:
+    return dataclasses.replace(table, gpio=tuple(gpio))
+
+
+def test_validate_catches_pin_table_mistakes(table, pins):
+    g = list(table.gpio)
+    # the same header bit twice
+    twice = _with_gpio(table, g + [dataclasses.replace(g[0], net="spare_net")])
+    assert any("assigned twice" in p for p in board.validate(twice, pins))
+    # one net on two pins
+    dup_net = _with_gpio(table, g + [dataclasses.replace(g[0], signal="GPIO_1[30]", header=35)])
+    assert any("on two pins" in p for p in board.validate(dup_net, pins))
+    # wrong header pin number (pin 11 is +5 V)
+    bad_hdr = _with_gpio(table, [dataclasses.replace(g[0], signal="GPIO_0[10]", header=11)] + g[1:])
+    assert any("header pin 11" in p for p in board.validate(bad_hdr, pins))
+    # a port wider than the board signal
+    wide = dataclasses.replace(table, ports=tuple(
+        dataclasses.replace(p, width=11) if p.name == "SW" else p for p in table.ports))
+    assert any("SW[10]" in p for p in board.validate(wide, pins))
+    # a board pin with another I/O standard than the table's
+    odd = dict(pins)
+    odd["KEY[2]"] = dataclasses.replace(pins["KEY[2]"], io_standard="2.5 V")
+    assert any("KEY[2]" in p for p in board.validate(table, odd))
+    # two ports on the same ball
+    same_ball = dict(pins)
+    same_ball["LEDR[0]"] = dataclasses.replace(pins["LEDR[0]"], pin=pins["LEDR[1]"].pin)
+    assert any("used twice" in p for p in board.validate(table, same_ball))
+
+
+# --- generated products, read back independently -----------------------------------------------
+
+def test_qsf_pins_check_passes_on_generated_qsf(table, pins):
+    qsf = board.gen_qsf(table, pins, FAKE_SOURCES)
+    c = board_check.check_qsf_pins(table, pins, qsf)
+    assert c.ok, c.detail
+    s = board.parse_qsf(qsf)
+    assert s.locations["CLOCK_50"] == ["PIN_M9"] and s.locations["RESET_N"] == ["PIN_P22"]
+    assert len(s.locations) == sum(len(p.bits()) for p in table.ports) == 140
+
+
+@pytest.mark.parametrize("mutation, expect", [
+    (lambda q: q.replace("PIN_N16 -to GPIO_0[0]", "PIN_B16 -to GPIO_0[0]"), "GPIO_0[0]: location PIN_B16"),
+    (lambda q: q.replace("PIN_N16 -to GPIO_0[0]", "PIN_B16 -to GPIO_0[0]"), "used twice"),
+    (lambda q: re.sub(r'set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to SW\[3\]\n', "", q),
+     "SW[3]: IO_STANDARD []"),
+    (lambda q: q.replace('IO_STANDARD "3.3-V LVTTL" -to HEX2[1]', 'IO_STANDARD "2.5 V" -to HEX2[1]'), "HEX2[1]"),
+    (lambda q: q + "set_location_assignment PIN_H13 -to CLOCK2_50\n", "CLOCK2_50"),
+    (lambda q: re.sub(r"set_location_assignment PIN_\w+ -to KEY\[1\]\n", "", q), "KEY[1]: 0 location"),
+    (lambda q: q.replace("WEAK_PULL_UP_RESISTOR ON -to GPIO_0[6]", "WEAK_PULL_UP_RESISTOR OFF -to GPIO_0[6]"),
+     "weak pull-ups"),
+    (lambda q: q.replace("ENABLE_DEVICE_WIDE_RESET OFF", "ENABLE_DEVICE_WIDE_RESET ON"), "ENABLE_DEVICE_WIDE_RESET"),
+    (lambda q: q.replace("DEVICE 5CEBA4F23C7", "DEVICE 5CEBA2F23C7"), "DEVICE"),
+])
+def test_qsf_pins_check_catches(table, pins, mutation, expect):
+    qsf = board.gen_qsf(table, pins, FAKE_SOURCES)
+    bad = mutation(qsf)
+    assert bad != qsf
+    c = board_check.check_qsf_pins(table, pins, bad)
+    assert not c.ok and expect in c.detail, c.detail
+
+
+def test_sdc_check(table):
+    sdc = board.gen_sdc(table)
+    bits = {b for _, b in table.port_bits()}
+    assert board_check.check_sdc(table, sdc, bits).ok
+    # every synchronised input and every slow output is cut, the clock is not
+    named = set(board.sdc_port_names(sdc))
+    assert {"RESET_N", "KEY[0]", "SW[0]", "GPIO_0[6]", "GPIO_0[10]", "LEDR[9]", "GPIO_0[0]"} <= named
+    assert board_check.check_sdc(table, sdc + "set_false_path -to [get_ports {LEDR[*]}]\n", bits).ok
+    c = board_check.check_sdc(table, sdc + "set_false_path -from [get_ports {ENC_A}]\n", bits)
+    assert not c.ok and "ENC_A" in c.detail
+    c = board_check.check_sdc(table, sdc + "set_false_path -from [get_ports {CLOCK_50}]\n", bits)
+    assert not c.ok and "clock port" in c.detail
+    c = board_check.check_sdc(table, sdc.replace("-period 20.000", "-period 10.000"), bits)
+    assert not c.ok and "create_clock" in c.detail
+
+
+def test_gpio_block_drives_outputs_reads_inputs_and_tristates_the_rest(table):
+    block = board.gen_top_gpio_block(table)
+    driven: dict[str, str] = {}
+    read: dict[str, str] = {}
+    for lhs, rhs in re.findall(r"assign\s+(\S+)\s*=\s*([^;]+);", block):
+        m = re.fullmatch(r"(GPIO_[01])\[(\d+)(?::(\d+))?\]", lhs)
+        if m:
+            hi = int(m.group(2))
+            lo = int(m.group(3)) if m.group(3) else hi
+            for i in range(lo, hi + 1):
+                bit = f"{m.group(1)}[{i}]"
+                assert bit not in driven, f"{bit} assigned twice"
+                driven[bit] = rhs.strip()
+        else:
+            read[lhs] = rhs.strip()
+    assert len(driven) == 72
+    for g in table.gpio:
+        if g.dir == "out":
+            assert driven[g.signal] == g.net
+        else:
+            assert "'bz" in driven[g.signal] and read[g.net] == g.signal
+    used = {g.signal for g in table.gpio}
+    assert all("'bz" in v for k, v in driven.items() if k not in used)
+
+
+# --- the top and the project's sources -------------------------------------------------------------
+
+def test_top_ports_match_the_pin_table(table):
+    c = board_check.check_top_ports(table)
+    assert c.ok, c.detail
+
+
+def test_top_ports_check_catches_a_port_without_pin(table, tmp_path):
+    text = board.TOP_V.read_text()
+    extra = tmp_path / "de0_cv_top.v"
+    extra.write_text(text.replace("    input  wire        RESET_N,\n",
+                                  "    input  wire        RESET_N,\n    output wire        BUZZER,\n"))
+    c = board_check.check_top_ports(table, extra)
+    assert not c.ok and "BUZZER" in c.detail
+    narrow = tmp_path / "narrow" / "de0_cv_top.v"
+    narrow.parent.mkdir()
+    narrow.write_text(text.replace("input  wire [9:0]  SW,", "input  wire [7:0]  SW,"))
+    c = board_check.check_top_ports(table, narrow)
+    assert not c.ok and "SW" in c.detail
+
+
+def _core(name: str, files: list[Path]) -> Core:
+    return Core(name=name, top=name, verilog=tuple(files), vhdl=())
+
+
+def test_sources_check_catches_a_missing_soc_file(table, pins, tmp_path):
+    a, b, top = (tmp_path / n for n in ("soc_a.v", "soc_b.v", "de0_cv_top.v"))
+    a.write_text("module soc_a; endmodule\n")
+    b.write_text("module soc_b; endmodule\n")
+    top.write_text("module de0_cv_top; soc_a ua(); soc_b ub(); endmodule\n")
+    soc = _core(table.board.soc_core, [a, b])
+    full = _core(table.board.top, [a, b, top])
+    cores = {soc.name: soc, full.name: full}
+    good = board.gen_qsf(table, pins, [a, b, top])
+    c = board_check.check_qsf_sources(table, good, cores)
+    assert c.ok, c.detail
+    # the project left out soc_b.v (and the manifest's top list too)
+    short = _core(table.board.top, [a, top])
+    bad = board.gen_qsf(table, pins, [a, top])
+    c = board_check.check_qsf_sources(table, bad, {soc.name: soc, short.name: short})
+    assert not c.ok and "soc_b.v is not in the Quartus project" in c.detail
+    # a qsf that differs from the manifest's list
+    c = board_check.check_qsf_sources(table, bad, cores)
+    assert not c.ok and "differs from rtl/manifest.toml" in c.detail
+
+
+def test_sources_check_elaborates(table, pins, tmp_path):
+    """The Yosys elaboration finds a module that no listed file defines."""
+    a, top = tmp_path / "soc_a.v", tmp_path / "de0_cv_top.v"
+    a.write_text("module soc_a; endmodule\n")
+    top.write_text("module de0_cv_top; soc_a ua(); soc_missing um(); endmodule\n")
+    cores = {table.board.soc_core: _core(table.board.soc_core, [a]),
+             table.board.top: _core(table.board.top, [a, top])}
+    c = board_check.check_qsf_sources(table, board.gen_qsf(table, pins, [a, top]), cores)
+    assert not c.ok and "soc_missing" in c.detail
+
+
+def test_readmemh_image_check(tmp_path):
+    good = tmp_path / "ok.hex"
+    good.write_text("// boot\n@0\n00000013\ndeadbeef\n")
+    assert quartus.check_readmemh(good) == []
+    bad = tmp_path / "bad.hex"
+    bad.write_text("00000013\n:020000040000FA\n")     # an Intel HEX record is not $readmemh
+    assert quartus.check_readmemh(bad)
+
+
+# --- the repository as committed ------------------------------------------------------------------
+
+def test_repository_constraints_are_consistent():
+    """What CI runs (scripts/check_constraints.py): every check on the committed files."""
+    cores = load_manifest()
+    t = board.load_pin_table()
+    if t.board.top not in cores:
+        pytest.skip(f"core {t.board.top} not in rtl/manifest.toml yet (waits for rtl/soc/soc.v)")
+    failed = [c for c in board_check.run_all() if not c.ok]
+    assert not failed, "\n".join(f"{c.name}:\n{c.detail[:3000]}" for c in failed)
