@@ -83,6 +83,54 @@ async def directed_programs_match_iss(dut):
                       res.instret, res.cycles / res.instret, bool(k & 1))
 
 
+MTI, MEI, MSI = 0x8000_0007, 0x8000_000B, 0x8000_0003
+S_MULDIV = 3  # cpu.v state encoding, for classifying when an interrupt arrived
+
+
+@cocotb.test()
+async def interrupts_latency_nesting_and_divide(dut):
+    """Timer/external/software interrupts: order, masking, nesting, latency, during divides."""
+    tb = CpuTb(dut)
+    elf_path = build("irq", [PROGS / "irq.S"], tag=TAG, crt0=False)
+    elf = read_elf(elf_path)
+    handler = elf.symbols["handler"]
+    await tb.load(elf)
+
+    samples: list[tuple[int, bool]] = []  # (cycles from irq_timer rising to handler fetch, arrived in a divide)
+
+    async def monitor() -> None:
+        while True:
+            await RisingEdge(dut.irq_timer)
+            await ReadOnly()
+            in_div = int(dut.u_cpu.state.value) == S_MULDIV
+            for n in range(200):
+                if int(dut.u_cpu.ibus_req.value) and int(dut.u_cpu.ibus_addr.value) == handler:
+                    samples.append((n, in_div))
+                    break
+                await RisingEdge(dut.clk)
+                await ReadOnly()
+
+    mon = cocotb.start_soon(monitor())
+    res = await tb.run(200_000)
+    mon.cancel()
+    assert res.tohost is not None, "irq program did not finish"
+    assert res.tohost == 1, f"irq program failed check {res.tohost >> 1}"
+    words = await tb.signature(elf)
+    count, log = words[0], words[1:1 + words[0]]
+    expected_prefix = [MTI] * 4 + [MTI] + [MTI, MEI] + [MEI, MSI, MTI]
+    assert log[:len(expected_prefix)] == expected_prefix, f"trap order {[hex(c) for c in log[:10]]}"
+    assert all(c == MTI for c in log[len(expected_prefix):]), "unexpected trap during the divide loop"
+    spin = [n for n, _ in samples[:4]]
+    in_div = [n for n, d in samples if d]
+    dut._log.info("timer interrupt latency from a spin loop: %s cycles (irq_timer high -> handler fetch request)", spin)
+    dut._log.info("%d of %d timer interrupts arrived during a divide; latency max %s cycles",
+                  len(in_div), len(samples), max(in_div) if in_div else None)
+    assert max(spin) <= 6, f"spin-loop latency {spin}"
+    assert len(in_div) >= 5, "too few interrupts landed in a divide to test that case"
+    assert max(in_div) <= 40, f"latency in a divide {max(in_div)}"
+    dut._log.info("%d traps logged, %d cycles", count, res.cycles)
+
+
 @pytest.mark.parametrize("sim", sims_for("cpu_sim_top", langs=("verilog",)))
 def test_cpu(sim):
     env = {"CPU_PROG_TAG": sim}
