@@ -126,7 +126,7 @@ def test_char_bench(sim, tmp_path):
     """A written configuration's Count_max, PW0 and PW_F on the RTL's pins give
     the chosen frequency within the error the file states, and the dead zone."""
     from torqueloop.characterize import load_config
-    from torqueloop.characterize.simbench import check_config_on_pins
+    from torqueloop.characterize.simbench import check_config_on_pins, model_waveform
 
     _paper_like_config(tmp_path)
     cfg = load_config(tmp_path / "cfg.json")
@@ -143,3 +143,5 @@ def test_char_bench(sim, tmp_path):
         # the smallest command lands on the dead-zone edge, the largest on PW_F
         assert a.pw0_counts <= got["duty_counts_cmd1"] <= a.pw0_counts + 1, (name, got)
         assert got["duty_counts_full"] == a.pw_max_counts, (name, got)
+        # and the simulated bench's "model" pin source is what the RTL does
+        assert 1.0 / model_waveform(a.count_max, 1).period_s == pytest.approx(f_pins, rel=1e-9)
