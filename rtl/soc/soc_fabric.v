@@ -94,6 +94,7 @@ module soc_fabric #(
     localparam [PAGE_BITS-1:0] P_TIMER = `TL_TIMER_PAGE;
     localparam [PAGE_BITS-1:0] P_INTC  = `TL_INTC_PAGE;
     localparam [PAGE_BITS-1:0] P_GPIO  = `TL_GPIO_PAGE;
+    localparam [PAGE_BITS-1:0] P_UART  = `TL_UART_PAGE;
     localparam [PAGE_BITS-1:0] P_AXIS0 = `TL_AXIS0_PAGE;
     localparam [PAGE_BITS-1:0] P_AXIS1 = `TL_AXIS1_PAGE;
     localparam [PAGE_BITS-1:0] P_SYS   = `TL_SYS_PAGE;
@@ -126,7 +127,7 @@ module soc_fabric #(
     wire d_ram    = (dbus_addr & RAM_MASK) == `TL_RAM_BASE;
     wire d_per    = (dbus_addr & PER_MASK) == PER_BASE;
     wire [PAGE_BITS-1:0] d_page = dbus_addr[12 +: PAGE_BITS];
-    wire d_page_used = (d_page == P_TIMER) || (d_page == P_INTC) || (d_page == P_GPIO)
+    wire d_page_used = (d_page == P_TIMER) || (d_page == P_INTC) || (d_page == P_GPIO) || (d_page == P_UART)
                     || (d_page == P_AXIS0) || (d_page == P_AXIS1) || (d_page == P_SYS);
     reg  d_miss_ack;
 
@@ -134,6 +135,7 @@ module soc_fabric #(
     wire req_timer = d_per_launch && (d_page == P_TIMER);
     wire req_intc  = d_per_launch && (d_page == P_INTC);
     wire req_gpio  = d_per_launch && (d_page == P_GPIO);
+    wire req_uart  = d_per_launch && (d_page == P_UART);
     wire req_axis0 = d_per_launch && (d_page == P_AXIS0);
     wire req_axis1 = d_per_launch && (d_page == P_AXIS1);
     wire req_sys   = d_per_launch && (d_page == P_SYS);
@@ -178,8 +180,8 @@ module soc_fabric #(
     // ---- peripherals --------------------------------------------------------------------------
     wire [11:0] p_addr = dbus_addr[11:0];
     wire        tim_ack, tim_err, int_ack, int_err, gpio_ack, gpio_err, sys_ack, sys_err;
-    wire        ax0_ack, ax0_err, ax1_ack, ax1_err;
-    wire [31:0] tim_rdata, int_rdata, gpio_rdata, sys_rdata, ax0_rdata, ax1_rdata;
+    wire        ax0_ack, ax0_err, ax1_ack, ax1_err, uart_ack, uart_err;
+    wire [31:0] tim_rdata, int_rdata, gpio_rdata, sys_rdata, ax0_rdata, ax1_rdata, uart_rdata;
 
     soc_timer u_timer (
         .clk(clk), .rst(rst), .req(req_timer), .we(dbus_we), .be(dbus_be), .addr(p_addr),
@@ -190,14 +192,14 @@ module soc_fabric #(
     wire safe;
     wire safety_event;
     wire key_event;
+    wire uart_rx_event, uart_tx_event;
     wire [1:0] period_event, index_event, fault_event;
     wire [1:0] bridge_fault_s;
     wire [`TL_INTC_ENABLE_MASK_WIDTH-1:0] irq_src;
 
-    // Interrupt sources in the bit order of INTC.PENDING.  UART_RX/UART_TX stay 0
-    // until the UART (rtl/uart) is integrated.
-    assign irq_src[`TL_INTC_PENDING_UART_RX_LSB]    = 1'b0;
-    assign irq_src[`TL_INTC_PENDING_UART_TX_LSB]    = 1'b0;
+    // Interrupt sources in the bit order of INTC.PENDING.
+    assign irq_src[`TL_INTC_PENDING_UART_RX_LSB]    = uart_rx_event;
+    assign irq_src[`TL_INTC_PENDING_UART_TX_LSB]    = uart_tx_event;
     assign irq_src[`TL_INTC_PENDING_AX0_PERIOD_LSB] = period_event[0];
     assign irq_src[`TL_INTC_PENDING_AX1_PERIOD_LSB] = period_event[1];
     assign irq_src[`TL_INTC_PENDING_AX0_INDEX_LSB]  = index_event[0];
@@ -256,12 +258,12 @@ module soc_fabric #(
         .rpwm(rpwm), .lpwm(lpwm), .pwm(pwm)
     );
 
-    // ---- UART: not integrated yet (rtl/uart has not landed); idle levels ---------------------
-    assign uart_tx    = 1'b1;   // line idle
-    assign uart_rts_n = 1'b1;   // not ready to receive
-    /* verilator lint_off UNUSEDSIGNAL */
-    wire uart_unused = uart_rx ^ uart_cts_n;
-    /* verilator lint_on UNUSEDSIGNAL */
+    soc_uart #(.CLK_HZ(CLK_HZ)) u_uart (
+        .clk(clk), .rst(rst), .req(req_uart), .we(dbus_we), .be(dbus_be), .addr(p_addr),
+        .wdata(dbus_wdata), .ack(uart_ack), .err(uart_err), .rdata(uart_rdata),
+        .rxd(uart_rx), .txd(uart_tx), .cts_n(uart_cts_n), .rts_n(uart_rts_n),
+        .rx_event(uart_rx_event), .tx_event(uart_tx_event)
+    );
 
     // ---- responses: only the addressed slave acks; rdata gated by its ack ---------------------
     assign ibus_ack   = rom_b_ack | ram_b_ack | i_miss_ack;
@@ -269,13 +271,14 @@ module soc_fabric #(
     assign ibus_rdata = ({32{rom_b_ack}} & rom_b_rdata) | ({32{ram_b_ack}} & ram_b_rdata);
 
     assign dbus_ack   = rom_a_ack | ram_a_ack | tim_ack | int_ack | gpio_ack | sys_ack
-                      | ax0_ack | ax1_ack | d_miss_ack;
+                      | ax0_ack | ax1_ack | uart_ack | d_miss_ack;
     assign dbus_err   = rom_a_err | tim_err | int_err | gpio_err | sys_err | ax0_err | ax1_err
-                      | d_miss_ack;
+                      | uart_err | d_miss_ack;
     assign dbus_rdata = ({32{rom_a_ack}} & rom_a_rdata) | ({32{ram_a_ack}} & ram_a_rdata)
                       | ({32{tim_ack}}   & tim_rdata)   | ({32{int_ack}}   & int_rdata)
                       | ({32{gpio_ack}}  & gpio_rdata)  | ({32{sys_ack}}   & sys_rdata)
-                      | ({32{ax0_ack}}   & ax0_rdata)   | ({32{ax1_ack}}   & ax1_rdata);
+                      | ({32{ax0_ack}}   & ax0_rdata)   | ({32{ax1_ack}}   & ax1_rdata)
+                      | ({32{uart_ack}}  & uart_rdata);
 
 endmodule
 
