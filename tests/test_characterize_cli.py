@@ -57,7 +57,10 @@ def test_lab_loop_to_a_loadable_configuration(tmp_path, capsys):
     pngs = sorted(p.name for p in (tmp_path / "plots").glob("*.png"))
     assert "x_fig10_torque_vs_freq.png" in pngs and "z_fig11_torque_vs_duty_200hz.png" in pngs
 
-    assert main(["show", str(out)]) == EXIT_OK
+    assert main(["show", str(out), "--registers"]) == EXIT_OK
+    shown = capsys.readouterr().out
+    assert "write AXIS0_FDIV       0x40004000 = 109" in shown  # x -> AXIS0 (regmap.toml)
+    assert "write AXIS1_FDIV       0x40005000 = 244" in shown
     first = out.read_bytes()
     assert main(argv) == EXIT_OK
     assert out.read_bytes() == first  # same data, same file

@@ -22,7 +22,9 @@ import sys
 from pathlib import Path
 from typing import Sequence
 
-from .config import CLK_HZ, PWM_BITS, ConfigError, axis_config, build_config, default_divider, load_config, write_config
+from .config import (
+    CLK_HZ, PWM_BITS, ConfigError, axis_config, build_config, default_divider, load_config, register_writes, write_config,
+)
 from .data import DataError, Sweep, read_sweep
 from .method import MethodError, MotorResult, Thresholds, characterize_motor, step5_candidates
 
@@ -166,6 +168,13 @@ def cmd_show(args: argparse.Namespace) -> int:
     for n, a in cfg.axes.items():
         print(f"  {n}: {a.pwm_freq_hz:g} Hz, count_max {a.count_max} ({a.achieved_hz:.6g} Hz, {a.freq_error_pct:+.3f} %), "
               f"PW0 {a.pw0_counts}, PW_F {a.pw_max_counts}, tau_max {a.tau_max_nm:g} N m")
+    if args.registers:
+        try:
+            for reg, addr, val in register_writes(cfg):
+                print(f"  write {reg:<16} 0x{addr:08X} = {val}")
+        except ConfigError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return EXIT_ERROR
     return EXIT_OK
 
 
@@ -196,6 +205,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.set_defaults(fn=cmd_check)
     p = sub.add_parser("show", help="validate and summarise a configuration file")
     p.add_argument("config")
+    p.add_argument("--registers", action="store_true", help="list the SoC register writes that apply it")
     p.set_defaults(fn=cmd_show)
     args = ap.parse_args(argv)
     return int(args.fn(args))

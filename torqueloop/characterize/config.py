@@ -378,3 +378,28 @@ def load_config(
             raise ConfigError(f"{w}tau_max_nm: must be > 0, got {a['tau_max_nm']}")
         axes[name] = AxisConfig(**{k: a[k] for k in _AXIS_FIELDS})
     return Config(doc["schema_version"], clk, bits, axes, dict(doc["provenance"]))
+
+
+# ---------------------------------------------------------------- to the board
+
+#: Which SoC axis page drives which characterised axis: the plant's axis 1
+#: (x) is AXIS0, axis 2 (z) is AXIS1 (sim_models/params/table2.toml order).
+DEFAULT_AXIS_PAGES: dict[str, int] = {"x": 0, "z": 1}
+
+
+def register_writes(cfg: Config, pages: Mapping[str, int] | None = None) -> list[tuple[str, int, int]]:
+    """The SoC register writes that apply a configuration (rtl/soc/regmap.toml,
+    AXIS page): (register name, address, value) for FDIV (Count_max),
+    PWM_PW0 and PWM_PWMAX of each configured axis.  PW0/PW_max take effect
+    at the next PWM period start (double-buffered in pwm_torque)."""
+    from torqueloop import regs
+
+    pages = DEFAULT_AXIS_PAGES if pages is None else pages
+    out = []
+    for name, a in cfg.axes.items():
+        if name not in pages:
+            raise ConfigError(f"axes.{name}: no SoC axis page assigned (known: {dict(pages)})")
+        p = f"AXIS{pages[name]}"
+        for reg, val in (("FDIV", a.count_max), ("PWM_PW0", a.pw0_counts), ("PWM_PWMAX", a.pw_max_counts)):
+            out.append((f"{p}_{reg}", int(getattr(regs, f"{p}_{reg}")), int(val)))
+    return out
