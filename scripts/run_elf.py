@@ -1,0 +1,123 @@
+#!/usr/bin/env python3
+"""Run a linked RV32IM ELF on the torqueloop CPU in simulation.
+
+    scripts/run_elf.py PROG.elf [--sim verilator|icarus] [--max-cycles N] [--signature FILE]
+    scripts/run_elf.py --memory-map
+
+The ELF's loadable segments are written at their addresses into the RAM of
+rtl/cpu/cpu_sim_top (SoC memory map: RAM at 0x8000_0000), the core starts in
+the boot ROM at 0x0000_0000, whose two-instruction stub jumps to the ELF
+entry point, and runs until the program stores a non-zero word to its
+`tohost` symbol.  Prints cycles and retired instructions (both from reset,
+the stub's two instructions included) and exits 0 if the stored value is 1;
+otherwise 1 (an odd value (n << 1) | 1 names failed test n), 2 on the cycle
+limit, 3 on a bad ELF.  --signature writes the words from begin_signature to
+end_signature as 8-digit hex, one per line.  Programs are linked by the
+caller (see tb/cpu/progs/link.ld for a script that fits the memory map).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(REPO / "tb" / "cpu"))
+
+from torqueloop.ref.rv32 import read_elf  # noqa: E402
+
+RAM_BASE = 0x8000_0000
+RAM_BYTES = 64 * 1024  # cpu_sim_top's RAM_BYTES default
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("elf", nargs="?", type=Path)
+    ap.add_argument("--sim", choices=["verilator", "icarus"], default="verilator")
+    ap.add_argument("--max-cycles", type=int, default=10_000_000)
+    ap.add_argument("--signature", type=Path)
+    ap.add_argument("--memory-map", action="store_true", help="print the RAM region programs may use")
+    ap.add_argument("-v", "--verbose", action="store_true", help="show the simulator's own output")
+    args = ap.parse_args(argv)
+
+    if args.memory_map:
+        print(f"ram_base=0x{RAM_BASE:08x} ram_size=0x{RAM_BYTES:x}")
+        return 0
+    if args.elf is None:
+        ap.error("PROG.elf is required (unless --memory-map)")
+    try:
+        elf = read_elf(args.elf)
+    except (OSError, ValueError) as e:
+        print(f"run_elf: {e}", file=sys.stderr)
+        return 3
+    missing = [s for s in ["tohost"] + (["begin_signature", "end_signature"] if args.signature else [])
+               if s not in elf.symbols]
+    if missing:
+        print(f"run_elf: {args.elf} has no symbol(s) {missing}", file=sys.stderr)
+        return 3
+    for addr, blob in elf.segments:
+        if not (RAM_BASE <= addr and addr + len(blob) <= RAM_BASE + RAM_BYTES):
+            print(f"run_elf: segment {addr:#x}+{len(blob):#x} is outside the RAM "
+                  f"(0x{RAM_BASE:08x}+0x{RAM_BYTES:x})", file=sys.stderr)
+            return 3
+
+    from torqueloop.simrun import run
+
+    with tempfile.TemporaryDirectory() as tmp:
+        result = Path(tmp) / "result.json"
+        env = {
+            "RUN_ELF": str(args.elf.resolve()),
+            "RUN_ELF_MAX_CYCLES": str(args.max_cycles),
+            "RUN_ELF_RESULT": str(result),
+        }
+        if args.signature:
+            env["RUN_ELF_SIGNATURE"] = str(args.signature.resolve())
+        log = Path(tmp) / "sim.log"
+        # The simulator and cocotb write to fd 1/2; keep them out of the
+        # runner's own output unless asked.
+        saved = [os.dup(1), os.dup(2)]
+        if not args.verbose:
+            fd = os.open(log, os.O_WRONLY | os.O_CREAT)
+            os.dup2(fd, 1)
+            os.dup2(fd, 2)
+            os.close(fd)
+        try:
+            run("cpu_sim_top", args.sim, "elf_runner_tb", extra_env=env, build_tag="run_elf")
+            error = None
+        except (AssertionError, SystemExit, RuntimeError) as e:
+            error = e
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+        if error is not None or not result.exists():
+            print(f"run_elf: simulation failed: {error}", file=sys.stderr)
+            if log.exists():
+                print(log.read_text()[-4000:], file=sys.stderr)
+            return 3
+        r = json.loads(result.read_text())
+
+    if r["tohost"] is None:
+        print(f"run_elf: no tohost write within {args.max_cycles} cycles "
+              f"({r['cycles']} cycles, {r['instret']} instructions)")
+        return 2
+    cpi = r["cycles"] / r["instret"] if r["instret"] else float("nan")
+    print(f"cycles={r['cycles']} instructions={r['instret']} cpi={cpi:.3f} tohost=0x{r['tohost']:x}")
+    if r["tohost"] == 1:
+        print("PASS")
+        return 0
+    if r["tohost"] & 1:
+        print(f"FAIL: test {r['tohost'] >> 1}")
+    else:
+        print(f"FAIL: tohost value 0x{r['tohost']:x}")
+    return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,5 @@
+// Never writes tohost: run_elf.py must stop at --max-cycles.
+int main(void) {
+    for (;;)
+        __asm__ volatile("");
+}
