@@ -5,8 +5,10 @@
 // RESET_VAL = 1, the idle level, so reset never looks like a start bit.
 //
 // Timing, with L = baud_div + 1 clocks per bit (L >= 16):
-//  - the start edge is seen 2-3 clocks late through the synchroniser, so the
-//    bit clock counter starts at 3 when the line is first seen low;
+//  - every decision reads rx, which shows the line as it was two clocks
+//    earlier (synchroniser); the counter is set to 1 when the start edge is
+//    first seen, which makes counter value v read the line between v and
+//    v + 1 clocks after the start edge (the synchroniser's delay cancels);
 //  - each bit is sampled at L/2 - L/16, L/2 and L/2 + L/16 clocks into the bit
 //    (the middle three points of 16x oversampling, at clock resolution) and
 //    decided by majority, so one disturbed sample does not flip a bit;
@@ -34,7 +36,7 @@ module uart_rx (
 );
 
     localparam [1:0] IDLE = 2'd0, RUN = 2'd1, WAIT_HIGH = 2'd2;
-    localparam [16:0] START_CNT = 17'd3;   // synchroniser latency, clocks
+    localparam [16:0] START_CNT = 17'd1;   // see the header: cancels the synchroniser delay
 
     wire rx;
     sync_2ff #(.WIDTH(1), .RESET_VAL(1)) u_sync (

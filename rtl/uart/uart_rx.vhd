@@ -22,7 +22,7 @@ architecture rtl of uart_rx is
     constant IDLE      : std_logic_vector(1 downto 0) := "00";
     constant RUN       : std_logic_vector(1 downto 0) := "01";
     constant WAIT_HIGH : std_logic_vector(1 downto 0) := "10";
-    constant START_CNT : unsigned(15 downto 0) := to_unsigned(3, 16);  -- synchroniser latency
+    constant START_CNT : unsigned(15 downto 0) := to_unsigned(1, 16);  -- cancels the synchroniser delay
 
     signal rx_v    : std_logic_vector(0 downto 0);
     signal rxd_v   : std_logic_vector(0 downto 0);

@@ -117,8 +117,7 @@ class LineDecoder:
             t0 = next_time(t, 0)
             if t0 is None:
                 return events
-            # The counter reads 3 when the synchronised edge is seen (2-3 clocks
-            # late), so sample point v is taken v to v + 1 clocks after the edge.
+            # Sample point v reads the line v to v + 1 clocks after the start edge.
             base = t0 + 0.5
             bits = []
             for k in range(10):
