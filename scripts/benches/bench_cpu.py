@@ -1,0 +1,109 @@
+"""The CPU core: CPI on a small integer benchmark (tb/cpu/progs/bench.c, -O2),
+cycles per instruction class, Cyclone V resources and logic depth."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from torqueloop import eda
+from torqueloop.hdl import REPO_ROOT, core
+
+sys.path.insert(0, str(REPO_ROOT / "tb" / "cpu"))
+from cpu_progs import PROGS, build  # noqa: E402
+
+REPS = 64
+#: instruction class -> one instance (repeated REPS times between two mcycle reads)
+CLASSES = {
+    "alu (add)": "add t2, t2, t3",
+    "alu imm (addi)": "addi t2, t2, 1",
+    "lui": "lui t2, 0x12345",
+    "branch not taken": "bne x0, x0, .+8",
+    "branch taken": "beq x0, x0, .+4",
+    "jal": "jal x0, .+4",
+    "load (lw)": "lw t2, 0(sp)",
+    "store (sw)": "sw t2, 0(sp)",
+    "mul": "mul t2, t3, t4",
+    "div": "div t2, t3, t4",
+    "csr read (mscratch)": "csrr t2, mscratch",
+}
+
+
+def class_program() -> str:
+    out = ["    .section .text.init, \"ax\"", "    .globl _start", "_start:",
+           "    la sp, __stack_top - 16", "    la s0, begin_signature",
+           "    li t3, 123456789", "    li t4, -77",
+           # overhead of the measurement itself: two back-to-back mcycle reads
+           "    csrr t0, mcycle", "    csrr t1, mcycle", "    sub s1, t1, t0"]
+    for i, insn in enumerate(CLASSES.values()):
+        out += ["    csrr t0, mcycle", f"    .rept {REPS}", f"    {insn}", "    .endr",
+                "    csrr t1, mcycle", "    sub t1, t1, t0", "    sub t1, t1, s1", f"    sw t1, {4 * i}(s0)"]
+    out += ["    li t0, 1", "    la t1, tohost", "    sw t0, 0(t1)", "1:  j 1b",
+            "    .section .signature, \"aw\", @progbits", f"    .zero {4 * len(CLASSES)}",
+            "    .section .tohost, \"aw\", @progbits", "    .align 6", "    .globl tohost",
+            "tohost: .word 0", "    .word 0", ""]
+    return "\n".join(out)
+
+
+def run_elf(elf: Path, *extra: str) -> str:
+    proc = subprocess.run([sys.executable, str(REPO_ROOT / "scripts" / "run_elf.py"), str(elf), *extra],
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(proc.stdout + proc.stderr)
+    return proc.stdout
+
+
+def logic_depth(netlist: Path, skip_prefix: str | None = None) -> int:
+    """Longest path in cells (LUTs, carry cells, DSPs) between flip-flops/ports:
+    Yosys ltp after removing the flip-flops (optionally also one submodule's cells)."""
+    src = netlist
+    if skip_prefix:
+        d = json.loads(netlist.read_text())
+        m = d["modules"]["cpu"]
+        m["cells"] = {k: v for k, v in m["cells"].items() if not k.startswith(skip_prefix)}
+        src = Path(tempfile.mkdtemp()) / "netlist.json"
+        src.write_text(json.dumps(d))
+    out = subprocess.run(["yosys", "-p", f"read_json {src}; delete t:MISTRAL_FF t:MISTRAL_CLKBUF; ltp"],
+                         capture_output=True, text=True).stdout
+    m = re.search(r"Longest topological path in \S+ \(length=(\d+)\)", out)
+    return int(m.group(1)) if m else -1
+
+
+def main() -> int:
+    elf = build("bench", [PROGS / "bench.c"], tag="bench", opt="-O2")
+    out = run_elf(elf)
+    m = re.search(r"cycles=(\d+) instructions=(\d+) cpi=([\d.]+)", out)
+    print(f"bench.c (-O2: CRC-32, insertion sort, 12x12 matrix product, itoa): "
+          f"{m.group(1)} cycles, {m.group(2)} instructions, CPI {m.group(3)}")
+
+    with tempfile.TemporaryDirectory() as tmp:
+        src = Path(tmp) / "classes.S"
+        src.write_text(class_program())
+        celf = build("classes", [src], tag="bench", crt0=False)
+        sig = Path(tmp) / "sig.txt"
+        run_elf(celf, "--signature", str(sig))
+        cycles = [int(l, 16) for l in sig.read_text().split()]
+    print(f"cycles per instruction by class (zero-wait-state RAM, {REPS} in a row, mcycle):")
+    for name, c in zip(CLASSES, cycles):
+        print(f"  {name:22s} {c / REPS:6.2f}")
+
+    row = eda.synth_cyclonev(core("cpu"))
+    if "error" in row:
+        print(row["error"])
+        return 1
+    netlist = eda.BUILD / "synth" / "cpu" / "netlist.json"
+    depth = logic_depth(netlist)
+    depth_core = logic_depth(netlist, "u_muldiv")
+    print(f"Cyclone V (yosys synth_intel_alm): {row['luts']} LUTs, {row['carry_cells']} carry cells, "
+          f"{row['ffs']} FFs, {row['dsp']} DSP blocks, {row['m10k']} M10K, {row['mlab']} MLAB")
+    print(f"logic depth (ltp, cells between registers incl. carry-chain cells): {depth}; "
+          f"without the multiplier: {depth_core}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
