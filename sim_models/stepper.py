@@ -1,0 +1,437 @@
+"""Fast plant stepper for co-simulation: exact zero-order-hold flow per mode.
+
+Between mode switches each axis is linear time-invariant with a constant
+bridge voltage, so its flow over a time tau is exactly ``expm(M tau)`` of the
+augmented matrix ``M = [[A, b], [0, 0]]`` acting on ``[x, 1]``.  The stepper
+caches these matrices per (mode, bridge voltages, length in ticks), so a
+co-simulation that steps at PWM edges or fixed periods reuses a handful of
+them.  Mode switches (current reaching zero while a bridge side floats, gear
+backlash and nut clearance contacts, table stick/slip) are events: after each
+chunk (at most ``h_max_s`` long) the guards are checked at the chunk end and,
+through a cubic Hermite fit of the guard using its exact time derivatives,
+for a dip inside the chunk; the crossing is then located by bracketed
+false-position iteration on the exact flow, the mode switched and the rest of
+the chunk integrated in the new mode.
+
+Co-simulation API (sim_models.stepper.TwoAxisPlant)::
+
+    plant = TwoAxisPlant()                      # Table 2 parameters
+    edges = plant.advance(dt, (pins_x, pins_z)) # Pins(rpwm, lpwm, r_en, l_en) each
+    for t, axis, a, b, z in edges: ...          # t: seconds after the call's start
+    plant.table_mm(0), plant.screw_angle(1), plant.current(0), plant.is_currents(0)
+
+Time advances in integers of ``tick_s`` (default 10 ns); the running total
+of the requested dt is rounded (not each dt), so the plant never drifts from
+the caller's clock by more than half a tick.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+from scipy.linalg import matrix_balance
+
+from sim_models import axis as ax
+from sim_models.bridge import COAST, Pins, armature_voltages, is_currents
+from sim_models.encoder import Edge, add_glitches, count_of, edges_from_samples, hermite, pins_of
+from sim_models.params import AxisParams, PlantParams, load_params
+
+NZ = ax.N_STATE + 1
+
+
+@dataclass
+class _ModeSystem:
+    mode: ax.Mode
+    e_pos: float
+    e_neg: float
+    m: np.ndarray                  # augmented 14 x 14
+    guards: list[ax.Guard]
+    g: np.ndarray | None           # guard rows, n_g x 14
+    gm: np.ndarray | None          # g @ m: time derivative of the guards
+    tol: np.ndarray | None
+    phi: dict[int, np.ndarray]     # ticks -> expm(m * ticks * tick)
+    bal: np.ndarray                # diagonal similarity that balances m
+    mb: np.ndarray                 # the balanced matrix
+    h_ticks: int                   # longest chunk between guard checks
+    digits: dict[tuple[int, int], np.ndarray] = field(default_factory=dict)
+    gg: np.ndarray | None = None   # [g; g m]: guards and their derivatives in one product
+    tol_list: list[float] | None = None
+
+    def __post_init__(self) -> None:
+        if self.g is not None and self.gm is not None and self.tol is not None:
+            self.gg = np.vstack([self.g, self.gm])
+            self.tol_list = self.tol.tolist()
+
+    def expm(self, tau: float) -> np.ndarray:
+        """expm(m tau) through the balanced matrix (see :func:`expm_balanced`)."""
+        return expm_balanced(self.mb, self.bal, tau)
+
+
+class FastAxis:
+    """One axis advanced by exact ZOH with event handling."""
+
+    MAX_EVENTS_PER_CHUNK = 10_000
+
+    def __init__(self, a: AxisParams, plant: PlantParams, axis_index: int = 0,
+                 h_max_s: float = 1e-3, tick_s: float = 1e-8,
+                 h_contact_s: float = 1e-5) -> None:
+        self.params = a
+        self.bridge = plant.bridge
+        self.enc = plant.encoder
+        self.index = axis_index
+        self.c = ax.AxisConsts.build(a, plant.bridge)
+        self.tick = tick_s
+        self.h_max_ticks = max(1, round(h_max_s / tick_s))
+        # backlash and clearance contacts bounce at kHz rates: check them often
+        self.h_contact_ticks = max(1, min(self.h_max_ticks, round(h_contact_s / tick_s)))
+        self.z = np.zeros(NZ)
+        self.z[ax.N_STATE] = 1.0
+        self.pins = COAST
+        self.e_pos, self.e_neg = armature_voltages(COAST, self.bridge)
+        self.mode = ax.initial_mode(self.c, self.z[:ax.N_STATE], self.e_pos, self.e_neg)
+        self.count = count_of(0.0, self.enc)
+        self._systems: dict[tuple[ax.Mode, float, float], _ModeSystem] = {}
+        self.events = 0             # mode switches handled (for benchmarks)
+        self._t_req = 0.0           # time asked for so far (s)
+        self._ticks = 0             # time advanced so far (ticks)
+        self._s = np.linspace(0.0, 1.0, 17)
+
+    # ---- state ---------------------------------------------------------
+    @property
+    def x(self) -> np.ndarray:
+        return self.z[:ax.N_STATE]
+
+    def set_state(self, x: np.ndarray) -> None:
+        self.z[:ax.N_STATE] = x
+        self.mode = ax.initial_mode(self.c, self.z[:ax.N_STATE], self.e_pos, self.e_neg)
+        self.count = count_of(float(x[ax.PHI_M]), self.enc)
+
+    def set_pins(self, pins: Pins) -> None:
+        if pins == self.pins:
+            return
+        self.pins = pins
+        self.e_pos, self.e_neg = armature_voltages(pins, self.bridge)
+        self.mode = self.mode._replace(
+            se=ax.elec_mode(self.c, self.z[:ax.N_STATE], self.e_pos, self.e_neg))
+
+    # ---- flow ----------------------------------------------------------
+    def _system(self) -> _ModeSystem:
+        key = (self.mode, self.e_pos, self.e_neg)
+        s = self._systems.get(key)
+        if s is None:
+            a, b = ax.affine(self.c, self.mode, self.e_pos, self.e_neg)
+            m = np.zeros((NZ, NZ))
+            m[:ax.N_STATE, :ax.N_STATE] = a
+            m[:ax.N_STATE, ax.N_STATE] = b
+            gl = ax.guards(self.c, self.mode, self.e_pos, self.e_neg)
+            g = np.array([x.row for x in gl]) if gl else None
+            _, (bal, _) = matrix_balance(m, permute=False, separate=True)
+            s = _ModeSystem(self.mode, self.e_pos, self.e_neg, m, gl, g,
+                            None if g is None else g @ m,
+                            None if g is None else np.array([x.tol for x in gl]), {},
+                            bal, m * bal[None, :] / bal[:, None],
+                            self.h_contact_ticks if any(x.part in ("gear", "nut") for x in gl)
+                            else self.h_max_ticks)
+            self._systems[key] = s
+        return s
+
+    def _flow(self, s: _ModeSystem, ticks: int) -> np.ndarray:
+        """expm(m * ticks * tick), cached.  A new length is composed from
+        cached flows of its base-16 digits (d * 16^k ticks, each computed
+        once by :func:`expm_balanced`): at most 7 small products instead of
+        a new exponential, and exact because the factors commute."""
+        p = s.phi.get(ticks)
+        if p is None:
+            if len(s.phi) > 4096:
+                s.phi.clear()
+            n, k = ticks, 0
+            while n:
+                d = n & 15
+                if d:
+                    key = (k, d)
+                    f = s.digits.get(key)
+                    if f is None:
+                        f = s.digits[key] = s.expm((d << (4 * k)) * self.tick)
+                    p = f if p is None else p @ f
+                n >>= 4
+                k += 1
+            s.phi[ticks] = p
+        return p
+
+    def _find_event(self, s: _ModeSystem, z0: np.ndarray, z1: np.ndarray,
+                    tau: float) -> tuple[float, int, np.ndarray] | None:
+        """Earliest guard crossing in (0, tau]: (time, guard index, state)."""
+        assert s.gg is not None and s.tol_list is not None
+        n = len(s.tol_list)
+        v0 = (s.gg @ z0).tolist()    # guards and their time derivatives
+        v1 = (s.gg @ z1).tolist()
+        brackets: list[tuple[int, float]] = []
+        for j in range(n):
+            tol = s.tol_list[j]
+            g1 = v1[j]
+            if g1 < -tol:
+                brackets.append((j, tau))
+                continue
+            d0, d1 = v0[n + j] * tau, v1[n + j] * tau
+            if d0 < 0 < d1:          # a minimum inside: does it dip below zero?
+                sm = _hermite_min(v0[j], d0, g1, d1)
+                if sm is not None:
+                    tm = sm * tau
+                    if float(s.g[j] @ (s.expm(tm) @ z0)) < -tol:  # type: ignore[index]
+                        brackets.append((j, tm))
+        if not brackets:
+            return None
+        best: tuple[float, int, np.ndarray] | None = None
+        for j, hi in brackets:
+            t, z = self._locate(s, j, z0, hi)
+            if best is None or t < best[0]:
+                best = (t, j, z)
+        return best
+
+    def _locate(self, s: _ModeSystem, j: int, z0: np.ndarray,
+                hi: float) -> tuple[float, np.ndarray]:
+        """Crossing time of guard j in (0, hi]: Newton on the exact flow
+        (the guard's time derivative is exact, row @ m @ z), kept inside the
+        bracket and alternated with bisection.  Stops when the guard is
+        within its tolerance of zero or the bracket is below 1 ns; returns
+        the time and the state there."""
+        row = s.g[j]  # type: ignore[index]
+        drow = s.gm[j]  # type: ignore[index]
+        tol = float(s.tol[j])  # type: ignore[index]
+        lo, glo = 0.0, float(row @ z0)
+        zhi = s.expm(hi) @ z0
+        ghi = float(row @ zhi)
+        t = (lo * ghi - hi * glo) / (ghi - glo) if ghi != glo else 0.5 * hi
+        for it in range(80):
+            if not (lo < t < hi):
+                t = 0.5 * (lo + hi)
+            zt = s.expm(t) @ z0
+            gt = float(row @ zt)
+            if abs(gt) <= tol:
+                return t, zt
+            if gt < 0:
+                hi, ghi, zhi = t, gt, zt
+            else:
+                lo, glo = t, gt
+            if hi - lo <= 1e-9:
+                break
+            dg = float(drow @ zt)
+            t = t - gt / dg if dg != 0.0 and it % 4 != 3 else 0.5 * (lo + hi)
+        return hi, zhi
+
+    def _encode(self, z0: np.ndarray, z1: np.ndarray, t0: float, tau: float,
+                out: list[Edge]) -> None:
+        """Encoder edges along the cubic Hermite path of the motor angle
+        (exact angle and speed at both ends of the step)."""
+        phi0, phi1 = float(z0[ax.PHI_M]), float(z1[ax.PHI_M])
+        w0, w1 = float(z0[ax.W_M]), float(z1[ax.W_M])
+        enc = self.enc
+        u1 = phi1 / enc.rad_per_count + enc.phase_offset_counts
+        c1 = math.floor(u1)
+        c0 = self.count
+        if c1 == c0 and w0 * w1 >= 0:
+            return                      # monotonic and no count change
+        if w0 * w1 > 0 and abs(c1 - c0) <= 8:
+            # monotonic path: solve H(s) = threshold by Newton per edge
+            step = 1 if c1 > c0 else -1
+            k = 1.0 / enc.rad_per_count
+            off = enc.phase_offset_counts
+            u0 = phi0 * k + off
+            du0, du1 = w0 * tau * k, w1 * tau * k
+            a3 = 2 * u0 + du0 - 2 * u1 + du1
+            a2 = -3 * u0 - 2 * du0 + 3 * u1 - du1
+            c = c0
+            sg = 0.0
+            ok = True
+            while c != c1:
+                nxt = c + step
+                thr = float(nxt if step > 0 else c)
+                sg = max(sg, (thr - u0) / (u1 - u0))
+                for _ in range(30):
+                    f = ((a3 * sg + a2) * sg + du0) * sg + u0 - thr
+                    df = (3 * a3 * sg + 2 * a2) * sg + du0
+                    if df * step <= 0:
+                        ok = False
+                        break
+                    ds = f / df
+                    sg -= ds
+                    if abs(ds) < 1e-13:
+                        break
+                if not ok or not (0.0 <= sg <= 1.0):
+                    ok = False
+                    break
+                out.append(Edge(t0 + sg * tau, self.index, *pins_of(nxt, enc)))
+                c = nxt
+            if ok:
+                self.count = c1
+                return
+            del out[len(out) - abs(c - c0):]
+        n = max(17, min(4097, 4 * abs(c1 - c0) + 1))
+        s = self._s if n == 17 else np.linspace(0.0, 1.0, n)
+        ph = hermite(phi0, w0, phi1, w1, tau, s)
+        ph[0], ph[-1] = phi0, phi1
+        self.count = edges_from_samples(t0 + s * tau, ph, self.index, self.enc, out)
+
+    def advance(self, dt: float, out: list[Edge], t_offset: float = 0.0) -> None:
+        """Advance by dt (rounded to ticks) with the pins already set;
+        append encoder edges (times offset by ``t_offset``) to ``out``."""
+        # round the running total, not each dt, so rounding never accumulates
+        self._t_req += dt
+        target = round(self._t_req / self.tick)
+        remaining = target - self._ticks
+        self._ticks = target
+        t = t_offset
+        while remaining > 0:
+            s = self._system()
+            k = min(remaining, s.h_ticks)
+            remaining -= k
+            tau = k * self.tick
+            p = self._flow(s, k)
+            grid = True
+            for _ in range(self.MAX_EVENTS_PER_CHUNK):
+                z1 = p @ self.z
+                ev = None if s.g is None else self._find_event(s, self.z, z1, tau)
+                if ev is None:
+                    self._encode(self.z, z1, t, tau, out)
+                    self.z = z1
+                    t += tau
+                    break
+                te, j, ze = ev
+                self._encode(self.z, ze, t, te, out)
+                self.z = ze
+                t += te
+                tau -= te
+                self.events += 1
+                self.mode = ax.next_mode(self.c, self.z[:ax.N_STATE], self.mode, s.guards[j],
+                                         self.e_pos, self.e_neg)
+                s = self._system()
+                grid = False
+                if tau <= 1e-13:
+                    break
+                p = s.expm(tau)
+            else:
+                raise RuntimeError(f"axis {self.index}: more than {self.MAX_EVENTS_PER_CHUNK} "
+                                   f"mode switches in one chunk (Zeno?) mode={self.mode}")
+            del grid
+
+
+def expm_balanced(mb: np.ndarray, bal: np.ndarray, tau: float) -> np.ndarray:
+    """expm(M tau) with M = diag(bal) mb diag(bal)^-1: Taylor series of
+    degree 10 on tau mb scaled to a 1-norm <= 1/4 (truncation < 1e-14), then
+    repeated squaring.  scipy.linalg.expm gives the same result to 2e-11
+    relative (checked in tests/test_plant_stepper.py) but takes milliseconds
+    on these stiff, badly scaled matrices; this takes ~0.1 ms."""
+    a = mb * tau
+    nrm = float(np.abs(a).sum(axis=0).max())
+    sq = max(0, math.ceil(math.log2(nrm / 0.25))) if nrm > 0.25 else 0
+    a = a * (0.5**sq)
+    eye = _EYE
+    e = eye + a / 10.0
+    for k in range(9, 0, -1):
+        e = eye + (a @ e) / k
+    for _ in range(sq):
+        e = e @ e
+    return e * bal[:, None] / bal[None, :]
+
+
+_EYE = np.eye(NZ)
+
+
+def _hermite_min(g0: float, d0: float, g1: float, d1: float) -> float | None:
+    """Location in (0, 1) of the minimum of the cubic Hermite through
+    (g0, d0), (g1, d1) (derivatives already scaled by the step), if it dips
+    below zero there."""
+    # p(s) = a s^3 + b s^2 + d0 s + g0
+    a = 2 * g0 + d0 - 2 * g1 + d1
+    b = -3 * g0 - 2 * d0 + 3 * g1 - d1
+    # p'(s) = 3a s^2 + 2b s + d0 = 0
+    roots: list[float] = []
+    if abs(a) < 1e-300:
+        if b != 0:
+            roots = [-d0 / (2 * b)]
+    else:
+        disc = b * b - 3 * a * d0
+        if disc >= 0:
+            r = math.sqrt(disc)
+            roots = [(-b - r) / (3 * a), (-b + r) / (3 * a)]
+    best = None
+    for sr in roots:
+        if 0 < sr < 1:
+            v = ((a * sr + b) * sr + d0) * sr + g0
+            if v < 0 and (best is None or v < best[1]):
+                best = (sr, v)
+    return None if best is None else best[0]
+
+
+class TwoAxisPlant:
+    """The two-axis stage for co-simulation (axis 0 = x, axis 1 = z)."""
+
+    def __init__(self, params: PlantParams | None = None, h_max_s: float = 1e-3,
+                 tick_s: float = 1e-8, glitch_rate_hz: float = 0.0,
+                 glitch_width_s: float = 200e-9, seed: int | None = None) -> None:
+        self.params = params or load_params()
+        self.axes = [FastAxis(a, self.params, i, h_max_s, tick_s)
+                     for i, a in enumerate(self.params.axes)]
+        self.t = 0.0
+        self.glitch_rate_hz = glitch_rate_hz
+        self.glitch_width_s = glitch_width_s
+        if seed is None:
+            seed = random.SystemRandom().randrange(2**32)
+        self.seed = seed
+        self._rng = random.Random(seed)
+        self._pin_state = {i: (0, 0, 0) for i in range(len(self.axes))}
+        for i, a in enumerate(self.axes):
+            self._pin_state[i] = pins_of(a.count, self.params.encoder)
+
+    def advance(self, dt: float, pins: Sequence[Pins]) -> list[Edge]:
+        """Hold ``pins`` (one Pins per axis) for ``dt`` seconds.  Returns the
+        encoder edges of the step in time order: (t, axis, a, b, z) with t in
+        seconds after the start of this call; each edge gives the new levels
+        of that axis's A, B and Z pins."""
+        out: list[Edge] = []
+        for a, p in zip(self.axes, pins):
+            a.set_pins(p)
+            a.advance(dt, out)
+        if len(self.axes) > 1 and out:
+            out.sort(key=lambda e: e.t)
+        if self.glitch_rate_hz > 0:
+            out = add_glitches(out, 0.0, dt, self.glitch_rate_hz, self.glitch_width_s,
+                               self._pin_state, self._rng)
+        self.t += dt
+        return out
+
+    # ---- accessors (SI unless the name says otherwise) -------------------
+    def motor_angle(self, axis: int) -> float:
+        return float(self.axes[axis].z[ax.PHI_M])
+
+    def motor_speed(self, axis: int) -> float:
+        return float(self.axes[axis].z[ax.W_M])
+
+    def screw_angle(self, axis: int) -> float:
+        return float(self.axes[axis].z[ax.PHI_S])
+
+    def screw_speed(self, axis: int) -> float:
+        return float(self.axes[axis].z[ax.W_S])
+
+    def table_mm(self, axis: int) -> float:
+        return 1e3 * float(self.axes[axis].z[ax.CHI_L])
+
+    def table_speed_mm_s(self, axis: int) -> float:
+        return 1e3 * float(self.axes[axis].z[ax.V_L])
+
+    def current(self, axis: int) -> float:
+        return float(self.axes[axis].z[ax.I_])
+
+    def is_currents(self, axis: int) -> tuple[float, float]:
+        a = self.axes[axis]
+        return is_currents(a.pins, float(a.z[ax.I_]), self.params.bridge)
+
+    def count(self, axis: int) -> int:
+        return self.axes[axis].count
+
+    def state(self, axis: int) -> np.ndarray:
+        return self.axes[axis].x.copy()
