@@ -1,0 +1,66 @@
+// Safety properties of the SoC's stop path (soc_sys latch + soc_safety_gate),
+// proven by Yosys SAT k-induction (make lint), for every input sequence:
+// any bus traffic, any e-stop/fault waveform, any PWM request.
+//  1. While the e-stop pin is high, or in reset, or while `safe`, no PWM pin
+//     of either axis is high (combinational: holds with no clock edge).
+//  2. Once the e-stop has been high on 3 consecutive clock edges (through
+//     its synchroniser), `safe` is set, and it stays set as long as the
+//     e-stop is high, whatever firmware writes.
+//  3. `safe` never falls on its own: only in the cycle after a bus write to
+//     SYS.SAFETY (firmware's acknowledgement), and never straight out of
+//     reset - so a reset or power-up never restarts a drive by itself.
+`default_nettype none
+
+module soc_safety_props (
+    input wire        clk,
+    input wire        rst,
+    input wire        req,
+    input wire        we,
+    input wire [3:0]  be,
+    input wire [11:0] addr,
+    input wire [31:0] wdata,
+    input wire        estop,
+    input wire [1:0]  bridge_fault,
+    input wire [1:0]  rpwm_in,
+    input wire [1:0]  lpwm_in,
+    input wire [1:0]  pwm_in
+);
+    wire        ack, err, safe, safety_event;
+    wire [31:0] rdata;
+    wire [1:0]  fault_s, rpwm, lpwm, pwm;
+
+    soc_sys dut (
+        .clk(clk), .rst(rst), .req(req), .we(we), .be(be), .addr(addr), .wdata(wdata),
+        .ack(ack), .err(err), .rdata(rdata), .estop(estop), .bridge_fault(bridge_fault),
+        .bridge_fault_s(fault_s), .safe(safe), .safety_event(safety_event)
+    );
+
+    soc_safety_gate #(.N_AXES(2)) gate (
+        .rst(rst), .safe(safe), .estop_pin(estop),
+        .rpwm_in(rpwm_in), .lpwm_in(lpwm_in), .pwm_in(pwm_in),
+        .rpwm(rpwm), .lpwm(lpwm), .pwm(pwm)
+    );
+
+    reg [1:0] estop_edges = 2'd0;   // consecutive edges with estop high, saturating at 3
+    reg       ack_write_q = 1'b0;   // last edge saw a write to SYS.SAFETY, outside reset
+    reg       safe_q      = 1'b1;
+    reg       past_valid  = 1'b0;
+
+    always @(posedge clk) begin
+        estop_edges <= !estop ? 2'd0 : (estop_edges == 2'd3 ? 2'd3 : estop_edges + 2'd1);
+        ack_write_q <= !rst && req && we && addr[11:2] == `TL_SYS_SAFETY_IDX;
+        safe_q      <= safe;
+        past_valid  <= 1'b1;
+    end
+
+    always @(*) begin
+        if (estop || rst || safe)
+            assert (rpwm == 2'b00 && lpwm == 2'b00 && pwm == 2'b00);
+        if (past_valid && estop_edges == 2'd3)
+            assert (safe);
+        if (past_valid && safe_q && !safe)
+            assert (ack_write_q);
+    end
+endmodule
+
+`default_nettype wire
