@@ -14,16 +14,21 @@
 // Control (see docs/cpu.md for the cycle counts):
 //   FETCH  : hold the instruction request (address pc) until ack.
 //   EXEC   : decode the instruction register, read rs1/rs2, ALU / branch /
-//            CSR / trap decision.  Single-cycle instructions complete here.
-//            Loads and stores raise dbus_req in this cycle already.
-//   MEM    : wait for dbus_ack (load write-back, or access fault).
-//   MULDIV : wait for the multiply/divide unit.
-// In the cycle an instruction completes (or traps), pc takes the next pc and
-// the fetch of the next instruction is requested in that same cycle, so a
-// zero-wait-state bus gives 2 cycles per ALU instruction.
+//            CSR / trap decision.  Single-cycle instructions complete here
+//            and request the next instruction in the same cycle.
+//            Loads and stores raise dbus_req in this cycle already; loads,
+//            stores, multiplies and divides also prefetch pc+4 here.
+//   MEM    : wait for dbus_ack and the prefetch (load write-back, or access fault).
+//   MULDIV : wait for the multiply/divide unit and the prefetch.
+// With a zero-wait-state bus (ack in the cycle after the request) that is
+// 2 cycles per ALU/branch/jump/CSR instruction and per load/store, 3 per
+// multiply and 35 per divide.  The handshake itself sets the floor of 2:
+// a slave cannot accept a new request in its ack cycle.
 // Interrupts are taken in EXEC before the instruction executes (mepc = its
 // pc); multi-cycle instructions run to completion first, so they are never
 // half-done when a trap is taken.
+//
+// Port contract unchanged since the first version (rtl/soc instantiates it).
 module cpu #(
     parameter [31:0] RESET_PC = 32'h0000_0000,
     parameter [31:0] HART_ID  = 32'd0
@@ -59,16 +64,17 @@ module cpu #(
     wire in_md    = state == S_MULDIV;
 
     // ---- fetch -------------------------------------------------------------
-    wire        complete;
+    wire        complete, to_exec, fetch_start, prefetch;
     reg  [31:0] next_pc;
-    wire [31:0] insn;
-    wire        fetched, fetch_fault;
+    wire [31:0] insn, pc_plus4;
+    wire        fetched, fetch_fault, fetch_pending, pf_done, pf_bad;
     cpu_fetch u_fetch (
-        .clk(clk), .launch(complete && !rst), .next_pc(next_pc),
-        .waiting(in_fetch && !rst), .pc(pc),
+        .clk(clk), .rst(rst), .start(fetch_start),
+        .start_addr(prefetch ? pc_plus4 : (complete ? next_pc : pc)),
+        .waiting(in_fetch), .prefetching(in_mem || in_md), .take_prefetch(to_exec),
         .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
-        .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
-        .insn(insn), .fetched(fetched), .fault(fetch_fault)
+        .ibus_rdata(ibus_rdata), .ibus_err(ibus_err), .pending(fetch_pending),
+        .insn(insn), .fetched(fetched), .fault(fetch_fault), .pf_done(pf_done), .pf_bad(pf_bad)
     );
 
     // ---- decode and register file --------------------------------------------
@@ -104,7 +110,7 @@ module cpu #(
         .result(alu_result), .cmp_a(rs1_val), .cmp_b(rs2_val), .branch_taken(branch_taken)
     );
 
-    wire [31:0] pc_plus4 = pc + 32'd4;
+    assign      pc_plus4 = pc + 32'd4;
     wire [31:0] pc_imm   = pc + imm;          // JAL, branches, AUIPC
     wire [31:0] eff_addr = rs1_val + imm;     // loads, stores (S-imm), JALR
     wire        jumps    = is_jal || is_jalr || (is_branch && branch_taken);
@@ -114,12 +120,19 @@ module cpu #(
     wire        target_misaligned = jumps && jump_target[1];
 
     // ---- load/store ------------------------------------------------------------
+    // The data access and the prefetch of pc+4 run in parallel; whichever
+    // answers first is remembered until the other one has answered too.
+    reg         d_done, d_err_q;
+    reg  [31:0] d_rdata_q;
+    wire        d_fin   = d_done || dbus_ack;
+    wire        d_error = d_done ? d_err_q : dbus_err;
+    wire [31:0] d_rdata = d_done ? d_rdata_q : dbus_rdata;
     wire        mem_misaligned;
     wire [31:0] load_data;
     cpu_lsu u_lsu (
         .funct3(funct3), .off(eff_addr[1:0]), .store_data(rs2_val),
         .misaligned(mem_misaligned), .be(dbus_be), .wdata(dbus_wdata),
-        .rdata(dbus_rdata), .load_data(load_data)
+        .rdata(d_rdata), .load_data(load_data)
     );
 
     // ---- CSRs and traps -----------------------------------------------------------
@@ -158,7 +171,7 @@ module cpu #(
                     trap = 1'b0;
                 end
             end
-            S_MEM: if (dbus_ack && dbus_err) begin
+            S_MEM: if (d_fin && pf_done && d_error) begin
                 trap = 1'b1; trap_code = is_store ? 4'd7 : 4'd5; trap_tval = eff_addr;
             end
             default: ;
@@ -185,6 +198,7 @@ module cpu #(
 
     // ---- multiply / divide ------------------------------------------------------
     wire        md_done;
+    reg         md_done_q;
     wire [31:0] md_result;
     /* verilator lint_off PINCONNECTEMPTY */
     cpu_muldiv u_muldiv (
@@ -192,12 +206,18 @@ module cpu #(
         .a(rs1_val), .b(rs2_val), .busy(), .done(md_done), .result(md_result)
     );
     /* verilator lint_on PINCONNECTEMPTY */
+    wire md_fin = md_done || md_done_q;
 
     // ---- completion, write-back, next pc --------------------------------------------
-    assign complete = trap || (exec_go && !is_load && !is_store && !is_muldiv) ||
-                      (in_mem && dbus_ack) || (in_md && md_done);
+    assign prefetch = exec_mem || exec_md;
+    assign complete = trap || (exec_go && !prefetch) ||
+                      (in_mem && d_fin && pf_done) || (in_md && md_fin && pf_done);
     assign retire   = complete && !trap && !rst;
     assign rf_we    = retire && writes_rd;
+    // After a load/store/muldiv the prefetched pc+4 goes straight to EXEC;
+    // if that prefetch hit a bus error, FETCH asks again and takes the fault.
+    assign to_exec  = retire && (in_mem || in_md) && !pf_bad;
+    assign fetch_start = !rst && ((complete && !to_exec) || prefetch || (in_fetch && !fetch_pending));
 
     always @(*) begin
         if (trap)
@@ -227,23 +247,36 @@ module cpu #(
             rf_wdata = alu_result;
     end
 
-    assign dbus_req  = !rst && (exec_mem || in_mem);
+    assign dbus_req  = !rst && (exec_mem || (in_mem && !d_done));
     assign dbus_addr = eff_addr;
     assign dbus_we   = is_store;
 
     always @(posedge clk) begin
         if (rst) begin
-            state <= S_FETCH;
-            pc    <= RESET_PC;
-        end else if (complete) begin
-            state <= S_FETCH;
-            pc    <= next_pc;
+            state     <= S_FETCH;
+            pc        <= RESET_PC;
+            d_done    <= 1'b0;
+            md_done_q <= 1'b0;
         end else begin
-            case (state)
-                S_FETCH: if (fetched) state <= S_EXEC;
-                S_EXEC:  state <= exec_mem ? S_MEM : S_MULDIV;
-                default: ;
-            endcase
+            if (in_mem && dbus_ack) begin
+                d_done    <= 1'b1;
+                d_err_q   <= dbus_err;
+                d_rdata_q <= dbus_rdata;
+            end
+            if (md_done)
+                md_done_q <= 1'b1;
+            if (complete) begin
+                state     <= to_exec ? S_EXEC : S_FETCH;
+                pc        <= next_pc;
+                d_done    <= 1'b0;
+                md_done_q <= 1'b0;
+            end else begin
+                case (state)
+                    S_FETCH: if (fetched) state <= S_EXEC;
+                    S_EXEC:  state <= exec_mem ? S_MEM : S_MULDIV;
+                    default: ;
+                endcase
+            end
         end
     end
 endmodule

@@ -1,36 +1,76 @@
 `default_nettype none
-// Instruction fetch: drives the instruction bus and holds the fetched word.
+// Instruction fetch: the instruction bus master, the instruction register
+// and a one-word prefetch buffer.
 //
-// A fetch is requested in two ways, both holding ibus_req and ibus_addr
-// stable until ibus_ack:
-//   * `launch` in the cycle an instruction completes: the request goes out at
-//     once with the next pc, so the bus latency overlaps that cycle;
-//   * `waiting`: the core's FETCH state, holding the request (addr = pc) until ack.
-// There is never more than one request outstanding, so no fetch is ever
-// cancelled and a slave may take any number of wait states.
+// At most one request is outstanding.  A request starts with `start`
+// (address `start_addr`, driven combinationally in that cycle so the bus
+// latency overlaps it) and is then held, address registered, until
+// ibus_ack.  The core only raises `start` when no request is outstanding or
+// in the ack cycle of the outstanding one, so ibus_req/ibus_addr never
+// change under a pending request and no fetch is ever cancelled: a slave
+// may take any number of wait states.
+//
+// Two kinds of fetch:
+//   * in FETCH (`waiting`): the word goes straight into the instruction
+//     register (`fetched`), or raises `fault` on ibus_err;
+//   * while a load/store or multiply/divide is in flight (`prefetching`):
+//     the core prefetched pc+4; the word waits in the prefetch buffer (or
+//     is taken from the bus in its ack cycle) until the core moves it into
+//     the instruction register with `take_prefetch`.
 module cpu_fetch (
     input  wire        clk,
-    input  wire        launch,
-    input  wire [31:0] next_pc,
+    input  wire        rst,
+    input  wire        start,
+    input  wire [31:0] start_addr,
     input  wire        waiting,
-    input  wire [31:0] pc,
+    input  wire        prefetching,
+    input  wire        take_prefetch,
     output wire        ibus_req,
     output wire [31:0] ibus_addr,
     input  wire        ibus_ack,
     input  wire [31:0] ibus_rdata,
     input  wire        ibus_err,
+    output wire        pending,       // a request is outstanding
     output reg  [31:0] insn,
-    output wire        fetched,    // ack without error: insn valid from the next cycle
-    output wire        fault       // ack with error: instruction access fault
+    output wire        fetched,       // FETCH: ack without error, insn valid next cycle
+    output wire        fault,         // FETCH: ack with error
+    output wire        pf_done,       // prefetch answered (now or before)
+    output wire        pf_bad         // ... with a bus error
 );
-    assign ibus_req  = launch || waiting;
-    assign ibus_addr = launch ? next_pc : pc;
-    assign fetched   = waiting && ibus_ack && !ibus_err;
-    assign fault     = waiting && ibus_ack && ibus_err;
+    reg        pend;
+    reg [31:0] addr_q;
+    reg [31:0] pf_insn;
+    reg        pf_err;
+
+    assign pending   = pend;
+    assign ibus_req  = pend || start;
+    assign ibus_addr = pend ? addr_q : start_addr;
+    assign fetched   = waiting && pend && ibus_ack && !ibus_err;
+    assign fault     = waiting && pend && ibus_ack && ibus_err;
+    assign pf_done   = !pend || ibus_ack;
+    assign pf_bad    = pend ? ibus_err : pf_err;
+    wire [31:0] pf_word = pend ? ibus_rdata : pf_insn;
 
     always @(posedge clk) begin
+        if (rst) begin
+            pend <= 1'b0;
+        end else if (start) begin
+            pend   <= 1'b1;
+            addr_q <= start_addr;
+        end else if (ibus_ack) begin
+            pend <= 1'b0;
+        end
+    end
+
+    always @(posedge clk) begin
+        if (prefetching && pend && ibus_ack) begin
+            pf_insn <= ibus_rdata;
+            pf_err  <= ibus_err;
+        end
         if (fetched)
             insn <= ibus_rdata;
+        else if (take_prefetch)
+            insn <= pf_word;
     end
 endmodule
 `default_nettype wire

@@ -154,8 +154,9 @@ module cpu_sim_top #(
     end
 
     // ---- tohost watch and counters ----------------------------------------------
-    // The store to tohost is accepted at one edge and retires in the ack cycle
-    // after it; the counters stop after that cycle so they include the store.
+    // The store to tohost is accepted at one edge and retires in its ack
+    // cycle or later (when it waits for its prefetch); the counters stop
+    // after the cycle it retires in, so they include the store.
     reg tohost_seen;
     always @(posedge clk) begin
         if (rst) begin
@@ -167,7 +168,7 @@ module cpu_sim_top #(
         end else if (!tohost_hit) begin
             cycles  <= cycles + 64'd1;
             instret <= instret + {63'd0, retire};
-            if (tohost_seen)
+            if (tohost_seen && retire)
                 tohost_hit <= 1'b1;
             if (!tohost_seen && d_go && dbus_we && dbus_addr == tohost_addr && dbus_wdata != 32'd0) begin
                 tohost_seen  <= 1'b1;

@@ -67,6 +67,19 @@ _start:
     lb      x15, 7(x14)
     jalr    ra, 0(x14)          # fetch fault: the handler returns to ra
 
+    # --- fetch fault on the word after the last one in RAM, reached after
+    #     a load and after a divide (the core prefetches during those) ---
+    li      x14, 0x8000fffc
+    la      x15, tail_insns
+    lw      x16, 0(x15)         # "lw x16, 4(x20)"
+    sw      x16, 0(x14)
+    .word   0x0000100f          # fence.i
+    jalr    ra, 0(x14)
+    lw      x16, 4(x15)         # "div x16, x16, x21"
+    sw      x16, 0(x14)
+    .word   0x0000100f
+    jalr    ra, 0(x14)
+
     # --- mstatus across a trap: MIE -> MPIE, mret restores ---
     csrsi   mstatus, 8          # MIE = 1 (mie = 0: no interrupt can fire)
     ecall
@@ -143,6 +156,10 @@ _start:
 4:  la      x2, tohost
     sw      x1, 0(x2)
 5:  j       5b
+
+tail_insns:
+    lw      x16, 4(x20)
+    div     x16, x16, x21
 
     .align  2
 handler:
