@@ -90,6 +90,25 @@ def test_step5_several_crossings_are_all_candidates_flattest_first():
     assert fr[1] == pytest.approx(150.0, abs=1e-6)
 
 
+def test_step5_flat_curve_lists_every_point_highest_frequency_first():
+    # what a stalled R-L motor on a slow-decay bridge gives: torque independent of f
+    seed = random.randrange(1 << 30)
+    print(f"seed {seed}")
+    rng = np.random.default_rng(seed)
+    fs = freq_sweep(lambda f: 1.2 + rng.uniform(-1e-3, 1e-3))  # within 0.2 % of tau_max
+    s5 = step5_candidates(fs)
+    assert {c.kind for c in s5.candidates} == {"on_target"}, seed
+    assert [c.freq_hz for c in s5.candidates] == sorted(fs.x, reverse=True), seed
+    assert "cannot discriminate" in s5.message
+
+
+def test_step5_point_touching_the_target_is_a_candidate():
+    # a dip that reaches tau_max/2 at 300 Hz (0.1 % above it) without crossing
+    fs = freq_sweep(lambda f: 1.2 + 0.0024 + 0.001 * abs(f - 300))
+    s5 = step5_candidates(fs)
+    assert [(c.kind, c.freq_hz) for c in s5.candidates] == [("on_target", 300.0)]
+
+
 def test_step5_refuses_when_no_frequency_reaches_half_tau_max():
     fs = freq_sweep(lambda f: 0.9 - 0.0005 * f)  # 0.65..0.875 N m, all below 1.2
     with pytest.raises(MethodError, match="no frequency in 50-500 Hz reaches"):

@@ -53,6 +53,10 @@ class Thresholds:
     step5_nearest_frac: float = 0.05
     """step 5 when no point pair brackets tau_max/2: accept the closest point
     if it is within this fraction of tau_max, else refuse."""
+    step5_on_target_frac: float = 0.002
+    """step 5: a measured point within this fraction of tau_max of the target
+    is *on* it (a force gauge resolves about 0.2 % of its range); a curve
+    with no slope above this over the whole sweep is flat."""
     freq_match_frac: float = 0.03
     """a duty sweep belongs to a candidate if its frequency is within this
     fraction (the divider only reaches discrete frequencies: ~1 % apart at 450 Hz)."""
@@ -83,7 +87,7 @@ class Candidate:
     """torque at freq_hz on the interpolated curve (= target for a crossing)."""
     slope_nm_per_hz: float
     """local d(torque)/d(frequency): the flatter, the less a frequency error matters."""
-    kind: Literal["crossing", "nearest"]
+    kind: Literal["crossing", "on_target", "nearest"]
 
 
 @dataclass(frozen=True)
@@ -98,10 +102,14 @@ def step5_candidates(freq_sweep: Sweep, th: Thresholds = Thresholds()) -> Step5:
     """Step 5: the frequencies whose torque is tau_max * duty (tau_max/2 at the
     paper's 50 %), interpolated linearly between neighbouring points.
 
-    Every crossing is a candidate; they are ranked by |slope| (flattest
-    first) because there the achieved divider frequency, which differs from
-    the chosen one by up to ~0.5 %, changes the torque least.  The paper
-    gives no order for its loop back to step 5; this one is ours.
+    Every crossing is a candidate, interpolated; so is a measured point
+    within ``step5_on_target_frac`` of the target where the curve touches
+    it without crossing, and, if the whole curve is that close (flat), every
+    point.  They are ranked by |slope|
+    (flattest first) because there the achieved divider frequency, which
+    differs from the chosen one by up to ~0.5 %, changes the torque least;
+    slopes too small to matter tie, and ties go to the higher frequency.
+    The paper gives no order for its loop back to step 5; this one is ours.
     If nothing crosses, the closest measured point is the only candidate when
     it is within ``step5_nearest_frac`` of tau_max; otherwise MethodError.
     """
@@ -113,21 +121,49 @@ def step5_candidates(freq_sweep: Sweep, th: Thresholds = Thresholds()) -> Step5:
     f, t = freq_sweep.x, freq_sweep.torque_nm
     e = t - target
     grad = np.gradient(t, f)
+    tol = th.step5_on_target_frac * tmax
+    on = np.abs(e) <= tol
     found: list[Candidate] = []
-    for i in range(len(f)):
-        if e[i] == 0.0:
-            found.append(Candidate(float(f[i]), float(t[i]), float(grad[i]), "crossing"))
-        elif i + 1 < len(f) and e[i] * e[i + 1] < 0.0:
-            s = (t[i + 1] - t[i]) / (f[i + 1] - f[i])
-            fc = f[i] - e[i] / s
-            found.append(Candidate(float(fc), float(target), float(s), "crossing"))
+    if on.all():
+        # A flat curve: every point is on the target, none is a better crossing.
+        found = [Candidate(float(f[i]), float(t[i]), float(grad[i]), "on_target") for i in range(len(f))]
+    else:
+        near_crossing = np.zeros(len(f), dtype=bool)
+        for i in range(len(f)):
+            if e[i] == 0.0:
+                found.append(Candidate(float(f[i]), float(t[i]), float(grad[i]), "crossing"))
+                near_crossing[i] = True
+            elif i + 1 < len(f) and e[i] * e[i + 1] < 0.0:
+                s = (t[i + 1] - t[i]) / (f[i + 1] - f[i])
+                found.append(Candidate(float(f[i] - e[i] / s), float(target), float(s), "crossing"))
+                near_crossing[i] = near_crossing[i + 1] = True
+        # points that touch the target without the curve crossing it
+        found += [Candidate(float(f[i]), float(t[i]), float(grad[i]), "on_target")
+                  for i in range(len(f)) if on[i] and not near_crossing[i]]
     if found:
-        found.sort(key=lambda c: (abs(c.slope_nm_per_hz), c.freq_hz))
+        # Flattest first.  Slopes that change the torque by less than the
+        # on-target tolerance over the whole sweep are all "flat" and tie;
+        # ties go to the higher frequency (at stall the current ripple, and
+        # with it the torque ripple, shrinks as the period gets shorter
+        # against L/R).
+        flat = tol / float(f[-1] - f[0])
+
+        def rank(c: Candidate) -> tuple[float, float]:
+            m = abs(c.slope_nm_per_hz)
+            return (0.0 if m <= flat else m, -c.freq_hz)
+
+        flat_all = bool(on.all())
+        found.sort(key=(lambda c: -c.freq_hz) if flat_all else rank)
         n = len(found)
         msg = (
             f"{n} frequenc{'y' if n == 1 else 'ies'} give tau_max*{duty:g}% = {target:.4g} N m; "
             f"first: {found[0].freq_hz:.4g} Hz"
         )
+        if flat_all:
+            msg += (
+                f" (torque does not depend on frequency within {th.step5_on_target_frac:.1%} of tau_max: "
+                "step 5 cannot discriminate; the highest frequency is tried first)"
+            )
         return Step5(tmax, target, tuple(found), msg)
     k = int(np.argmin(np.abs(e)))
     short = e[k] / tmax
