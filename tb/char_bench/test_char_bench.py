@@ -121,17 +121,13 @@ def _paper_like_config(tmp_path: Path):
     return cfg
 
 
-@pytest.mark.parametrize("sim", ["verilator"])
-def test_char_bench(sim, tmp_path):
-    """A written configuration's Count_max, PW0 and PW_F on the RTL's pins give
-    the chosen frequency within the error the file states, and the dead zone."""
-    from torqueloop.characterize import load_config
-    from torqueloop.characterize.simbench import check_config_on_pins, model_waveform
+def _check_on_pins(cfg, sim: str, work: Path) -> None:
+    """Every axis of a configuration programmed into the RTL: the pins give
+    the chosen frequency within the error the file states, and PW0 / PW_F."""
+    from torqueloop.characterize.simbench import check_config_on_pins
 
-    _paper_like_config(tmp_path)
-    cfg = load_config(tmp_path / "cfg.json")
     for name, a in cfg.axes.items():
-        got = check_config_on_pins(cfg, name, sim=sim, work=tmp_path / f"pins_{name}")
+        got = check_config_on_pins(cfg, name, sim=sim, work=work / f"pins_{name}")
         f_pins = got["freq_hz"]
         # the pins give exactly the divider's carrier ...
         assert f_pins == pytest.approx(a.achieved_hz, rel=1e-6), (name, got)
@@ -143,5 +139,37 @@ def test_char_bench(sim, tmp_path):
         # the smallest command lands on the dead-zone edge, the largest on PW_F
         assert a.pw0_counts <= got["duty_counts_cmd1"] <= a.pw0_counts + 1, (name, got)
         assert got["duty_counts_full"] == a.pw_max_counts, (name, got)
-        # and the simulated bench's "model" pin source is what the RTL does
-        assert 1.0 / model_waveform(a.count_max, 1).period_s == pytest.approx(f_pins, rel=1e-9)
+
+
+@pytest.mark.parametrize("sim", ["verilator"])
+def test_char_bench(sim, tmp_path):
+    """A configuration with the paper's frequencies and real dead zones,
+    programmed into the RTL, reproduces them on the pins."""
+    from torqueloop.characterize import load_config
+
+    _paper_like_config(tmp_path)
+    _check_on_pins(load_config(tmp_path / "cfg.json"), sim, tmp_path)
+
+
+@pytest.mark.parametrize("sim", ["verilator"])
+def test_char_bench_simulated_lab(sim, tmp_path):
+    """End to end with no hardware: the plant's dynamometer records both
+    motors' sweeps (pins: the cores' waveform, checked here against the RTL),
+    the command runs the method and writes the configuration, and that
+    configuration on the RTL's pins gives the chosen frequency."""
+    from torqueloop.characterize import load_config
+    from torqueloop.characterize.cli import EXIT_OK, main
+    from torqueloop.characterize.simbench import model_waveform, rtl_waveforms
+
+    # the "model" pin source is what the RTL does, pin change for pin change
+    settings = [(98, 1), (98, 512), (98, 1022), (195, 512), (976, 700)]
+    for (n, d), w in zip(settings, rtl_waveforms(settings, sim=sim, work=tmp_path / "wf")):
+        m = model_waveform(n, d)
+        assert w.period_s == pytest.approx(m.period_s, abs=1e-12), (n, d)
+        assert [p for _, p in w.segments] == [p for _, p in m.segments], (n, d)
+        assert [t for t, _ in w.segments] == pytest.approx([t for t, _ in m.segments], abs=1e-12), (n, d)
+
+    assert main(["sim", "--source", "model", "--out-dir", str(tmp_path / "lab")]) == EXIT_OK
+    cfg = load_config(tmp_path / "lab" / "characterization.json")
+    assert set(cfg.axes) == {"x", "z"}
+    _check_on_pins(cfg, sim, tmp_path)

@@ -1,9 +1,15 @@
 """The characterisation command (scripts/characterize.py).
 
     characterize.py run DATA_DIR [--out CONFIG] [--plots DIR] [--set NAME=VALUE ...]
+    characterize.py sim [--out-dir DIR] [--source rtl|model] [--drive brake|coast] [--axes x z]
     characterize.py step5 FREQ_SWEEP.csv
     characterize.py check FILE.csv ...
     characterize.py show CONFIG.json
+
+``sim`` records the sweeps on the simulated bench (the plant's
+dynamometer, driven by the RTL's pins or their documented waveform) into
+``DIR/data/<axis>/`` and then does exactly what ``run`` does with them,
+writing ``DIR/characterization.json`` and the plots in ``DIR/plots``.
 
 ``run`` takes one folder per axis (``DATA_DIR/<axis>/*.csv``: one frequency
 sweep and any number of duty sweeps, recognised by their ``# sweep =``
@@ -70,8 +76,10 @@ def _split(files: Sequence[Path]) -> tuple[Sweep, list[Sweep]]:
 def report(name: str, r: MotorResult) -> str:
     lines = [f"[{name}] motor {r.freq_sweep.motor!r}: tau_max = {r.step5.tau_max_nm:.4g} N m (step 2)",
              f"[{name}] step 5: {r.step5.message}"]
-    for c in r.step5.candidates:
+    for c in r.step5.candidates[:5]:
         lines.append(f"[{name}]   candidate {c.freq_hz:9.4f} Hz  ({c.kind}, slope {c.slope_nm_per_hz:+.3g} N m/Hz)")
+    if len(r.step5.candidates) > 5:
+        lines.append(f"[{name}]   ... and {len(r.step5.candidates) - 5} more")
     for a in r.attempts:
         if a.linearity is None:
             continue
@@ -125,6 +133,19 @@ def cmd_run(args: argparse.Namespace) -> int:
               f"({a.freq_error_pct:+.3f} %), PW0 {a.pw0_counts} / PW_F {a.pw_max_counts} counts of {(1 << args.pwm_bits) - 1}")
     print(f"wrote {args.out}")
     return EXIT_OK
+
+
+def cmd_sim(args: argparse.Namespace) -> int:
+    from .simbench import simulate_lab
+
+    out = Path(args.out_dir)
+    th = _thresholds(args.set)
+    simulate_lab(out / "data", axes=args.axes, source=args.source, sim=args.simulator, drive=args.drive, th=th)
+    run_args = argparse.Namespace(
+        data_dir=str(out / "data"), out=str(out / "characterization.json"), plots=str(out / "plots"),
+        axis=None, set=args.set, clk_hz=CLK_HZ, pwm_bits=PWM_BITS,
+    )
+    return cmd_run(run_args)
 
 
 def cmd_step5(args: argparse.Namespace) -> int:
@@ -196,6 +217,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--axis", default=None, help="axis name when DATA_DIR holds one axis's CSVs")
     common(p)
     p.set_defaults(fn=cmd_run)
+    p = sub.add_parser("sim", help="the whole method on the simulated bench (no hardware)")
+    p.add_argument("--out-dir", default="build/characterize")
+    p.add_argument("--source", choices=("rtl", "model"), default="rtl",
+                   help="pins from the RTL in simulation (default) or from the cores' documented waveform")
+    p.add_argument("--simulator", default="verilator", choices=("verilator", "icarus"))
+    p.add_argument("--drive", choices=("brake", "coast"), default="brake",
+                   help="IBT-2 off-phase: brake (what pwm_torque drives) or coast (model pins only)")
+    p.add_argument("--axes", nargs="+", default=["x", "z"])
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
+    p.set_defaults(fn=cmd_sim)
     p = sub.add_parser("step5", help="candidate frequencies from a frequency sweep")
     p.add_argument("freq_sweep")
     common(p)

@@ -19,8 +19,9 @@ def plot_frequency(result: MotorResult, path: str | Path, title: str = "") -> Pa
     step-5 candidates and the chosen frequency."""
     fs, s5 = result.freq_sweep, result.step5
     fig, ax = plt.subplots(figsize=(7, 4.2), dpi=110)
-    ax.plot(fs.x, fs.torque_nm, "o-", color="C0", label=f"torque at {fs.duty_pct:g} % duty")
-    ax.axhline(s5.target_nm, color="C3", ls="--", label=f"tau_max/2 = {s5.target_nm:.3g} N m")
+    ax.plot(fs.x, fs.torque_nm, "o-", color="C0", label=f"torque at {fs.duty_pct:.4g} % duty")
+    ax.axhline(s5.target_nm, color="C3", ls="--",
+               label=f"target tau_max x {fs.duty_pct:.4g} % = {s5.target_nm:.4g} N m")
     for c in s5.candidates:
         ax.plot([c.freq_hz], [c.torque_nm], "x", color="0.4", ms=9)
     if result.chosen is not None:
@@ -31,6 +32,10 @@ def plot_frequency(result: MotorResult, path: str | Path, title: str = "") -> Pa
     ax2 = ax.twinx()
     ax2.plot(fs.x, fs.current_a, ".:", color="C1", alpha=0.7)
     ax2.set_ylabel("current (A)", color="C1")
+    # From zero, as Fig. 10: a flat curve must look flat, not like a slope
+    # magnified into the plot's height.
+    ax.set_ylim(0, 1.15 * max(float(fs.torque_nm.max()), s5.target_nm))
+    ax2.set_ylim(0, 1.15 * max(float(fs.current_a.max()), 1e-9))
     ax.set_xlabel("PWM frequency (Hz)")
     ax.set_ylabel("torque (N m)")
     ax.set_title(title or f"step 5: {fs.motor or fs.source}")
@@ -60,6 +65,7 @@ def plot_duty(result: MotorResult, lin: Linearity, path: str | Path, title: str 
     ax2 = ax.twinx()
     ax2.plot(ds.x, ds.current_a, ".:", color="C1", alpha=0.7)
     ax2.set_ylabel("current (A)", color="C1")
+    ax2.set_ylim(0, 1.15 * max(float(ds.current_a.max()), 1e-9))
     ax.set_xlabel("duty (%)")
     ax.set_ylabel("torque (N m)")
     verdict = "passes step 7" if lin.ok else "fails step 7"

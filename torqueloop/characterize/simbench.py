@@ -33,6 +33,7 @@ from .method import MotorResult, Thresholds, characterize_motor
 TB_DIR = REPO_ROOT / "tb" / "char_bench"
 CLK_PS = 20_000  # CLOCK_50
 PinSource = Literal["rtl", "model"]
+Drive = Literal["brake", "coast"]
 
 
 @dataclass(frozen=True)
@@ -61,13 +62,19 @@ class PinWaveform:
         return t
 
 
-def model_waveform(count_max: int, duty_counts: int, clk_hz: int = CLK_HZ, pwm_bits: int = PWM_BITS) -> PinWaveform:
+def model_waveform(count_max: int, duty_counts: int, clk_hz: int = CLK_HZ, pwm_bits: int = PWM_BITS,
+                   drive: Drive = "brake") -> PinWaveform:
     """What freq_div + pwm_torque make for a forward duty (docs/pwm_torque.md):
-    a period of M ticks of Count_max clocks, RPWM high for ``duty`` ticks."""
+    a period of M ticks of Count_max clocks, on for ``duty`` ticks.  ``brake``
+    is what pwm_torque drives in IBT-2 mode (PWM on RPWM, enables high: the
+    off-phase brakes on the low sides); ``coast`` (RPWM high, PWM on both
+    enables: the off-phase floats the bridge) is the other way to wire an
+    IBT-2, for comparison - the RTL does not make it."""
     m = pwm_full_scale(pwm_bits)
     tick_s = max(1, count_max) / clk_hz
     period = m * tick_s
-    on, off = (1, 0, 1, 1), (0, 0, 1, 1)
+    on = (1, 0, 1, 1)
+    off = (0, 0, 1, 1) if drive == "brake" else (1, 0, 0, 0)
     if duty_counts <= 0:
         segs: tuple = ((0.0, off),)
     elif duty_counts >= m:
@@ -75,6 +82,23 @@ def model_waveform(count_max: int, duty_counts: int, clk_hz: int = CLK_HZ, pwm_b
     else:
         segs = ((0.0, on), (duty_counts * tick_s, off))
     return PinWaveform(count_max, duty_counts, period, segs)
+
+
+def drive_and_duty(w: PinWaveform) -> tuple[Drive, float]:
+    """Read a forward IBT-2 pin waveform: which off-phase it uses and the
+    fraction of the period the bridge drives the motor.  Anything else (a
+    reverse pulse, both sides driven, a glitch) is refused: the dynamometer
+    model takes a rectangular forward drive."""
+    on, brake_off, coast_off = (1, 0, 1, 1), (0, 0, 1, 1), (1, 0, 0, 0)
+    kinds = {p for _, p in w.segments}
+    if not kinds <= {on, brake_off, coast_off} or {brake_off, coast_off} <= kinds:
+        raise ValueError(f"pin waveform is not a forward IBT-2 PWM: pin states {sorted(kinds)}")
+    t_on = 0.0
+    for k, (start, p) in enumerate(w.segments):
+        end = w.segments[k + 1][0] if k + 1 < len(w.segments) else w.period_s
+        if p == on:
+            t_on += end - start
+    return ("coast" if coast_off in kinds else "brake"), t_on / w.period_s
 
 
 def _rtl_waveforms(settings: Sequence[dict], sim: str, work: Path) -> list[dict]:
@@ -139,7 +163,7 @@ class Reading:
 
     force_n: float
     current_a: float
-    current_std_a: float
+    current_std_a: float | None = None
 
 
 @dataclass(frozen=True)
@@ -156,10 +180,19 @@ class SweepPlan:
 Measure = Callable[[PinWaveform], Reading]
 
 
-def _waveforms(settings: list[tuple[int, int]], source: PinSource, sim: str, work: Path) -> list[PinWaveform]:
+def _waveforms(settings: list[tuple[int, int]], source: PinSource, sim: str, work: Path,
+               drive: Drive = "brake") -> list[PinWaveform]:
     if source == "rtl":
+        if drive != "brake":
+            raise ValueError("the RTL drives the IBT-2 with a braking off-phase only (pwm_torque dir_mode 0)")
         return rtl_waveforms(settings, sim=sim, work=work)
-    return [model_waveform(n, c) for n, c in settings]
+    return [model_waveform(n, c, drive=drive) for n, c in settings]
+
+
+def _std(rd: Sequence[Reading]) -> np.ndarray | None:
+    if any(r.current_std_a is None for r in rd):
+        return None
+    return np.array([r.current_std_a for r in rd])
 
 
 def _progress(msg: str) -> None:
@@ -167,7 +200,7 @@ def _progress(msg: str) -> None:
 
 
 def record_frequency_sweep(measure: Measure, plan: SweepPlan, motor: str, source: PinSource = "model",
-                           sim: str = "verilator", work: Path | None = None) -> Sweep:
+                           sim: str = "verilator", work: Path | None = None, drive: Drive = "brake") -> Sweep:
     """Steps 2-4 on the simulated bench: the stall reading (duty M, constantly
     on) and the 50 % sweep.  50 % of the 1023-count period is not a whole
     count: 512 counts (50.05 %) is used and written as the sweep's duty."""
@@ -178,7 +211,7 @@ def record_frequency_sweep(measure: Measure, plan: SweepPlan, motor: str, source
     counts = [freq_div.count_max(f, CLK_HZ, PWM_BITS) for f in plan.freqs_hz]
     settings = [(counts[0], m)] + [(n, half) for n in counts]
     _progress(f"{motor}: frequency sweep, {len(counts)} frequencies + stall, pins from {source}")
-    wfs = _waveforms(settings, source, sim, (work or REPO_ROOT / "build" / "char_bench") / f"{motor}_freq")
+    wfs = _waveforms(settings, source, sim, (work or REPO_ROOT / "build" / "char_bench") / f"{motor}_freq", drive)
     rd = [measure(w) for w in wfs]
     bench = BenchConstants(plan.wheel_radius_m, plan.theta_deg, plan.supply_v)
     k = float(bench.torque_nm(1.0))
@@ -187,7 +220,7 @@ def record_frequency_sweep(measure: Measure, plan: SweepPlan, motor: str, source
         x=np.array([w.freq_hz for w in wfs[1:]]),
         torque_nm=np.array([r.force_n * k for r in rd[1:]]),
         current_a=np.array([r.current_a for r in rd[1:]]),
-        current_std_a=np.array([r.current_std_a for r in rd[1:]]),
+        current_std_a=_std(rd[1:]),
         duty_pct=100.0 * half / m,
         stall_torque_nm=rd[0].force_n * k, stall_current_a=rd[0].current_a,
         force_given=True,
@@ -195,7 +228,8 @@ def record_frequency_sweep(measure: Measure, plan: SweepPlan, motor: str, source
 
 
 def record_duty_sweep(measure: Measure, plan: SweepPlan, motor: str, freq_hz: float,
-                      source: PinSource = "model", sim: str = "verilator", work: Path | None = None) -> Sweep:
+                      source: PinSource = "model", sim: str = "verilator", work: Path | None = None,
+                      drive: Drive = "brake") -> Sweep:
     """Step 6 on the simulated bench at the board frequency nearest ``freq_hz``."""
     from torqueloop.ref import freq_div
 
@@ -204,7 +238,7 @@ def record_duty_sweep(measure: Measure, plan: SweepPlan, motor: str, freq_hz: fl
     duties = sorted({max(1, min(m - 1, int(round(d / 100.0 * m)))) for d in plan.duty_pcts})
     _progress(f"{motor}: duty sweep at {freq_hz:.4g} Hz (count_max {n}), {len(duties)} duties, pins from {source}")
     wfs = _waveforms([(n, d) for d in duties], source, sim,
-                     (work or REPO_ROOT / "build" / "char_bench") / f"{motor}_duty_{n}")
+                     (work or REPO_ROOT / "build" / "char_bench") / f"{motor}_duty_{n}", drive)
     rd = [measure(w) for w in wfs]
     bench = BenchConstants(plan.wheel_radius_m, plan.theta_deg, plan.supply_v)
     k = float(bench.torque_nm(1.0))
@@ -213,7 +247,7 @@ def record_duty_sweep(measure: Measure, plan: SweepPlan, motor: str, freq_hz: fl
         x=np.array([100.0 * w.duty_counts / m for w in wfs]),
         torque_nm=np.array([r.force_n * k for r in rd]),
         current_a=np.array([r.current_a for r in rd]),
-        current_std_a=np.array([r.current_std_a for r in rd]),
+        current_std_a=_std(rd),
         freq_hz=wfs[0].freq_hz,
         force_given=True,
     )
@@ -221,15 +255,16 @@ def record_duty_sweep(measure: Measure, plan: SweepPlan, motor: str, freq_hz: fl
 
 def run_bench(measure: Measure, out_dir: Path, motor: str, plan: SweepPlan = SweepPlan(),
               th: Thresholds = Thresholds(), source: PinSource = "model", sim: str = "verilator",
-              max_duty_sweeps: int = 4) -> MotorResult:
+              max_duty_sweeps: int = 4, drive: Drive = "brake") -> MotorResult:
     """A lab's session on the simulated bench: record the frequency sweep,
     ask the method where to record a duty sweep, record it, repeat until the
     method passes, fails, or ``max_duty_sweeps`` were recorded.  Every sweep
     is written to ``out_dir`` as the lab's CSV files."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    fs = record_frequency_sweep(measure, plan, motor, source, sim)
+    fs = record_frequency_sweep(measure, plan, motor, source, sim, drive=drive)
     fpath = out_dir / "freq_sweep.csv"
-    write_sweep(fpath, fs, comment=f"simulated bench ({source} pins), motor {motor}")
+    tag = f"simulated bench: {source} pins, {drive} off-phase, motor {motor}"
+    write_sweep(fpath, fs, comment=tag)
     fs = read_sweep(fpath)  # the method reads what a lab would hand it
     duty: list[Sweep] = []
     while True:
@@ -237,7 +272,49 @@ def run_bench(measure: Measure, out_dir: Path, motor: str, plan: SweepPlan = Swe
         if r.status != "need_duty_sweep" or len(duty) >= max_duty_sweeps:
             return r
         assert r.next_freq_hz is not None
-        ds = record_duty_sweep(measure, plan, motor, r.next_freq_hz, source, sim)
+        ds = record_duty_sweep(measure, plan, motor, r.next_freq_hz, source, sim, drive=drive)
         dpath = out_dir / f"duty_sweep_{ds.freq_hz:.0f}hz.csv"
-        write_sweep(dpath, ds, comment=f"simulated bench ({source} pins), motor {motor}")
+        write_sweep(dpath, ds, comment=tag)
         duty.append(read_sweep(dpath))
+
+
+# ---------------------------------------------------------------- the plant's dynamometer
+
+
+def dyno_bench(axis: str, drive: Drive = "brake") -> tuple[Measure, SweepPlan]:
+    """The plant's dynamometer (sim_models.dyno) for one axis of Table 2 as a
+    :data:`Measure`, and the sweep plan with its bench constants.  The pin
+    waveform is read (:func:`drive_and_duty`) and handed to the model as its
+    frequency, duty and off-phase."""
+    from sim_models.params import load_params
+    from sim_models.dyno import DynamometerBench, DynoConfig
+
+    p = load_params()
+    names = [a.name for a in p.axes]
+    if axis not in names:
+        raise ValueError(f"axis {axis!r}: the plant has {names}")
+    dcfg = DynoConfig(drive=drive)
+    bench = DynamometerBench(p.axes[names.index(axis)], p.bridge, dcfg)
+
+    def measure(w: PinWaveform) -> Reading:
+        seen, duty = drive_and_duty(w)
+        m = bench.measure(w.freq_hz, duty, direction=1, drive=seen)
+        # The bench's ammeter reads the mean; the model's current does not
+        # wander, so no current_std_a column (PWM ripple is not "wandering").
+        return Reading(force_n=m.force_N, current_a=m.current_A)
+
+    plan = SweepPlan(wheel_radius_m=dcfg.wheel_radius_m, theta_deg=dcfg.rope_angle_deg,
+                     supply_v=p.bridge.supply_V)
+    return measure, plan
+
+
+def simulate_lab(out_dir: Path, axes: Sequence[str] = ("x", "z"), source: PinSource = "model",
+                 sim: str = "verilator", drive: Drive = "brake", th: Thresholds = Thresholds()) -> dict[str, MotorResult]:
+    """Every axis through the simulated bench: ``out_dir/<axis>/*.csv`` as a
+    lab would hand them to ``characterize.py run``."""
+    out = {}
+    for a in axes:
+        measure, plan = dyno_bench(a, drive)
+        out[a] = run_bench(measure, out_dir / a, a, plan, th, source=source, sim=sim, drive=drive)
+        _progress(f"{a}: {out[a].status}: {out[a].message}")
+    return out
