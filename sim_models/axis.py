@@ -237,6 +237,8 @@ def elec_mode(c: AxisConsts, x: np.ndarray, e_pos: float, e_neg: float) -> int:
     the direction the bridge would push it (0 if no diode can conduct)."""
     if x[I_] != 0.0:
         return _sign(x[I_])
+    if e_pos == e_neg:
+        return 1                     # both sides driven: the sign does not matter
     eb = c.ke * x[W_M]
     if e_pos > eb:
         return 1

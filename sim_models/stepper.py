@@ -197,12 +197,25 @@ class FastAxis:
         """Crossing time of guard j in (0, hi]: Newton on the exact flow
         (the guard's time derivative is exact, row @ m @ z), kept inside the
         bracket and alternated with bisection.  Stops when the guard is
-        within its tolerance of zero or the bracket is below 1 ns; returns
+        within its tolerance below zero or the bracket is below 1 ps; returns
         the time and the state there."""
         row = s.g[j]  # type: ignore[index]
         drow = s.gm[j]  # type: ignore[index]
         tol = float(s.tol[j])  # type: ignore[index]
         lo, glo = 0.0, float(row @ z0)
+        if glo <= 0.0:
+            # on the surface (a mode just entered there): leaving at once if
+            # the guard decreases, else find where it turned positive first
+            if float(drow @ z0) < 0.0:
+                return 0.0, z0
+            lo = 1e-9
+            while lo < hi:
+                glo = float(row @ (s.expm(lo) @ z0))
+                if glo > tol:
+                    break
+                lo *= 4.0
+            else:
+                return hi, s.expm(hi) @ z0
         zhi = s.expm(hi) @ z0
         ghi = float(row @ zhi)
         t = (lo * ghi - hi * glo) / (ghi - glo) if ghi != glo else 0.5 * hi
@@ -211,13 +224,13 @@ class FastAxis:
                 t = 0.5 * (lo + hi)
             zt = s.expm(t) @ z0
             gt = float(row @ zt)
-            if abs(gt) <= tol:
+            if -tol <= gt <= 0.0:
                 return t, zt
             if gt < 0:
                 hi, ghi, zhi = t, gt, zt
             else:
                 lo, glo = t, gt
-            if hi - lo <= 1e-9:
+            if hi - lo <= 1e-12:
                 break
             dg = float(drow @ zt)
             t = t - gt / dg if dg != 0.0 and it % 4 != 3 else 0.5 * (lo + hi)

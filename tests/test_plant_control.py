@@ -1,0 +1,29 @@
+"""Pure-model closed loop (sim_models.control)."""
+
+from __future__ import annotations
+
+import pytest
+
+from sim_models.control import TABLE1, LoopConfig, duty_from_torque, run_loop, step_metrics
+
+
+def test_duty_mapping_saturates_and_skips_the_dead_zone():
+    cfg = LoopConfig(pw0=0.2)
+    assert duty_from_torque(0.0, 2.4, cfg) == 0
+    assert duty_from_torque(10.0, 2.4, cfg) == 1023           # eq (19): saturation
+    assert duty_from_torque(-10.0, 2.4, cfg) == -1023
+    # eq (1): the smallest non-zero command starts at PW0, not at zero
+    assert duty_from_torque(1e-6, 2.4, cfg) == round(0.2 * 1023)
+    assert duty_from_torque(-1.2, 2.4, cfg) == -round((0.2 + 0.8 * 0.5) * 1023)
+    assert duty_from_torque(1.2, 2.4, LoopConfig()) == round(0.5 * 1023)
+
+
+def test_p_control_settles_axis_x_on_one_screw_turn():
+    """Paper's step (6.28 rad) with Table 1's P gain on axis x: settles within
+    15 encoder counts in 4 s and the encoder tracks the model's angle."""
+    r = run_loop(LoopConfig(t_end_s=4.0, gains=TABLE1["P"]))
+    m = step_metrics(r.t, r.x_meas[:, 0], 6.28)
+    assert abs(m["final_error_rad"]) < 0.01
+    assert 0.2 < m["rise_s"] < 1.0
+    assert abs(r.x_meas[-1, 0] - r.x_true[-1, 0]) < 2 * 2 * 3.141592653589793 / 8400
+    assert r.table_mm[-1, 0] == pytest.approx(4.0, abs=0.05)
