@@ -67,6 +67,8 @@ module cpu #(
     wire        complete, to_exec, fetch_start, prefetch;
     reg  [31:0] next_pc;
     wire [31:0] insn, pc_plus4;
+    wire [4:0]  next_rs1, next_rs2;
+    wire        insn_load;
     wire        fetched, fetch_fault, fetch_pending, pf_done, pf_bad;
     cpu_fetch u_fetch (
         .clk(clk), .rst(rst), .start(fetch_start),
@@ -74,18 +76,18 @@ module cpu #(
         .waiting(in_fetch), .prefetching(in_mem || in_md), .take_prefetch(to_exec),
         .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
         .ibus_rdata(ibus_rdata), .ibus_err(ibus_err), .pending(fetch_pending),
-        .insn(insn), .fetched(fetched), .fault(fetch_fault), .pf_done(pf_done), .pf_bad(pf_bad)
+        .insn(insn), .insn_load(insn_load), .next_rs1(next_rs1), .next_rs2(next_rs2), .fetched(fetched), .fault(fetch_fault), .pf_done(pf_done), .pf_bad(pf_bad)
     );
 
     // ---- decode and register file --------------------------------------------
-    wire [4:0]  rd, rs1, rs2;
+    wire [4:0]  rd, rs1;
     wire [2:0]  funct3;
     wire [31:0] imm;
     wire is_lui, is_auipc, is_jal, is_jalr, is_branch, is_load, is_store;
     wire alu_use_imm, alu_alt, is_muldiv, is_csr, csr_writes, is_ecall, is_ebreak;
     wire is_mret, writes_rd, dec_illegal;
     cpu_decode u_decode (
-        .insn(insn), .rd(rd), .rs1(rs1), .rs2(rs2), .funct3(funct3), .imm(imm),
+        .insn(insn), .rd(rd), .rs1(rs1), .funct3(funct3), .imm(imm),
         .is_lui(is_lui), .is_auipc(is_auipc), .is_jal(is_jal), .is_jalr(is_jalr),
         .is_branch(is_branch), .is_load(is_load), .is_store(is_store),
         .alu_use_imm(alu_use_imm), .alu_alt(alu_alt), .is_muldiv(is_muldiv),
@@ -97,9 +99,12 @@ module cpu #(
     wire        rf_we;
     reg  [31:0] rf_wdata;
     wire [31:0] rs1_val, rs2_val;
+    // Read with the register numbers of the word entering the instruction
+    // register, so rs1/rs2 are ready in EXEC (block RAM, registered read).
     cpu_regfile u_regfile (
         .clk(clk), .we(rf_we), .waddr(rd), .wdata(rf_wdata),
-        .raddr1(rs1), .rdata1(rs1_val), .raddr2(rs2), .rdata2(rs2_val)
+        .re(insn_load), .raddr1(next_rs1), .raddr2(next_rs2),
+        .rdata1(rs1_val), .rdata2(rs2_val)
     );
 
     // ---- execute -------------------------------------------------------------

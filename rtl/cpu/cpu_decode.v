@@ -8,7 +8,6 @@ module cpu_decode (
     input  wire [31:0] insn,
     output wire [4:0]  rd,
     output wire [4:0]  rs1,
-    output wire [4:0]  rs2,
     output wire [2:0]  funct3,
     output reg  [31:0] imm,
     output wire        is_lui,
@@ -33,7 +32,6 @@ module cpu_decode (
     wire [6:0] funct7 = insn[31:25];
     assign rd     = insn[11:7];
     assign rs1    = insn[19:15];
-    assign rs2    = insn[24:20];
     assign funct3 = insn[14:12];
 
     wire op_lui    = opcode == 7'b0110111;

@@ -32,6 +32,9 @@ module cpu_fetch (
     input  wire        ibus_err,
     output wire        pending,       // a request is outstanding
     output reg  [31:0] insn,
+    output wire        insn_load,     // insn loads a new word at this edge ...
+    output wire [4:0]  next_rs1,      // ... whose register numbers these are
+    output wire [4:0]  next_rs2,
     output wire        fetched,       // FETCH: ack without error, insn valid next cycle
     output wire        fault,         // FETCH: ack with error
     output wire        pf_done,       // prefetch answered (now or before)
@@ -50,6 +53,10 @@ module cpu_fetch (
     assign pf_done   = !pend || ibus_ack;
     assign pf_bad    = pend ? ibus_err : pf_err;
     wire [31:0] pf_word = pend ? ibus_rdata : pf_insn;
+    assign insn_load = fetched || take_prefetch;
+    wire [31:0] insn_next = fetched ? ibus_rdata : pf_word;
+    assign next_rs1  = insn_next[19:15];
+    assign next_rs2  = insn_next[24:20];
 
     always @(posedge clk) begin
         if (rst) begin
@@ -67,10 +74,8 @@ module cpu_fetch (
             pf_insn <= ibus_rdata;
             pf_err  <= ibus_err;
         end
-        if (fetched)
-            insn <= ibus_rdata;
-        else if (take_prefetch)
-            insn <= pf_word;
+        if (insn_load)
+            insn <= insn_next;
     end
 endmodule
 `default_nettype wire

@@ -4,7 +4,8 @@ The stream mixes every RV32I ALU and M-extension operation (with operands
 biased towards the corner cases 0, 1, -1, -2^31 and 2^31-1 so that division
 by zero and -2^31 / -1 occur), loads and stores of every width at aligned
 addresses in a scratch area, forward branches and jumps (JAL, JALR), and
-mscratch CSR accesses.  At the end every register is stored after the
+mscratch CSR accesses.  Sources often name the last destinations, so
+results are used by the very next instruction (load-use, mul/div-use).  At the end every register is stored after the
 scratch area; scratch area and registers together form the signature that
 the core and the ISS must agree on word for word.
 """
@@ -38,10 +39,17 @@ def generate(seed: int, count: int) -> str:
     out.append(f"    la x{BASE_REG}, scratch + {SCRATCH_BYTES // 2}")
     label = 0
 
+    recent: list[int] = []  # destinations just written: reuse them to create back-to-back dependences
+
     def reg() -> str:
-        return f"x{rng.choice(FREE)}"
+        r = rng.choice(FREE)
+        recent.append(r)
+        del recent[:-2]
+        return f"x{r}"
 
     def src() -> str:
+        if recent and rng.random() < 0.4:
+            return f"x{rng.choice(recent)}"
         return f"x{rng.choice(FREE + [0])}"
 
     n = 0
