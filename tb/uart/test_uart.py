@@ -13,7 +13,8 @@ import random
 import cocotb
 import pytest
 from cocotb.clock import Clock
-from cocotb.triggers import ClockCycles, FallingEdge, Timer, with_timeout
+from cocotb.triggers import ClockCycles, FallingEdge, Timer, ValueChange, with_timeout
+from cocotb.utils import get_sim_time
 from cocotbext.uart import UartSink, UartSource
 
 from torqueloop.ref.uart import (
@@ -113,6 +114,13 @@ class TB:
                 self.rts_violations.append(f"rts_n={int(d.rts_n.value)} with level {prev_level}")
             prev_level = level
 
+    async def record_txd(self, changes: list[tuple[float, int]]) -> None:
+        """Log (time in clocks, level) of every txd change, for the reference decoder."""
+        changes.append((get_sim_time("ns") / CLK_NS, int(self.dut.txd.value)))
+        while True:
+            await ValueChange(self.dut.txd)
+            changes.append((get_sim_time("ns") / CLK_NS, int(self.dut.txd.value)))
+
     async def drive_line(self, segments: list[tuple[int, float]]) -> None:
         for level, clocks in segments:
             self.dut.rxd.value = level
@@ -129,6 +137,8 @@ async def loopback(dut, baud_div: int, mismatch: float, n_bytes: int) -> None:
     source = UartSource(dut.rxd, baud=model_baud(bit / (1 + mismatch)))
     dut._log.info("baud_div %d: %.0f baud, source %+.1f %%", baud_div,
                   baud_of(effective_div(baud_div, tb.p), tb.p.clk_hz), 100 * mismatch)
+    txd_changes: list[tuple[float, int]] = []
+    cocotb.start_soon(tb.record_txd(txd_changes))
     tx_data = bytes(random.getrandbits(8) for _ in range(n_bytes))
     rx_data = bytes(random.getrandbits(8) for _ in range(n_bytes))
     received = bytearray()
@@ -147,6 +157,12 @@ async def loopback(dut, baud_div: int, mismatch: float, n_bytes: int) -> None:
         await with_timeout(sink.wait(), frame_ns * (n_bytes + 2), "ns")
         got_tx += sink.read_nowait()
     assert bytes(got_tx) == tx_data, f"TX: sink got {got_tx.hex()}, sent {tx_data.hex()}"
+    # The sink ignores stop bits; the reference decoder checks them (and the bit timing).
+    await Timer(2 * bit, unit="ns")
+    segs = [(lvl, t1 - t0) for (t0, lvl), (t1, _) in zip(txd_changes, txd_changes[1:])]
+    segs.append((txd_changes[-1][1], 20 * bit / CLK_NS))
+    events = LineDecoder(effective_div(baud_div, tb.p)).decode(segs)
+    assert [(e.kind, e.data) for e in events] == [("byte", b) for b in tx_data], f"txd decoded as {events}"
     assert bytes(received) == rx_data, f"RX: got {bytes(received).hex()}, source sent {rx_data.hex()}"
     assert int(dut.overrun_count.value) == 0
 
