@@ -22,6 +22,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from torqueloop.board import load_pin_table
 from torqueloop.hdl import REPO_ROOT
 from torqueloop.quartus import PROJECT, products, stale, write_project
 
@@ -52,6 +53,9 @@ def main() -> int:
     args = ap.parse_args()
     if args.project:
         qpf = write_project()
+        if not load_pin_table().firmware:
+            print("[quartus] WARNING: constraints/pins.toml [firmware] names no ROM_INIT image: the boot ROM"
+                  " of this bitstream is empty and the CPU will run no program")
         return compile_project(qpf) if args.compile else 0
     drift = stale(products())
     for p, diff in drift:

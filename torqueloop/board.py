@@ -317,6 +317,10 @@ def gen_qsf(table: PinTable, board_pins: dict[str, BoardPin], verilog: list[Path
     ]
     for p in verilog:
         out.append(f"set_global_assignment -name VERILOG_FILE {qsf_relpath(p, project_dir)}")
+    # The `define headers are compiled first (listed first); their folders are
+    # also searched, for sources that `include them.
+    for d in dict.fromkeys(p.parent for p in verilog if p.suffix == ".vh"):
+        out.append(f"set_global_assignment -name SEARCH_PATH {qsf_relpath(d, project_dir)}")
     for name, p in extra_files:
         out.append(f"set_global_assignment -name {name} {qsf_relpath(p, project_dir)}")
     out.append(f"set_global_assignment -name SDC_FILE {qsf_relpath(sdc, project_dir)}")
@@ -522,17 +526,19 @@ def sdc_port_names(text: str) -> list[str]:
     return names
 
 
-def top_ports(verilog: Path, top: str) -> dict[str, tuple[str, int | None]]:
+def top_ports(verilog: Path, top: str, headers: list[Path] = ()) -> dict[str, tuple[str, int | None]]:
     """Ports of the board top as Yosys reads them: name -> (dir, width or None).
 
-    Only the top file is read (submodules stay unresolved), so this works
-    before the rest of the design elaborates.  A 1-bit port declared without
-    a range is reported as scalar.
+    Only the top file is read, after ``headers`` (the `define files it
+    uses); submodules stay unresolved, so this works before the rest of the
+    design elaborates.  A 1-bit port declared without a range is reported as
+    scalar.
     """
+    files = " ".join(str(h) for h in (*headers, verilog))
     with tempfile.TemporaryDirectory() as tmp:
         js = Path(tmp) / "top.json"
         proc = subprocess.run(
-            ["yosys", "-q", "-p", f"read_verilog {verilog}; write_json {js}"],
+            ["yosys", "-q", "-p", f"read_verilog {files}; write_json {js}"],
             capture_output=True, text=True, cwd=REPO_ROOT)
         if proc.returncode != 0:
             raise RuntimeError(f"yosys could not read {verilog}:\n{proc.stderr or proc.stdout}")

@@ -53,11 +53,17 @@ def check_pin_table(table: board.PinTable, board_pins: dict[str, board.BoardPin]
     return _result("pin table consistent with the board", board.validate(table, board_pins))
 
 
+def top_headers(table: board.PinTable) -> list[Path]:
+    """The `define headers (.vh) of the board top's manifest core, in order."""
+    core = load_manifest().get(table.board.top)
+    return [p for p in core.verilog if p.suffix == ".vh"] if core else []
+
+
 def check_top_ports(table: board.PinTable, top_v: Path = board.TOP_V) -> Check:
     """Every port of the top in the table with the same direction and width, and back."""
     name = f"top-level ports of {top_v.name} == pin table ports"
     try:
-        ports = board.top_ports(top_v, table.board.top)
+        ports = board.top_ports(top_v, table.board.top, top_headers(table))
     except (RuntimeError, KeyError) as e:
         return Check(name, False, str(e))
     problems = []
@@ -193,7 +199,7 @@ def _sdc_matches(pattern: str, bits: set[str]) -> bool:
 def port_bits_of_top(table: board.PinTable, top_v: Path = board.TOP_V) -> set[str]:
     """Bit names of the top's ports as Yosys reads them ('KEY[0]', 'CLOCK_50')."""
     out = set()
-    for n, (_, w) in board.top_ports(top_v, table.board.top).items():
+    for n, (_, w) in board.top_ports(top_v, table.board.top, top_headers(table)).items():
         out |= {n} if w is None else {f"{n}[{i}]" for i in range(w)}
     return out
 

@@ -24,8 +24,9 @@
 `default_nettype none
 
 module de0_cv_top #(
-    parameter ROM_INIT = "",   // boot ROM image ($readmemh, one 32-bit word per line)
-    parameter RAM_INIT = ""    // RAM image; empty when the program arrives over the UART
+    parameter         ROM_INIT  = "",             // boot ROM image ($readmemh, one 32-bit word per line)
+    parameter         RAM_INIT  = "",             // RAM image; empty when the program arrives over the UART
+    parameter integer RAM_BYTES = `TL_RAM_SIZE    // smaller only for quick generic synthesis checks
 ) (
     input  wire        CLOCK_50,
     input  wire        RESET_N,
@@ -74,6 +75,7 @@ module de0_cv_top #(
     /* verilator lint_on UNUSEDSIGNAL */
 
     soc #(
+        .RAM_BYTES(RAM_BYTES),
         .ROM_INIT(ROM_INIT),
         .RAM_INIT(RAM_INIT)
     ) u_soc (
@@ -106,7 +108,10 @@ module de0_cv_top #(
     );
 
     // ---- board-level drive interlock ----
-    // Idle levels as reset values: key released (1), switch down (0), no fault (1).
+    // Reset values: key released (1), no fault (1), and the arm switch UP (1):
+    // a switch already up when reset ends must not look like a fresh up-move
+    // (a 0 here would make a false rising edge two clocks after reset and arm
+    // the drives - tb/de0_cv_top caught exactly that).
     wire            estop_n_s;
     wire            arm_sw_s;
     wire [AXES-1:0] fault_n_s;
@@ -117,7 +122,7 @@ module de0_cv_top #(
 
     sync_2ff #(.WIDTH(1), .RESET_VAL(1)) u_sync_estop (
         .clk(clk), .rst(rst), .async_in(KEY[0]), .sync_out(estop_n_s));
-    sync_2ff #(.WIDTH(1), .RESET_VAL(0)) u_sync_arm (
+    sync_2ff #(.WIDTH(1), .RESET_VAL(1)) u_sync_arm (
         .clk(clk), .rst(rst), .async_in(SW[0]), .sync_out(arm_sw_s));
     sync_2ff #(.WIDTH(AXES), .RESET_VAL(1)) u_sync_fault (
         .clk(clk), .rst(rst), .async_in(ibt2_fault_n_pin), .sync_out(fault_n_s));

@@ -1,0 +1,134 @@
+"""Cyclone V resources of the whole board top (SoC + board logic) against the
+DE0-CV's 5CEBA4: Yosys synth_intel_alm, with sanity bounds asserted.
+
+ALMs are estimated from Yosys's cells, since Yosys does not pack ALMs (a
+Cyclone V ALM holds one 6-input LUT or two smaller ones sharing its 8
+inputs, two adder bits and four flip-flops): the packed estimate puts each
+6-input LUT in its own ALM and two smaller LUTs or two carry cells in one;
+the upper bound gives every LUT its own ALM.  The 20 % bound applies to the
+packed estimate.
+M10K blocks are Yosys's mapping (it maps a 32-bit true dual-port RAM as
+two blocks per 512 words; Quartus would use about half as many).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+from torqueloop import eda
+from torqueloop.board import load_pin_table
+from torqueloop.hdl import load_manifest
+
+#: 5CEBA4F23C7 (Cyclone V E A4)
+DEVICE_ALMS = 18_480
+DEVICE_M10K = 308
+#: Logic must stay under a fifth of the device: the paper's system is small,
+#: and the rest is headroom for Signal Tap and future axes.
+ALM_BOUND = 0.20
+#: 64 KiB of program RAM is a design choice (about a fifth of the blocks in
+#: Quartus); Yosys's mapping doubles it, hence the looser bound.
+M10K_BOUND = 0.50
+#: Longest register-to-register path in LUT levels; well above this, 50 MHz
+#: (20 ns, roughly 0.5-1 ns per level plus routing) is at risk.
+DEPTH_BOUND = 20
+
+#: Cells whose outputs are registered: a path starts at them.
+_REGISTERED = {"MISTRAL_FF", "MISTRAL_M10K"}
+
+
+def alm_estimate(row: dict) -> tuple[int, int]:
+    """(packed, upper): packed = a 6-input LUT per ALM, two smaller LUTs or
+    two carry cells per ALM; upper = one ALM per LUT."""
+    cells = row["cells"]
+    lut6 = cells.get("MISTRAL_ALUT6", 0)
+    packed = lut6 + math.ceil((row["luts"] - lut6) / 2) + math.ceil(row["carry_cells"] / 2)
+    upper = row["luts"] + math.ceil(row["carry_cells"] / 2)
+    return packed, upper
+
+
+def logic_depth(netlist: Path, top: str) -> int:
+    """Longest path in LUT levels between registers / ports of a Yosys
+    synth_intel_alm netlist (write_json).  A LUT, NOT, MLAB read or DSP
+    multiplier is one level; a carry chain costs one level where it is
+    entered (A/B/C/D inputs), nothing along CI -> CO.  (Yosys 0.23's ltp
+    reports -1 on these netlists, hence this walk.)"""
+    mod = json.loads(netlist.read_text())["modules"][top]
+    driver: dict[int, tuple[dict, str]] = {}
+    for cell in mod["cells"].values():
+        for port, bits in cell["connections"].items():
+            if cell["port_directions"].get(port) == "output":
+                for b in bits:
+                    if isinstance(b, int):
+                        driver[b] = (cell, port)
+    sys.setrecursionlimit(max(10_000, 4 * len(driver)))
+    level: dict[int, int] = {}
+
+    def depth(bit: object) -> int:
+        if not isinstance(bit, int) or bit not in driver:
+            return 0                      # constant or module input
+        if bit in level:
+            return level[bit]
+        level[bit] = 0                    # breaks a (combinational) loop, if any
+        cell, _ = driver[bit]
+        if cell["type"] in _REGISTERED:
+            return 0
+        best = 0
+        for port, bits in cell["connections"].items():
+            if cell["port_directions"].get(port) != "input":
+                continue
+            step = 0 if (cell["type"] == "MISTRAL_ALUT_ARITH" and port == "CI") else 1
+            for b in bits:
+                best = max(best, depth(b) + step)
+        level[bit] = best
+        return best
+
+    ends = []
+    for cell in mod["cells"].values():
+        if cell["type"] in _REGISTERED:
+            ends += [b for p, bits in cell["connections"].items()
+                     if cell["port_directions"].get(p) == "input" for b in bits]
+    for port in mod["ports"].values():
+        if port["direction"] in ("output", "inout"):
+            ends += port["bits"]
+    return max((depth(b) for b in ends), default=0)
+
+
+def main() -> int:
+    top = load_pin_table().board.top
+    cores = load_manifest()
+    if top not in cores:
+        print(f"[bench_board] core {top} not in rtl/manifest.toml yet (waits for rtl/soc/soc.v)")
+        return 1
+    t0 = time.monotonic()
+    row = eda.synth_cyclonev(cores[top], tag="board")
+    if "error" in row:
+        print(f"[bench_board] synthesis failed:\n{row['error']}")
+        return 1
+    lo, hi = alm_estimate(row)
+    depth = logic_depth(eda.BUILD / "synth" / f"{top}_board" / "netlist.json", top)
+    print(f"board top {top}: Yosys synth_intel_alm -family cyclonev in {time.monotonic() - t0:.0f} s")
+    print("| resource | used | device | share |")
+    print("|---|---:|---:|---:|")
+    print(f"| ALMs (packed estimate) | {lo} | {DEVICE_ALMS} | {lo / DEVICE_ALMS:.1%} |")
+    print(f"| ALMs (one per LUT, upper bound) | {hi} | {DEVICE_ALMS} | {hi / DEVICE_ALMS:.1%} |")
+    print(f"| LUTs | {row['luts']} | | |")
+    print(f"| carry cells | {row['carry_cells']} | | |")
+    print(f"| flip-flops | {row['ffs']} | {4 * DEVICE_ALMS} | {row['ffs'] / (4 * DEVICE_ALMS):.1%} |")
+    print(f"| M10K | {row['m10k']} | {DEVICE_M10K} | {row['m10k'] / DEVICE_M10K:.1%} |")
+    print(f"| MLAB | {row['mlab']} | | |")
+    print(f"| DSP | {row['dsp']} | 66 | {row['dsp'] / 66:.1%} |")
+    print(f"| logic depth (LUT levels) | {depth} | bound {DEPTH_BOUND} | |")
+    bad = []
+    if lo > ALM_BOUND * DEVICE_ALMS:
+        bad.append(f"ALM estimate {lo} above {ALM_BOUND:.0%} of the device")
+    if row["m10k"] > M10K_BOUND * DEVICE_M10K:
+        bad.append(f"{row['m10k']} M10K above {M10K_BOUND:.0%} of the device")
+    if depth > DEPTH_BOUND:
+        bad.append(f"logic depth {depth} above {DEPTH_BOUND}")
+    for b in bad:
+        print(f"[bench_board] FAIL {b}")
+    return 1 if bad else 0

@@ -1,0 +1,29 @@
+/* Board-top test program: a deliberately careless firmware.
+ *
+ * It asks both axes for torque at once, acknowledges every cause of the
+ * SoC's safety latch (e-stop, bridge faults) over and over, and echoes each
+ * UART byte plus one.  With firmware like this, only the board-level drive
+ * interlock (SW[0] arming, KEY[0], the fault inputs) stands between the
+ * program and the motors - which is what tb/de0_cv_top checks on the pins.
+ */
+#include <stdint.h>
+
+#include "torqueloop_regs.h"
+
+int main(void)
+{
+    /* Count_max = 1: one PWM tick per clock, a 1023-clock carrier, so a
+       period fits in a short simulation. */
+    TL_AXIS0_FDIV = 1u;
+    TL_AXIS1_FDIV = 1u;
+    TL_AXIS0_PWM_CMD = 600u;                        /* forward: RPWM */
+    TL_AXIS1_PWM_CMD = (uint32_t)(-400) & 0x7FFu;   /* reverse: LPWM */
+    TL_AXIS0_PWM_CTRL = 1u;                         /* ENABLE, coast when safe */
+    TL_AXIS1_PWM_CTRL = 1u;
+    for (;;) {
+        TL_SYS_SAFETY = TL_SYS_SAFETY_ESTOP_MSK | TL_SYS_SAFETY_FAULT0_MSK | TL_SYS_SAFETY_FAULT1_MSK;
+        uint32_t rx = TL_UART_RX_DATA;
+        if (rx & TL_UART_RX_DATA_VALID_MSK)
+            TL_UART_TX_DATA = (rx + 1u) & 0xFFu;
+    }
+}
