@@ -2,6 +2,7 @@
 generator's count (an oracle that knows nothing of the filter), the glitch
 bounds, and the stated maximum count rate - including that it is tight."""
 
+import math
 import random
 
 import pytest
@@ -13,6 +14,7 @@ from torqueloop.ref.quad_decoder import (
     QuadDecoderModel,
     QuadInputs,
     QuadSettings,
+    VelocityEstimator,
     encoder_stream,
     max_count_rate,
     max_rejected_glitch_clocks,
@@ -89,3 +91,38 @@ def test_illegal_jump_holds_position_and_is_counted():
     pins = [(0, 0, 0)] * 20 + [(1, 1, 0)] * 20 + [(0, 0, 0)] * 20
     m = run_model(pins, s)
     assert m.position == 0 and m.illegal_count == 2 and m.illegal_flag == 1
+
+
+@pytest.mark.parametrize("counts_per_s", [-10_700.0, -37.0, 5.0, 800.0, 10_700.0])
+def test_velocity_from_timestamps_fast_and_slow(counts_per_s):
+    """Edges of an ideal encoder at a constant rate, read every 1 ms control
+    tick: the estimate is within 0.1 % once two ticks with counts have passed,
+    and after a stop it decays below one count per elapsed time."""
+    clk = 50e6
+    tick = 50_000                                   # 1 ms in clocks
+    period = clk / abs(counts_per_s)                # clocks per count
+    step = 1 if counts_per_s > 0 else -1
+    est = VelocityEstimator(clk_hz=clk)
+    stop_at = 400 * tick
+
+    def state(t: int) -> tuple[int, int]:
+        n = int(min(t, stop_at) // period)          # counts so far
+        return (n * step) & 0xFFFF_FFFF, int(n * period) & 0xFFFF_FFFF
+
+    counted_ticks = 0
+    for k in range(1, 400):
+        pos, edge = state(k * tick)
+        v = est.update(pos, edge, k * tick)
+        if v != 0.0:
+            counted_ticks += 1
+        if counted_ticks >= 2:
+            assert v == pytest.approx(counts_per_s, rel=1e-3), f"tick {k}"
+    last_pos = None
+    for k in range(400, 4000, 50):
+        pos, edge = state(k * tick)
+        v = est.update(pos, edge, k * tick)
+        if pos == last_pos:   # no count since the last read: bounded by one count per elapsed time
+            assert abs(v) <= clk / (k * tick - edge) + 1e-9
+        assert math.copysign(1, v) == step
+        last_pos = pos
+    assert abs(v) < 1.0, "speed estimate did not decay after the stop"

@@ -287,3 +287,46 @@ def encoder_stream(rng: random.Random, s: QuadSettings, n_events: int, start_pha
             last_dir = d
     emit(*GRAY_UP[phase], 0, settle)
     return out
+
+
+# --- speed from counts over time (what firmware does with the timestamps) ---------------------
+
+@dataclass
+class VelocityEstimator:
+    """Counts-over-time speed estimate from the decoder's registers, as
+    LinuxCNC's hostmot2 encoder does; the reference for the firmware's
+    fixed-point version.
+
+    Call :meth:`update` once per control tick with ``position``,
+    ``last_edge_time`` and ``timestamp`` read in that tick.  With new counts,
+    the speed is the counts divided by the time between the last counted
+    edges of the previous and this tick (not the tick period), which is
+    exact to one clock however slow the shaft.  Without new counts, the
+    shaft cannot be faster than one count since the last edge, so the
+    estimate decays as CLK_HZ / (timestamp - last_edge_time).
+    """
+
+    clk_hz: float
+    ts_bits: int = 32
+    velocity: float = 0.0            # counts/s
+    _pos: int | None = None
+    _edge: int = 0
+
+    def update(self, position: int, last_edge_time: int, timestamp: int) -> float:
+        mask = (1 << self.ts_bits) - 1
+        if self._pos is None:
+            self._pos, self._edge = position, last_edge_time
+            return self.velocity
+        dpos = to_signed32(position - self._pos)
+        if dpos != 0:
+            dt = (last_edge_time - self._edge) & mask
+            if dt > 0:
+                self.velocity = dpos * self.clk_hz / dt
+            self._pos, self._edge = position, last_edge_time
+        else:
+            since = (timestamp - self._edge) & mask
+            if since > 0:
+                bound = self.clk_hz / since
+                if abs(self.velocity) > bound:
+                    self.velocity = math.copysign(bound, self.velocity)
+        return self.velocity
