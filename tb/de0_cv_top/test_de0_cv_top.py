@@ -15,6 +15,8 @@ whatever the firmware does:
     does not;
   - the UART on GPIO_0 pins 13/14 carries bytes both ways (the firmware
     echoes each byte plus one; an independent UART model on the RN-XV side);
+  - the encoders on pins 7/8 count in the decoder's direction (A leading B
+    counts up), shown by the firmware on LEDR[7:0];
   - no spare header pin is driven (four-state simulators only).
 """
 
@@ -68,6 +70,27 @@ async def _watch_armed(dut, cycles: int) -> dict[str, int]:
     return high
 
 
+#: Quadrature states (A, B) in the order A leads B; each level is held long
+#: enough for the decoder's default filter (3 samples of 50 clocks).
+_QUAD = [(0, 0), (1, 0), (1, 1), (0, 1)]
+STEP_CLOCKS = 300
+
+
+async def _turn_encoders(dut, steps: list[int]) -> None:
+    """Move each axis's encoder by steps[axis] counts (positive: A leads B)."""
+    state = [0, 0]
+    for i in range(max(abs(s) for s in steps)):
+        a = b = 0
+        for axis, s in enumerate(steps):
+            if i < abs(s):
+                state[axis] = (state[axis] + (1 if s > 0 else -1)) % 4
+            a |= _QUAD[state[axis]][0] << axis
+            b |= _QUAD[state[axis]][1] << axis
+        dut.enc_a.value = a
+        dut.enc_b.value = b
+        await ClockCycles(dut.clk, STEP_CLOCKS)
+
+
 async def _arm(dut) -> None:
     sw = int(dut.sw.value)
     dut.sw.value = sw & ~1
@@ -116,6 +139,13 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
             for i in range(36):
                 if f"{bus}[{i}]" not in used:
                     assert bits[i] in "zZ", f"spare pin {bus}[{i}] is driven ({bits[i]}) by the design"
+
+    # Encoders on header pins 7/8: axis 1 turned 6 steps with A leading (counts
+    # up), axis 2 3 steps with B leading (counts down); the firmware shows the
+    # low nibbles on LEDR[3:0] / LEDR[7:4].
+    await _turn_encoders(dut, [6, -3])
+    await ClockCycles(dut.clk, 200)
+    assert int(dut.ledr.value) & 0xFF == ((-3 & 0xF) << 4) | 6, f"LEDR shows {int(dut.ledr.value) & 0xFF:#04x}"
 
     # 2. Arm: the firmware's PWM reaches the pins.
     await _arm(dut)

@@ -1,8 +1,8 @@
 /* Board-top test program: a deliberately careless firmware.
  *
  * It asks both axes for torque at once, acknowledges every cause of the
- * SoC's safety latch (e-stop, bridge faults) over and over, and echoes each
- * UART byte plus one.  With firmware like this, only the board-level drive
+ * SoC's safety latch (e-stop, bridge faults) over and over, echoes each
+ * UART byte plus one and shows the encoder positions on the LEDs.  With firmware like this, only the board-level drive
  * interlock (SW[0] arming, KEY[0], the fault inputs) stands between the
  * program and the motors - which is what tb/de0_cv_top checks on the pins.
  */
@@ -25,5 +25,7 @@ int main(void)
         uint32_t rx = TL_UART_RX_DATA;
         if (rx & TL_UART_RX_DATA_VALID_MSK)
             TL_UART_TX_DATA = (rx + 1u) & 0xFFu;
+        /* Low nibble of each encoder position on LEDR[3:0] / LEDR[7:4]. */
+        TL_GPIO_LEDR = (TL_AXIS0_ENC_POS & 0xFu) | ((TL_AXIS1_ENC_POS & 0xFu) << 4);
     }
 }
