@@ -78,3 +78,40 @@ def test_bad_file_stops_the_run_with_line_and_reason(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"freq_sweep.csv:{i + 1}: force_n is nan (NaN or infinite)" in err
     assert main(["check", str(p)]) == EXIT_ERROR
+
+
+def test_exported_headers_compile(tmp_path):
+    """The firmware header compiles against the generated register header
+    and the Verilog `defines parse; both carry the configuration's counts."""
+    import shutil
+    import subprocess
+
+    import pytest
+
+    from torqueloop.hdl import REPO_ROOT
+
+    data = tmp_path / "data"
+    write_freq(data / "x" / "freq_sweep.csv", 2.4, 450.0)
+    write_duty(data / "x" / "duty.csv", 448.4, 2.4, 11.0)
+    cfg = tmp_path / "cfg.json"
+    assert main(["run", str(data), "--out", str(cfg)]) == EXIT_OK
+    h, vh = tmp_path / "char.h", tmp_path / "char.vh"
+    assert main(["export", str(cfg), "--out", str(h)]) == EXIT_OK
+    assert main(["export", str(cfg), "--format", "verilog", "--out", str(vh)]) == EXIT_OK
+    assert "#define TL_CHAR_AXIS0_FDIV 109u" in h.read_text()
+    assert f"#define TL_CHAR_AXIS0_PWM_PW0 {math.ceil(0.11 * 1023)}u" in h.read_text()
+
+    cc = shutil.which("riscv64-unknown-elf-gcc") or shutil.which("gcc")
+    iv = shutil.which("iverilog")
+    if not cc or not iv:
+        pytest.skip("needs a C compiler and iverilog")
+    src = tmp_path / "use.c"
+    src.write_text('#include "char.h"\nvoid use(void) { tl_char_apply(); }\n')
+    subprocess.run([cc, "-std=c11", "-ffreestanding", "-Wall", "-Werror", "-fsyntax-only",
+                    "-I", str(REPO_ROOT / "firmware" / "include"), "-I", str(tmp_path), str(src)], check=True)
+    v = tmp_path / "use.v"
+    v.write_text(  # noqa: E501
+        '`include "char.vh"\nmodule use_char; initial $display("FDIV=%0d W=%0d", `TL_CHAR_AXIS0_FDIV, $bits(`TL_CHAR_AXIS0_FDIV)); endmodule\n')
+    subprocess.run([iv, "-g2005", "-I", str(tmp_path), "-o", str(tmp_path / "a.out"), str(v)], check=True)
+    out = subprocess.run(["vvp", str(tmp_path / "a.out")], capture_output=True, text=True, check=True).stdout
+    assert "FDIV=109 W=16" in out

@@ -4,7 +4,8 @@
     characterize.py sim [--out-dir DIR] [--source rtl|model] [--drive brake|coast] [--axes x z]
     characterize.py step5 FREQ_SWEEP.csv
     characterize.py check FILE.csv ...
-    characterize.py show CONFIG.json
+    characterize.py show CONFIG.json [--registers]
+    characterize.py export CONFIG.json --format c|verilog --out FILE
 
 ``sim`` records the sweeps on the simulated bench (the plant's
 dynamometer, driven by the RTL's pins or their documented waveform) into
@@ -29,7 +30,8 @@ from pathlib import Path
 from typing import Sequence
 
 from .config import (
-    CLK_HZ, PWM_BITS, ConfigError, axis_config, build_config, default_divider, load_config, register_writes, write_config,
+    CLK_HZ, PWM_BITS, ConfigError, axis_config, build_config, c_header, default_divider, load_config, register_writes,
+    verilog_header, write_config,
 )
 from .data import DataError, Sweep, read_sweep
 from .method import MethodError, MotorResult, Thresholds, characterize_motor, step5_candidates
@@ -199,6 +201,20 @@ def cmd_show(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_export(args: argparse.Namespace) -> int:
+    try:
+        cfg = load_config(args.config)
+        text = (c_header if args.format == "c" else verilog_header)(cfg, Path(args.config).name)
+    except ConfigError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return EXIT_ERROR
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(text)
+    print(f"wrote {out}")
+    return EXIT_OK
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="characterize", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -238,6 +254,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("config")
     p.add_argument("--registers", action="store_true", help="list the SoC register writes that apply it")
     p.set_defaults(fn=cmd_show)
+    p = sub.add_parser("export", help="C header (firmware) or Verilog `defines (RTL) from a configuration")
+    p.add_argument("config")
+    p.add_argument("--format", choices=("c", "verilog"), default="c")
+    p.add_argument("--out", required=True)
+    p.set_defaults(fn=cmd_export)
     args = ap.parse_args(argv)
     return int(args.fn(args))
 
