@@ -26,8 +26,10 @@ module cpu_regfile (
     reg [31:0] q1, q2, fwd;
     reg        use_fwd1, use_fwd2, zero1, zero2;
 
-    // Defined start values make simulations reproducible; synthesis takes
-    // them as the block RAMs' power-up contents.
+`ifndef SYNTHESIS
+    // Defined start values make simulations reproducible.  Left out of
+    // synthesis: Yosys 0.23 will not map an initialised memory to M10K, and
+    // software must not rely on register values at reset anyway.
     integer i;
     initial begin
         for (i = 0; i < 32; i = i + 1) begin
@@ -35,6 +37,7 @@ module cpu_regfile (
             bank2[i] = 32'd0;
         end
     end
+`endif
 
     always @(posedge clk) begin
         if (we) begin
