@@ -171,7 +171,8 @@ def prove_properties(c: Core) -> list[Result]:
         files = " ".join(_rel(p) for p in (*c.verilog, chk.file))
         reset = f"-set-at 1 {chk.reset} 1 " if chk.reset else ""
         script = (
-            f"read_verilog -formal {files}\nprep -top {chk.top}\nflatten\nasync2sync\n"
+            # memory_map: sat cannot import memories; model them as flip-flops.
+            f"read_verilog -formal {files}\nprep -top {chk.top}\nflatten\nmemory_map\nopt_clean\nasync2sync\n"
             f"sat -tempinduct -prove-asserts {reset}-seq 1 -maxsteps {chk.depth} -verify\n"
         )
         log = BUILD / "formal" / c.name / f"{chk.top}.log"
@@ -198,7 +199,7 @@ def synth_cyclonev(c: Core, params: Mapping[str, int] | None = None, tag: str = 
         _read_verilog_cmds(c, params)
         + f"synth_intel_alm -family cyclonev -top {c.top} -noiopad\n"
         + "tee -o {stat} stat\n".format(stat=_rel(work / "stat.txt"))
-        + "select -set comb t:* t:MISTRAL_FF %d\n"
+        + "select -set comb * t:MISTRAL_FF %d\n"
         + "tee -o {ltp} ltp @comb\n".format(ltp=_rel(work / "ltp.txt"))
         + f"write_json {_rel(work / 'netlist.json')}\n"
     )
@@ -210,6 +211,7 @@ def synth_cyclonev(c: Core, params: Mapping[str, int] | None = None, tag: str = 
     mem_bits = int(m.group(1)) if (m := re.search(r"Number of memory bits:\s+(\d+)", stat)) else 0
     ltp_txt = (work / "ltp.txt").read_text()
     depth = int(m.group(1)) if (m := re.search(r"Longest topological path in \S+ \(length=(\d+)\)", ltp_txt)) else 0
+    levels = lut_levels(work / "netlist.json", c.top)
     luts = sum(v for k, v in cells.items() if k.startswith("MISTRAL_ALUT") and "ARITH" not in k)
     m10k = cells.get("MISTRAL_M10K", 0)
     mlab = cells.get("MISTRAL_MLAB", 0)
@@ -224,24 +226,79 @@ def synth_cyclonev(c: Core, params: Mapping[str, int] | None = None, tag: str = 
         "memory_bits": mem_bits,
         "dsp": cells.get("MISTRAL_MUL27X27", 0) + cells.get("MISTRAL_MUL18X18", 0) + cells.get("MISTRAL_MUL9X9", 0),
         "longest_path_cells": depth,
+        "lut_levels": levels,
         "cells": cells,
     }
+
+
+#: cells whose outputs start a new timing path (registers and memories)
+_SEQUENTIAL = ("MISTRAL_FF", "MISTRAL_M10K", "MISTRAL_MLAB", "MISTRAL_MUL")
+
+
+def lut_levels(netlist_json: Path, top: str) -> int:
+    """Logic depth in LUT levels between registers/ports of a synthesised netlist.
+
+    Yosys ``ltp`` counts every carry-chain cell as a level, so a 32-bit adder
+    reads as 32 levels although its carry ripple is the fast dedicated
+    route.  Here a cell entered through its carry input (CI) adds no level;
+    any other entry (a LUT, or an adder cell entered at its data inputs)
+    adds one.
+    """
+    mod = json.loads(netlist_json.read_text())["modules"][top]
+    cells = mod["cells"]
+    driver: dict[int, str] = {}
+    for name, cell in cells.items():
+        for port, bits in cell["connections"].items():
+            if cell["port_directions"].get(port) == "output":
+                for b in bits:
+                    if isinstance(b, int):
+                        driver[b] = name
+    memo: dict[str, int] = {}
+
+    def depth(name: str, stack: set[str]) -> int:
+        if name in memo:
+            return memo[name]
+        cell = cells[name]
+        if cell["type"].startswith(_SEQUENTIAL) or name in stack:
+            return 0
+        stack.add(name)
+        best = 1
+        for port, bits in cell["connections"].items():
+            if cell["port_directions"].get(port) != "input":
+                continue
+            cost = 0 if port == "CI" else 1
+            for b in bits:
+                d = driver.get(b) if isinstance(b, int) else None
+                if d is not None and not cells[d]["type"].startswith(_SEQUENTIAL):
+                    best = max(best, depth(d, stack) + cost)
+        stack.discard(name)
+        memo[name] = best
+        return best
+
+    import sys
+    old = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(old, 20000))
+    try:
+        comb = [n for n, c in cells.items() if not c["type"].startswith(_SEQUENTIAL)]
+        return max((depth(n, set()) for n in comb), default=0)
+    finally:
+        sys.setrecursionlimit(old)
 
 
 def write_synth_table(rows: list[dict], out_dir: Path = BUILD / "synth") -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "resources.json").write_text(json.dumps(rows, indent=2))
     lines = [
-        "| core | LUTs | carry | FFs | M10K | MLAB | mem bits | DSP | longest path (cells) |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| core | LUTs | carry | FFs | M10K | MLAB | mem bits | DSP | LUT levels | ltp cells |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         if "error" in r:
-            lines.append(f"| {r['core']} | synthesis failed | | | | | | | |")
+            lines.append(f"| {r['core']} | synthesis failed | | | | | | | | |")
             continue
         lines.append(
             f"| {r['core']} | {r['luts']} | {r['carry_cells']} | {r['ffs']} | {r['m10k']} | {r['mlab']} "
-            f"| {r['memory_bits']} | {r['dsp']} | {r['longest_path_cells']} |"
+            f"| {r['memory_bits']} | {r['dsp']} | {r['lut_levels']} | {r['longest_path_cells']} |"
         )
     md = out_dir / "resources.md"
     md.write_text("\n".join(lines) + "\n")
