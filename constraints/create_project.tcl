@@ -17,14 +17,21 @@ file mkdir $proj_dir
 cd $proj_dir
 
 set qpf [open de0_cv_top.qpf w]
+puts $qpf "# Quartus project of the torqueloop board top, written by constraints/create_project.tcl"
 puts $qpf "PROJECT_REVISION = \"de0_cv_top\""
 close $qpf
 file copy -force [file join $repo constraints de0_cv_top.qsf] de0_cv_top.qsf
 puts "Info: Quartus project written to $proj_dir/de0_cv_top.qpf"
 
-if {[llength $argv] > 0 && [lindex $argv 0] eq "compile"} {
+# quartus_sh passes the script's arguments in quartus(args) (and argv).
+if {[info exists quartus(args)]} {
+    set script_args $quartus(args)
+} else {
+    set script_args $argv
+}
+if {[llength $script_args] > 0 && [lindex $script_args 0] eq "compile"} {
     load_package flow
-    project_open de0_cv_top -revision de0_cv_top
+    project_open -revision de0_cv_top de0_cv_top
     execute_flow -compile
     project_close
     puts "Info: bitstream $proj_dir/output_files/de0_cv_top.sof"

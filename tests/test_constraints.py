@@ -255,3 +255,35 @@ def test_repository_constraints_are_consistent():
         pytest.skip(f"core {t.board.top} not in rtl/manifest.toml yet (waits for rtl/soc/soc.v)")
     failed = [c for c in board_check.run_all() if not c.ok]
     assert not failed, "\n".join(f"{c.name}:\n{c.detail[:3000]}" for c in failed)
+
+
+def test_create_project_tcl_writes_the_project_and_compiles(tmp_path):
+    """constraints/create_project.tcl under tclsh, with the four Quartus
+    commands it uses stubbed: it must write build/quartus/de0_cv_top.qpf and
+    an exact copy of the committed .qsf, and only with 'compile' open the
+    project and run the compile flow."""
+    import shutil
+    import subprocess
+
+    if shutil.which("tclsh") is None:
+        pytest.skip("tclsh not installed")
+    (tmp_path / "constraints").mkdir()
+    for f in ("create_project.tcl", "de0_cv_top.qsf"):
+        shutil.copy(REPO_ROOT / "constraints" / f, tmp_path / "constraints" / f)
+    stubs = tmp_path / "stubs.tcl"
+    stubs.write_text(
+        "proc load_package {args} { puts \"STUB load_package $args\" }\n"
+        "proc project_open {args} { puts \"STUB project_open $args\" }\n"
+        "proc execute_flow {args} { puts \"STUB execute_flow $args\" }\n"
+        "proc project_close {args} { puts \"STUB project_close\" }\n"
+        "set argv0 [lindex $argv 0]\nset argv [lrange $argv 1 end]\n"
+        "source $argv0\n")
+    script = tmp_path / "constraints" / "create_project.tcl"
+    only = subprocess.run(["tclsh", str(stubs), str(script)], capture_output=True, text=True, check=True)
+    proj = tmp_path / "build" / "quartus"
+    assert 'PROJECT_REVISION = "de0_cv_top"' in (proj / "de0_cv_top.qpf").read_text()
+    assert (proj / "de0_cv_top.qsf").read_text() == (REPO_ROOT / "constraints" / "de0_cv_top.qsf").read_text()
+    assert "STUB" not in only.stdout
+    full = subprocess.run(["tclsh", str(stubs), str(script), "compile"], capture_output=True, text=True, check=True)
+    assert "STUB project_open -revision de0_cv_top de0_cv_top" in full.stdout
+    assert "STUB execute_flow -compile" in full.stdout
