@@ -138,6 +138,13 @@ def test_qsf_pins_check_catches(table, pins, mutation, expect):
     assert not c.ok and expect in c.detail, c.detail
 
 
+def test_firmware_images_become_top_parameters(table, pins):
+    """[firmware] entries reach the top's parameters, relative to the project folder."""
+    with_fw = dataclasses.replace(table, firmware=(("ROM_INIT", REPO_ROOT / "build" / "fw" / "boot.hex"),))
+    s = board.parse_qsf(board.gen_qsf(with_fw, pins, FAKE_SOURCES))
+    assert s.parameters == {"ROM_INIT": "../fw/boot.hex"}
+
+
 def test_sdc_check(table):
     sdc = board.gen_sdc(table)
     bits = {b for _, b in table.port_bits()}

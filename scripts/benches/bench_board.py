@@ -104,6 +104,7 @@ def main() -> int:
         print(f"[bench_board] core {top} not in rtl/manifest.toml yet (waits for rtl/soc/soc.v)")
         return 1
     t0 = time.monotonic()
+    print(f"[bench_board] synthesising {top} (full-size RAM) with synth_intel_alm, about a minute ...", flush=True)
     row = eda.synth_cyclonev(cores[top], tag="board")
     if "error" in row:
         print(f"[bench_board] synthesis failed:\n{row['error']}")
