@@ -112,11 +112,23 @@ async def firmware_blinks_counts_keys_and_talks(dut):
     assert len(await _toggle_times(dut, cyc, 2, 4 * HALF_PERIOD)) == 2
 
 
+def write_if_changed(path: Path, text: str) -> None:
+    """Atomic, and untouched when identical: other engineers' test runs may
+    be reading the same image at this moment (a simulator reading a
+    half-written hex file would boot garbage)."""
+    if path.exists() and path.read_text() == text:
+        return
+    tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+
+
 def build_rom_image(name: str = "blink") -> Path:
     """Compile tb/soc/prog/<name>.c into a boot-ROM hex image (one word per line)."""
     out = BUILD_ROOT / "soc" / "prog"
     out.mkdir(parents=True, exist_ok=True)
-    elf, binf, hexf = out / f"{name}.elf", out / f"{name}.bin", out / f"{name}.hex"
+    tag = f"{name}.{os.getpid()}"
+    elf, binf, hexf = out / f"{tag}.elf", out / f"{tag}.bin", out / f"{name}.hex"
     subprocess.run(
         ["riscv64-unknown-elf-gcc", "-march=rv32im_zicsr", "-mabi=ilp32", "-O2", "-nostdlib",
          "-ffreestanding", "-static", "-std=c11", "-Wall", "-Wextra", "-Werror",
@@ -125,10 +137,12 @@ def build_rom_image(name: str = "blink") -> Path:
         check=True, capture_output=True, text=True)
     subprocess.run(["riscv64-unknown-elf-objcopy", "-O", "binary", str(elf), str(binf)], check=True)
     data = binf.read_bytes()
+    elf.replace(out / f"{name}.elf")
+    binf.unlink()
     assert len(data) <= regs.BOOT_ROM_SIZE, f"{name}: {len(data)} bytes do not fit the boot ROM"
     data += bytes(regs.BOOT_ROM_SIZE - len(data))
     words = [int.from_bytes(data[i:i + 4], "little") for i in range(0, len(data), 4)]
-    hexf.write_text("".join(f"{w:08x}\n" for w in words))
+    write_if_changed(hexf, "".join(f"{w:08x}\n" for w in words))
     return hexf
 
 

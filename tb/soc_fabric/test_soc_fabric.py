@@ -135,8 +135,15 @@ def read_hex(path: Path) -> list[int]:
 
 
 def write_hex(path: Path, words: list[int]) -> None:
+    """Atomic and skipped when identical: a concurrent run of this bench may
+    be reading the image right now."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("".join(f"{w:08x}\n" for w in words))
+    text = "".join(f"{w:08x}\n" for w in words)
+    if path.exists() and path.read_text() == text:
+        return
+    tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
 
 
 # --- registers ------------------------------------------------------------------------------
