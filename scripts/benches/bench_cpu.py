@@ -58,8 +58,10 @@ def run_elf(elf: Path, *extra: str) -> str:
 
 
 def logic_depth(netlist: Path, skip_prefix: str | None = None) -> int:
-    """Longest path in cells (LUTs, carry cells, DSPs) between flip-flops/ports:
-    Yosys ltp after removing the flip-flops (optionally also one submodule's cells)."""
+    """Longest path in cells (LUTs, carry cells, DSPs) between flip-flops, block
+    RAMs (registered reads) and ports: Yosys ltp after removing those cells
+    (optionally also one submodule's cells).  Works around eda.synth_cyclonev's
+    ltp selection, which reports -1."""
     src = netlist
     if skip_prefix:
         d = json.loads(netlist.read_text())
@@ -67,7 +69,7 @@ def logic_depth(netlist: Path, skip_prefix: str | None = None) -> int:
         m["cells"] = {k: v for k, v in m["cells"].items() if not k.startswith(skip_prefix)}
         src = Path(tempfile.mkdtemp()) / "netlist.json"
         src.write_text(json.dumps(d))
-    out = subprocess.run(["yosys", "-p", f"read_json {src}; delete t:MISTRAL_FF t:MISTRAL_CLKBUF; ltp"],
+    out = subprocess.run(["yosys", "-p", f"read_json {src}; delete t:MISTRAL_FF t:MISTRAL_CLKBUF t:MISTRAL_M10K t:MISTRAL_MLAB; ltp"],
                          capture_output=True, text=True).stdout
     m = re.search(r"Longest topological path in \S+ \(length=(\d+)\)", out)
     return int(m.group(1)) if m else -1
