@@ -102,3 +102,25 @@ def test_ram_fits_the_device_with_room_to_spare():
     """64 KiB is 64 of the 5CEBA4's 308 M10K blocks (1 KiB of data each in x32 mode)."""
     ram = regmap.load().region("RAM").size
     assert ram // 1024 <= 308 // 2
+
+
+def test_bus_oracle_decodes_the_map():
+    """torqueloop/ref/soc_bus.py (the benches' decode oracle) against the map:
+    every register answers, the word after each block's last register and
+    the unused pages do not, and execution is limited to ROM and RAM."""
+    from torqueloop.ref.soc_bus import BusModel
+    rm = regmap.load()
+    m = BusModel()
+    for b in rm.blocks:
+        for r in b.registers:
+            assert not m.dbus_err(b.base + r.offset, we=False)
+            assert m.ibus_err(b.base + r.offset)
+        last = max(r.offset for r in b.registers)
+        assert m.dbus_err(b.base + last + 4, we=False)
+    used = {b.base for b in rm.blocks}
+    periph = rm.region("PERIPH")
+    for page in range(periph.base, periph.base + periph.size, regmap.PAGE_BYTES):
+        if page not in used:
+            assert m.dbus_err(page, we=False), f"unused page {page:#x} must be an error"
+    assert m.dbus_err(regmap.load().region("BOOT_ROM").base, we=True), "ROM write"
+    assert not m.ibus_err(0) and not m.ibus_err(0x8000_0000) and m.ibus_err(0x8000_0000 + m.ram_bytes)
