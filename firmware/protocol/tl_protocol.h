@@ -1,0 +1,199 @@
+/* Generated from firmware/protocol/protocol.toml by scripts/gen_protocol.py - do not edit. */
+#ifndef TL_PROTOCOL_H
+#define TL_PROTOCOL_H
+
+#include <stdint.h>
+
+#define TLP_VERSION 0x1u
+#define TLP_MAX_PAYLOAD 0x40u
+#define TLP_HEADER_BYTES 0x4u
+#define TLP_CRC_BYTES 0x2u
+#define TLP_REPLY_FLAG 0x80u
+#define TLP_TELEMETRY_CMD 0xC0u
+#define TLP_ERROR_CMD 0xFFu
+#define TLP_SEQ_WINDOW 0x8000u
+#define TLP_BOOTLOADER_MAGIC 0xB00710ADu
+#define TLP_FIRMWARE_VERSION 0x100u
+#define TLP_MAX_PACKET 70u
+#define TLP_MAX_ENCODED 71u
+
+#define TLP_ST_OK 0u
+#define TLP_ST_CRC 1u
+#define TLP_ST_FRAMING 2u
+#define TLP_ST_LENGTH 3u
+#define TLP_ST_OVERSIZE 4u
+#define TLP_ST_UNKNOWN_CMD 5u
+#define TLP_ST_BAD_ARG 6u
+#define TLP_ST_RANGE 7u
+#define TLP_ST_REPLAY 8u
+#define TLP_ST_STATE 9u
+
+#define TLP_FAULT_ESTOP 0x01u
+#define TLP_FAULT_BRIDGE 0x02u
+#define TLP_FAULT_FOLLOWING 0x04u
+#define TLP_FAULT_SOFT_LIMIT 0x08u
+#define TLP_FAULT_LINK 0x10u
+#define TLP_FAULT_ENCODER 0x20u
+#define TLP_FAULT_HW_SAFE 0x40u
+
+#define TLP_CMD_IDENTIFY 0x01u
+#define TLP_CMD_IDENTIFY_REQ_LEN 0u
+#define TLP_CMD_IDENTIFY_REP_LEN 15u
+#define TLP_CMD_GET_PARAM 0x02u
+#define TLP_CMD_GET_PARAM_REQ_LEN 2u
+#define TLP_CMD_GET_PARAM_REP_LEN 5u
+#define TLP_CMD_SET_PARAM 0x03u
+#define TLP_CMD_SET_PARAM_REQ_LEN 6u
+#define TLP_CMD_SET_PARAM_REP_LEN 5u
+#define TLP_CMD_ENABLE 0x04u
+#define TLP_CMD_ENABLE_REQ_LEN 2u
+#define TLP_CMD_ENABLE_REP_LEN 1u
+#define TLP_CMD_MOVE 0x05u
+#define TLP_CMD_MOVE_REQ_LEN 6u
+#define TLP_CMD_MOVE_REP_LEN 1u
+#define TLP_CMD_STOP 0x06u
+#define TLP_CMD_STOP_REQ_LEN 1u
+#define TLP_CMD_STOP_REP_LEN 1u
+#define TLP_CMD_STATUS 0x07u
+#define TLP_CMD_STATUS_REQ_LEN 1u
+#define TLP_CMD_STATUS_REP_LEN 30u
+#define TLP_CMD_TELEMETRY 0x08u
+#define TLP_CMD_TELEMETRY_REQ_LEN 2u
+#define TLP_CMD_TELEMETRY_REP_LEN 1u
+#define TLP_CMD_CLEAR_FAULT 0x09u
+#define TLP_CMD_CLEAR_FAULT_REQ_LEN 1u
+#define TLP_CMD_CLEAR_FAULT_REP_LEN 3u
+#define TLP_CMD_BOOTLOADER 0x0Au
+#define TLP_CMD_BOOTLOADER_REQ_LEN 4u
+#define TLP_CMD_BOOTLOADER_REP_LEN 1u
+#define TLP_CMD_COUNTERS 0x0Bu
+#define TLP_CMD_COUNTERS_REQ_LEN 0u
+#define TLP_CMD_COUNTERS_REP_LEN 19u
+
+/* Field offsets in the payloads (little-endian). */
+#define TLP_IDENTIFY_REP_STATUS 0u
+#define TLP_IDENTIFY_REP_PROTO_VERSION 1u
+#define TLP_IDENTIFY_REP_FW_VERSION 2u
+#define TLP_IDENTIFY_REP_BUILD_ID 4u
+#define TLP_IDENTIFY_REP_AXIS_COUNT 8u
+#define TLP_IDENTIFY_REP_LAST_SEQ 9u
+#define TLP_IDENTIFY_REP_CLK_HZ 11u
+#define TLP_GET_PARAM_REQ_AXIS 0u
+#define TLP_GET_PARAM_REQ_PARAM 1u
+#define TLP_GET_PARAM_REP_STATUS 0u
+#define TLP_GET_PARAM_REP_VALUE 1u
+#define TLP_SET_PARAM_REQ_AXIS 0u
+#define TLP_SET_PARAM_REQ_PARAM 1u
+#define TLP_SET_PARAM_REQ_VALUE 2u
+#define TLP_SET_PARAM_REP_STATUS 0u
+#define TLP_SET_PARAM_REP_VALUE 1u
+#define TLP_ENABLE_REQ_MASK 0u
+#define TLP_ENABLE_REQ_ENABLE 1u
+#define TLP_ENABLE_REP_STATUS 0u
+#define TLP_MOVE_REQ_AXIS 0u
+#define TLP_MOVE_REQ_MODE 1u
+#define TLP_MOVE_REQ_TARGET 2u
+#define TLP_MOVE_REP_STATUS 0u
+#define TLP_STOP_REQ_MASK 0u
+#define TLP_STOP_REP_STATUS 0u
+#define TLP_STATUS_REQ_AXIS 0u
+#define TLP_STATUS_REP_STATUS 0u
+#define TLP_STATUS_REP_ENABLED 1u
+#define TLP_STATUS_REP_FAULTS 2u
+#define TLP_STATUS_REP_MOVING 3u
+#define TLP_STATUS_REP_POSITION 4u
+#define TLP_STATUS_REP_SETPOINT 8u
+#define TLP_STATUS_REP_VELOCITY_Q8 12u
+#define TLP_STATUS_REP_PWM_CMD 16u
+#define TLP_STATUS_REP_SAFETY 18u
+#define TLP_STATUS_REP_RX_ERRORS 20u
+#define TLP_STATUS_REP_LOOP_CYCLES_MAX 22u
+#define TLP_STATUS_REP_JITTER_CYCLES_MAX 26u
+#define TLP_TELEMETRY_REQ_EVERY 0u
+#define TLP_TELEMETRY_REP_STATUS 0u
+#define TLP_CLEAR_FAULT_REQ_MASK 0u
+#define TLP_CLEAR_FAULT_REP_STATUS 0u
+#define TLP_CLEAR_FAULT_REP_FAULTS0 1u
+#define TLP_CLEAR_FAULT_REP_FAULTS1 2u
+#define TLP_BOOTLOADER_REQ_MAGIC 0u
+#define TLP_BOOTLOADER_REP_STATUS 0u
+#define TLP_COUNTERS_REP_STATUS 0u
+#define TLP_COUNTERS_REP_FRAMES_OK 1u
+#define TLP_COUNTERS_REP_CRC 3u
+#define TLP_COUNTERS_REP_FRAMING 5u
+#define TLP_COUNTERS_REP_LENGTH 7u
+#define TLP_COUNTERS_REP_OVERSIZE 9u
+#define TLP_COUNTERS_REP_UNKNOWN 11u
+#define TLP_COUNTERS_REP_REPLAY 13u
+#define TLP_COUNTERS_REP_REJECTED 15u
+#define TLP_COUNTERS_REP_TX_DROPPED 17u
+#define TLP_TELEM_TIME_US 0u
+#define TLP_TELEM_HEAD_LEN 4u
+#define TLP_TELEM_AX_SETPOINT 0u
+#define TLP_TELEM_AX_POSITION 4u
+#define TLP_TELEM_AX_VELOCITY_Q8 8u
+#define TLP_TELEM_AX_ERROR 12u
+#define TLP_TELEM_AX_PWM_CMD 16u
+#define TLP_TELEM_AX_FAULTS 18u
+#define TLP_TELEM_AX_ENABLED 19u
+#define TLP_TELEM_AX_LEN 20u
+#define TLP_TELEM_LEN 44u
+
+#define TLP_GLOBAL_AXIS 0xFFu
+#define TLP_P_LAW 0u
+#define TLP_P_KP_Q16 1u
+#define TLP_P_KD_Q16 2u
+#define TLP_P_KI_Q16 3u
+#define TLP_P_KP_UNM_RAD 4u
+#define TLP_P_KD_UNMS_RAD 5u
+#define TLP_P_KI_UNM_RADS 6u
+#define TLP_P_TAU_MAX_MNM 7u
+#define TLP_P_COUNTS_PER_REV 8u
+#define TLP_P_PITCH_UM 9u
+#define TLP_P_CMD_LIMIT 10u
+#define TLP_P_PW0 11u
+#define TLP_P_PWMAX 12u
+#define TLP_P_FDIV 13u
+#define TLP_P_DEADBAND_Q16 14u
+#define TLP_P_FOLLOW_LIMIT 15u
+#define TLP_P_SOFT_MIN 16u
+#define TLP_P_SOFT_MAX 17u
+#define TLP_P_VMAX 18u
+#define TLP_P_AMAX 19u
+#define TLP_P_VEL_MODE 20u
+#define TLP_P_BRAKE 21u
+#define TLP_P_PERIOD_US 64u
+#define TLP_P_LINK_TIMEOUT_MS 65u
+#define TLP_P_BAUD_DIV 66u
+
+typedef struct { uint8_t id; uint8_t global; int32_t min; int32_t max; int32_t dflt; } tlp_param_info_t;
+#define TLP_PARAM_COUNT 25u
+static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {
+    {0u, 0u, 0L, 3L, 1L},  /* LAW */
+    {1u, 0u, 0L, 2147483647L, 17132L},  /* KP_Q16 */
+    {2u, 0u, 0L, 2147483647L, 0L},  /* KD_Q16 */
+    {3u, 0u, 0L, 2147483647L, 0L},  /* KI_Q16 */
+    {4u, 0u, 0L, 100000000L, 820000L},  /* KP_UNM_RAD */
+    {5u, 0u, 0L, 100000000L, 0L},  /* KD_UNMS_RAD */
+    {6u, 0u, 0L, 100000000L, 0L},  /* KI_UNM_RADS */
+    {7u, 0u, 1L, 1000000L, 2400L},  /* TAU_MAX_MNM */
+    {8u, 0u, 1L, 1000000L, 8400L},  /* COUNTS_PER_REV */
+    {9u, 0u, 1L, 1000000L, 4000L},  /* PITCH_UM */
+    {10u, 0u, 0L, 1023L, 1023L},  /* CMD_LIMIT */
+    {11u, 0u, 0L, 1023L, 0L},  /* PW0 */
+    {12u, 0u, 0L, 1023L, 1023L},  /* PWMAX */
+    {13u, 0u, 1L, 65535L, 109L},  /* FDIV */
+    {14u, 0u, 0L, 2147483647L, 32768L},  /* DEADBAND_Q16 */
+    {15u, 0u, 1L, 2147483647L, 16800L},  /* FOLLOW_LIMIT */
+    {16u, 0u, (-2147483647L), 2147483647L, (-1000000L)},  /* SOFT_MIN */
+    {17u, 0u, (-2147483647L), 2147483647L, 1000000L},  /* SOFT_MAX */
+    {18u, 0u, 1L, 10000000L, 8400L},  /* VMAX */
+    {19u, 0u, 1L, 100000000L, 16800L},  /* AMAX */
+    {20u, 0u, 0L, 1L, 1L},  /* VEL_MODE */
+    {21u, 0u, 0L, 1L, 1L},  /* BRAKE */
+    {64u, 1u, 200L, 25000L, 25000L},  /* PERIOD_US */
+    {65u, 1u, 10L, 60000L, 500L},  /* LINK_TIMEOUT_MS */
+    {66u, 1u, 15L, 65535L, 433L},  /* BAUD_DIV */
+};
+
+#endif

@@ -1,0 +1,67 @@
+/* hal.h on the torqueloop SoC: every address from the generated register header. */
+#include "hal.h"
+
+#include "torqueloop_regs.h"
+
+/* Axis register of axis i: the AXIS0 offset moved to that axis's page. */
+#define AX(i, REG) TL_REG32(((i) ? TL_AXIS1_BASE : TL_AXIS0_BASE) + (TL_AXIS0_##REG##_ADDR - TL_AXIS0_BASE))
+
+void hal_enc_read(uint32_t axis, tl_enc_sample_t *s)
+{
+    /* Position and edge time are two reads: retry if a count fell between them,
+     * so the pair always belongs to the same edge. */
+    uint32_t t0, t1;
+    do {
+        t0 = AX(axis, ENC_EDGE_TIME);
+        s->pos = (int32_t)AX(axis, ENC_POS);
+        t1 = AX(axis, ENC_EDGE_TIME);
+    } while (t0 != t1);
+    s->edge_time = t1;
+    s->now = AX(axis, ENC_TIMESTAMP);
+    s->illegal = AX(axis, ENC_ILLEGAL) & TL_AXIS_ENC_ILLEGAL_COUNT_MSK;
+    s->bridge_fault = (AX(axis, PWM_STATUS) & TL_AXIS_PWM_STATUS_BRIDGE_FAULT_MSK) != 0u;
+}
+
+void hal_enc_clear_illegal(uint32_t axis) { AX(axis, ENC_CMD) = TL_AXIS_ENC_CMD_ILLEGAL_CLEAR_MSK; }
+
+void hal_pwm_cmd(uint32_t axis, int32_t cmd) { AX(axis, PWM_CMD) = (uint32_t)cmd & TL_AXIS_PWM_CMD_CMD_MSK; }
+
+void hal_pwm_enable(uint32_t axis, bool on, bool brake)
+{
+    AX(axis, PWM_CTRL) = (on ? TL_AXIS_PWM_CTRL_ENABLE_MSK : 0u) | (brake ? TL_AXIS_PWM_CTRL_BRAKE_MSK : 0u);
+}
+
+void hal_pwm_config(uint32_t axis, uint32_t fdiv, uint32_t pw0, uint32_t pwmax)
+{
+    AX(axis, FDIV) = fdiv & TL_AXIS_FDIV_DIV_MSK;
+    AX(axis, PWM_PW0) = pw0 & TL_AXIS_PWM_PW0_PW0_MSK;
+    AX(axis, PWM_PWMAX) = pwmax & TL_AXIS_PWM_PWMAX_PWMAX_MSK;
+}
+
+uint32_t hal_safety(void)
+{
+    uint32_t r = TL_SYS_SAFETY, o = 0;
+    if (r & TL_SYS_SAFETY_SAFE_MSK) o |= TL_HAL_SAFE_FORCED;
+    if (r & TL_SYS_SAFETY_ESTOP_IN_MSK) o |= TL_HAL_SAFE_ESTOP_IN;
+    if (r & TL_SYS_SAFETY_ESTOP_MSK) o |= TL_HAL_SAFE_ESTOP;
+    if (r & TL_SYS_SAFETY_FAULT0_MSK) o |= TL_HAL_SAFE_FAULT0;
+    if (r & TL_SYS_SAFETY_FAULT1_MSK) o |= TL_HAL_SAFE_FAULT1;
+    if (r & TL_SYS_SAFETY_WDOG_MSK) o |= TL_HAL_SAFE_WDOG;
+    return o;
+}
+
+void hal_safety_ack(uint32_t bits)
+{
+    uint32_t w = 0;
+    if (bits & TL_HAL_SAFE_ESTOP) w |= TL_SYS_SAFETY_ESTOP_MSK;
+    if (bits & TL_HAL_SAFE_FAULT0) w |= TL_SYS_SAFETY_FAULT0_MSK;
+    if (bits & TL_HAL_SAFE_FAULT1) w |= TL_SYS_SAFETY_FAULT1_MSK;
+    if (bits & TL_HAL_SAFE_WDOG) w |= TL_SYS_SAFETY_WDOG_MSK;
+    TL_SYS_SAFETY = w;
+}
+
+uint32_t hal_build_id(void) { return TL_SYS_BUILD_ID; }
+uint32_t hal_clk_hz(void) { return TL_SYS_CLK_HZ; }
+void hal_set_baud_div(uint32_t div) { TL_UART_BAUD_DIV = div & TL_UART_BAUD_DIV_DIV_MSK; }
+void hal_irq_off(void) { __asm__ volatile("csrc mstatus, %0" : : "r"(1u << 3) : "memory"); }
+void hal_irq_on(void) { __asm__ volatile("csrs mstatus, %0" : : "r"(1u << 3) : "memory"); }

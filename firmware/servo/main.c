@@ -1,0 +1,159 @@
+/* Servo firmware entry: the machine-timer interrupt runs one control
+ * iteration of both axes every PERIOD_US (servo.c, tl_servo_tick); the main
+ * loop moves bytes between the UART and the link layer and sends telemetry.
+ *
+ * Measured here and reported over the link (STATUS): the worst cycles of one
+ * control iteration (mcycle around tl_servo_tick) and the worst lateness of
+ * the interrupt against its mtimecmp deadline (the jitter of the period).
+ * The SoC watchdog is kicked by every iteration: if the interrupt stops, the
+ * hardware forces both drives safe after WDOG_PERIODS periods. */
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "hal.h"
+#include "servo.h"
+#include "torqueloop_regs.h"
+
+#define WDOG_PERIODS 4u
+#define TX_RING 512u          /* bytes; a power of two */
+
+static tl_servo_t servo;
+static volatile uint64_t deadline;
+static uint8_t tx_ring[TX_RING];
+static volatile uint32_t tx_head, tx_tail;
+
+static uint32_t mcycle(void)
+{
+    uint32_t v;
+    __asm__ volatile("csrr %0, mcycle" : "=r"(v));
+    return v;
+}
+
+static void arm_timer(uint64_t t)
+{
+    /* High word to all ones first: no spurious interrupt while the low half moves. */
+    TL_TIMER_MTIMECMP_HI = 0xFFFFFFFFu;
+    TL_TIMER_MTIMECMP_LO = (uint32_t)t;
+    TL_TIMER_MTIMECMP_HI = (uint32_t)(t >> 32);
+}
+
+static uint64_t mtime(void)
+{
+    uint32_t hi, lo;
+    do {
+        hi = TL_TIMER_MTIME_HI;
+        lo = TL_TIMER_MTIME_LO;
+    } while (hi != TL_TIMER_MTIME_HI);
+    return ((uint64_t)hi << 32) | lo;
+}
+
+__attribute__((interrupt("machine"))) static void trap_handler(void)
+{
+    uint32_t cause;
+    __asm__ volatile("csrr %0, mcause" : "=r"(cause));
+    if (cause == 0x80000007u) {   /* machine timer */
+        uint32_t late = TL_TIMER_MTIME_LO - (uint32_t)deadline;
+        uint32_t c0 = mcycle();
+        tl_servo_tick(&servo);
+        uint32_t period = tl_servo_period_cycles(&servo);
+        TL_SYS_WDOG_KICK = 1u;
+        deadline += period;
+        arm_timer(deadline);
+        uint32_t used = mcycle() - c0;
+        if (used > servo.loop_cycles_max)
+            servo.loop_cycles_max = used;
+        if (late > servo.jitter_cycles_max && late < period)
+            servo.jitter_cycles_max = late;
+        return;
+    }
+    /* Anything else is a firmware bug: drives off, stop here (the watchdog
+     * keeps the SoC latch set because nothing kicks it any more). */
+    hal_pwm_enable(0, false, true);
+    hal_pwm_enable(1, false, true);
+    for (;;)
+        TL_GPIO_HEX_HI = 0x7979u;   /* "EE" on HEX5/HEX4 */
+}
+
+static bool tx_push(const uint8_t *wire, uint32_t len)
+{
+    uint32_t head = tx_head;
+    if (TX_RING - (head - tx_tail) < len)
+        return false;
+    for (uint32_t i = 0; i < len; i++)
+        tx_ring[(head + i) & (TX_RING - 1u)] = wire[i];
+    tx_head = head + len;
+    return true;
+}
+
+static void tx_pump(void)
+{
+    while (tx_tail != tx_head && (TL_UART_STATUS & TL_UART_STATUS_TX_READY_MSK)) {
+        TL_UART_TX_DATA = tx_ring[tx_tail & (TX_RING - 1u)];
+        tx_tail++;
+    }
+}
+
+static void tx_drain(void)
+{
+    while (tx_tail != tx_head)
+        tx_pump();
+    while (!(TL_UART_STATUS & TL_UART_STATUS_TX_IDLE_MSK)) {
+    }
+}
+
+static void jump_to_bootloader(void)
+{
+    /* Hook for the bootloader issue: drives are already off (servo.c); stop
+     * the timer and interrupts and enter the boot ROM at its reset address. */
+    tx_drain();
+    hal_irq_off();
+    arm_timer(0xFFFFFFFFFFFFFFFFull);
+    TL_SYS_WDOG_LOAD = 0u;
+    void (*boot)(void) = (void (*)(void))(uintptr_t)TL_BOOT_ROM_BASE;
+    boot();
+}
+
+int main(void)
+{
+    tl_servo_init(&servo);
+    TL_GPIO_HEX_HI = 0u;
+    TL_INTC_ENABLE = 0u;
+    TL_SYS_WDOG_LOAD = tl_servo_period_cycles(&servo) * WDOG_PERIODS;
+    deadline = mtime() + tl_servo_period_cycles(&servo);
+    arm_timer(deadline);
+    __asm__ volatile("csrw mtvec, %0" : : "r"(&trap_handler));
+    __asm__ volatile("csrs mie, %0" : : "r"(1u << 7));   /* MTIE */
+    hal_irq_on();
+
+    uint32_t wdog_period = tl_servo_period_cycles(&servo);
+    for (;;) {
+        uint32_t rx;
+        while ((rx = TL_UART_RX_DATA) & TL_UART_RX_DATA_VALID_MSK)
+            tl_servo_rx_byte(&servo, (uint8_t)(rx & TL_UART_RX_DATA_DATA_MSK), tx_push);
+        if (servo.telem_due) {
+            uint8_t p[TLP_TELEM_LEN];
+            uint8_t wire[TLP_MAX_ENCODED + 1u];
+            hal_irq_off();
+            servo.telem_due = false;
+            tl_servo_telemetry(&servo, p);
+            hal_irq_on();
+            uint32_t n = (uint32_t)tl_frame_encode(servo.telem_seq++, TLP_TELEMETRY_CMD, p, TLP_TELEM_LEN,
+                                                   wire, sizeof wire);
+            if (!tx_push(wire, n) && servo.cnt.tx_dropped != 0xFFFFu)
+                servo.cnt.tx_dropped++;
+        }
+        tx_pump();
+        uint32_t period = tl_servo_period_cycles(&servo);
+        if (period != wdog_period) {
+            wdog_period = period;
+            TL_SYS_WDOG_LOAD = period * WDOG_PERIODS;
+        }
+        if (servo.baud_div_pending) {
+            tx_drain();
+            hal_set_baud_div(servo.baud_div_pending);
+            servo.baud_div_pending = 0;
+        }
+        if (servo.bootloader_req)
+            jump_to_bootloader();
+    }
+}

@@ -1,0 +1,60 @@
+/* The servo application without its hardware: parameters, two axes under
+ * control.c, the safety state machine and the command handler of the link
+ * protocol.  servo/main.c calls tl_servo_tick() from the machine-timer
+ * interrupt and feeds received bytes to tl_servo_rx_byte(); everything else
+ * goes through hal.h, so the host tests and the fuzzer run this very code. */
+#ifndef TL_SERVO_H
+#define TL_SERVO_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "control.h"
+#include "tl_link.h"
+
+#define TL_AXES 2u
+
+typedef struct {
+    int32_t p[TLP_PARAM_COUNT];   /* raw parameter values, indexed like TLP_PARAM_INFO */
+    tl_ctl_params_t ctl;          /* control view of the same values */
+    tl_ctl_t c;
+    bool enabled;
+    uint8_t faults;               /* TLP_FAULT_* latched */
+    uint32_t illegal_seen;
+    int32_t pos;
+} tl_axis_t;
+
+typedef struct {
+    uint16_t frames_ok, crc, framing, length, oversize, unknown, replay, rejected, tx_dropped;
+} tl_counters_t;
+
+typedef struct {
+    tl_axis_t ax[TL_AXES];
+    int32_t g[TLP_PARAM_COUNT];   /* global parameters, same indexing */
+    tl_rx_t rx;
+    tl_seq_t seq;
+    tl_counters_t cnt;
+    uint32_t ticks;               /* control periods since start */
+    uint32_t link_idle_ticks;     /* control periods since the last valid command */
+    uint16_t telem_every;
+    uint16_t telem_seq;
+    bool telem_due;
+    bool bootloader_req;
+    uint32_t baud_div_pending;    /* set the UART divisor once the reply is out (0 = none) */
+    uint32_t loop_cycles_max;     /* worst control iteration (set by main.c) */
+    uint32_t jitter_cycles_max;   /* worst lateness of the interrupt (set by main.c) */
+    uint32_t clk_hz;
+} tl_servo_t;
+
+/* Transmit hook: a complete wire frame (delimiter included).  Returns false if dropped. */
+typedef bool (*tl_tx_fn)(const uint8_t *wire, uint32_t len);
+
+void tl_servo_init(tl_servo_t *s);
+void tl_servo_tick(tl_servo_t *s);
+void tl_servo_rx_byte(tl_servo_t *s, uint8_t byte, tl_tx_fn tx);
+/* Build the telemetry payload (TLP_TELEM_LEN bytes) from the last tick. */
+void tl_servo_telemetry(const tl_servo_t *s, uint8_t *payload);
+uint32_t tl_servo_period_cycles(const tl_servo_t *s);
+int tl_param_index(uint8_t id);
+
+#endif
