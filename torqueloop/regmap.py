@@ -4,6 +4,7 @@ generate every derived view from it.
 One source (regmap.toml), four generated files:
 
 * ``rtl/soc/regmap.vh``              Verilog `defines (listed first in the SoC cores' sources)
+* ``rtl/soc/regmap_pkg.vhd``         the same constants as a VHDL-2008 package (VHDL twins)
 * ``firmware/include/torqueloop_regs.h``  C11 header for the firmware
 * ``torqueloop/regs.py``             Python constants and register table (tests, host tools)
 * ``docs/registers.md``              the data sheet
@@ -28,6 +29,7 @@ PAGE_BYTES = 0x1000  # one peripheral block per 4 KiB page
 #: generated file -> generator function name (relative to the repo root)
 OUTPUTS = {
     "rtl/soc/regmap.vh": "verilog_header",
+    "rtl/soc/regmap_pkg.vhd": "vhdl_package",
     "firmware/include/torqueloop_regs.h": "c_header",
     "torqueloop/regs.py": "python_module",
     "docs/registers.md": "markdown",
@@ -279,6 +281,32 @@ def verilog_header(rm: RegMap) -> str:
                 L.append(f"`define {q}_WIDTH {f.width}")
                 L.append(f"`define {q}_RESET {f.width}'h{f.reset:X}")
     L += ["", "`endif", ""]
+    return "\n".join(L)
+
+
+def vhdl_package(rm: RegMap) -> str:
+    """VHDL-2008 package tl_regmap_pkg with the constants of regmap.vh:
+    word index (_IDX), reset and access masks (std_logic_vector(31 downto 0)),
+    field LSB/MSB/WIDTH (natural)."""
+    L = [f"-- {_BANNER}", "library ieee;", "use ieee.std_logic_1164.all;", "",
+         "package tl_regmap_pkg is",
+         f"    constant TL_REGMAP_VERSION : natural := {rm.version};",
+         f"    constant TL_CLK_HZ : natural := {rm.clk_hz};"]
+    for kind, b in rm.kinds.items():
+        L.append(f"    -- {kind}")
+        for r in b.registers:
+            p = f"TL_{kind}_{r.name}"
+            L.append(f"    constant {p}_IDX : natural := {r.offset // 4};")
+            L.append(f'    constant {p}_RESET : std_logic_vector(31 downto 0) := x"{r.reset:08X}";')
+            for acc in ACCESS_TYPES:
+                L.append(f'    constant {p}_{acc.upper()}_MASK : std_logic_vector(31 downto 0) := '
+                         f'x"{getattr(r, acc + "_mask"):08X}";')
+            for f in r.fields:
+                q = f"{p}_{f.name}"
+                L.append(f"    constant {q}_LSB : natural := {f.lsb};")
+                L.append(f"    constant {q}_MSB : natural := {f.msb};")
+                L.append(f"    constant {q}_WIDTH : natural := {f.width};")
+    L += ["end package tl_regmap_pkg;", ""]
     return "\n".join(L)
 
 
