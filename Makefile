@@ -21,7 +21,7 @@ export TORQUELOOP_SIM := $(SIM)
 PYTEST_K := $(if $(TB),-k "$(TB)",)
 XDIST    := $(if $(filter 1,$(JOBS)),,-n $(JOBS))
 
-.PHONY: help setup sim lint test unit synth run bench clean
+.PHONY: help setup sim lint test unit synth run bench characterize clean
 
 help: ## this list
 	@grep -hE '^[a-z][a-zA-Z_-]*:.*## ' $(MAKEFILE_LIST) | \
@@ -31,7 +31,8 @@ help: ## this list
 setup: ## install tools (apt + .venv); idempotent
 	@bash scripts/setup.sh
 
-$(STAMP): pyproject.toml scripts/setup.sh
+# Also re-run when a top-level Python package appears (editable install maps).
+$(STAMP): pyproject.toml scripts/setup.sh $(wildcard */__init__.py)
 	@bash scripts/setup.sh
 
 sim: $(STAMP) ## all cocotb test benches on every applicable simulator
@@ -55,6 +56,9 @@ run: $(STAMP) ## the main job (richest demo that exists so far)
 
 bench: $(STAMP) ## benchmarks that print numbers
 	$(PY) scripts/bench.py
+
+characterize: $(STAMP) ## the characterisation method (steps 1-8) on the simulated bench: build/characterize/
+	$(PY) scripts/characterize.py sim --out-dir build/characterize
 
 clean: ## remove build output (keeps .venv)
 	rm -rf build

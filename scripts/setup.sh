@@ -45,14 +45,22 @@ fi
 
 # --- 2. Python virtual environment -----------------------------------------
 stamp="$VENV/.torqueloop-setup"
-want=$(cat pyproject.toml scripts/setup.sh | sha1sum | cut -d' ' -f1)
+# The editable install maps the top-level packages found at install time, so
+# a new package (a folder with __init__.py) also calls for a reinstall.
+want=$( (cat pyproject.toml scripts/setup.sh; ls -d */__init__.py 2>/dev/null) | sha1sum | cut -d' ' -f1)
 if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ] && [ -x "$VENV/bin/python" ]; then
     log "virtual environment up to date"
 else
     [ -x "$VENV/bin/python" ] || { log "creating $VENV"; "$PYTHON" -m venv "$VENV"; }
     log "installing Python packages (pip install -e .[dev])"
-    "$VENV/bin/python" -m pip install -q --upgrade pip
-    "$VENV/bin/python" -m pip install -q -e ".[dev]"
+    mkdir -p build
+    # pip's build chatter goes to a log, shown only if the install fails.
+    if ! { "$VENV/bin/python" -m pip install -q --upgrade pip &&
+           "$VENV/bin/python" -m pip install -q -e ".[dev]"; } >build/setup-pip.log 2>&1; then
+        cat build/setup-pip.log >&2
+        echo "[setup] pip install failed (log above, also in build/setup-pip.log)" >&2
+        exit 1
+    fi
     echo "$want" > "$stamp"
 fi
 
