@@ -2,7 +2,7 @@
 
 tb/soc/prog/blink.c (compiled here with riscv64-unknown-elf-gcc, using only
 the generated register header) toggles LEDR[0] from the machine-timer
-interrupt, copies SW to LEDR[9:1], counts KEY presses from the INTC's
+interrupt (its handler runs from RAM, preloaded through RAM_INIT), copies SW to LEDR[9:1], counts KEY presses from the INTC's
 external interrupt onto HEX0 and answers each press with 'K' on the UART.
 The bench checks all of it on the pins, with an independent UART model
 (cocotbext-uart) on the TX line.  It exercises reset vector, ROM fetch,
@@ -123,27 +123,40 @@ def write_if_changed(path: Path, text: str) -> None:
     tmp.replace(path)
 
 
-def build_rom_image(name: str = "blink") -> Path:
-    """Compile tb/soc/prog/<name>.c into a boot-ROM hex image (one word per line)."""
+def _hex_words(data: bytes, size: int) -> str:
+    assert len(data) <= size, f"{len(data)} bytes do not fit {size}"
+    data += bytes(size - len(data))
+    return "".join(f"{int.from_bytes(data[i:i + 4], 'little'):08x}\n" for i in range(0, size, 4))
+
+
+def build_images(name: str = "blink") -> tuple[Path, Path]:
+    """Compile tb/soc/prog/<name>.c; return the boot-ROM and RAM hex images
+    (one word per line): ROM = code, constants and the .data load image;
+    RAM = the .ramtext section (code that runs from RAM)."""
     out = BUILD_ROOT / "soc" / "prog"
     out.mkdir(parents=True, exist_ok=True)
     tag = f"{name}.{os.getpid()}"
-    elf, binf, hexf = out / f"{tag}.elf", out / f"{tag}.bin", out / f"{name}.hex"
+    elf, rom_bin, ram_bin = out / f"{tag}.elf", out / f"{tag}.rom.bin", out / f"{tag}.ram.bin"
     subprocess.run(
         ["riscv64-unknown-elf-gcc", "-march=rv32im_zicsr", "-mabi=ilp32", "-O2", "-nostdlib",
          "-ffreestanding", "-static", "-std=c11", "-Wall", "-Wextra", "-Werror",
          "-I", str(REPO_ROOT / "firmware" / "include"), "-T", str(PROG / "link.ld"),
          "-Wl,--no-warn-rwx-segments", "-o", str(elf), str(PROG / "crt0.S"), str(PROG / f"{name}.c")],
         check=True, capture_output=True, text=True)
-    subprocess.run(["riscv64-unknown-elf-objcopy", "-O", "binary", str(elf), str(binf)], check=True)
-    data = binf.read_bytes()
+    objcopy = "riscv64-unknown-elf-objcopy"
+    subprocess.run([objcopy, "-O", "binary", "-R", ".ramtext", str(elf), str(rom_bin)], check=True)
+    subprocess.run([objcopy, "-O", "binary", "-j", ".ramtext", str(elf), str(ram_bin)], check=True)
+    rom_text = _hex_words(rom_bin.read_bytes(), regs.BOOT_ROM_SIZE)
+    ram_data = ram_bin.read_bytes()
+    assert ram_data, "no .ramtext: the handler must run from RAM"
+    ram_text = _hex_words(ram_data, RAM_BYTES_TB)
     elf.replace(out / f"{name}.elf")
-    binf.unlink()
-    assert len(data) <= regs.BOOT_ROM_SIZE, f"{name}: {len(data)} bytes do not fit the boot ROM"
-    data += bytes(regs.BOOT_ROM_SIZE - len(data))
-    words = [int.from_bytes(data[i:i + 4], "little") for i in range(0, len(data), 4)]
-    write_if_changed(hexf, "".join(f"{w:08x}\n" for w in words))
-    return hexf
+    rom_bin.unlink()
+    ram_bin.unlink()
+    rom_hex, ram_hex = out / f"{name}.rom.hex", out / f"{name}.ram.hex"
+    write_if_changed(rom_hex, rom_text)
+    write_if_changed(ram_hex, ram_text)
+    return rom_hex, ram_hex
 
 
 @contextlib.contextmanager
@@ -169,6 +182,7 @@ def _verilator_pch_fix(sim: str):
 
 @pytest.mark.parametrize("sim", sims_for("soc"))
 def test_soc(sim):
-    rom = build_rom_image()
+    rom, ram = build_images()
     with _verilator_pch_fix(sim):
-        run("soc", sim, "test_soc", parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"'})
+        run("soc", sim, "test_soc",
+            parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"', "RAM_INIT": f'"{ram}"'})

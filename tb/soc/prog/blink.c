@@ -1,7 +1,9 @@
 /* SoC integration program: everything through the generated register header.
  *  - acknowledges the reset-time safety latch (SYS.SAFETY.ESTOP);
  *  - toggles LEDR[0] from the machine-timer interrupt every HALF_PERIOD cycles
- *    (mtimecmp re-armed in the handler);
+ *    (mtimecmp re-armed in the handler); the handler runs from RAM (section
+ *    .ramtext, preloaded by the RAM image), so the CPU fetches from both the
+ *    ROM and the RAM;
  *  - counts KEY presses from the external interrupt (INTC GPIO_KEY) and shows
  *    the count on HEX0 as raw segments;
  *  - main loop copies SW[8:0] to LEDR[9:1] with LEDR[0] from the handler,
@@ -25,7 +27,7 @@ static void arm_timer(void)
     TL_TIMER_MTIMECMP_HI = 0u;
 }
 
-__attribute__((interrupt("machine"))) static void trap_handler(void)
+__attribute__((interrupt("machine"), section(".ramtext"))) static void trap_handler(void)
 {
     uint32_t cause;
     __asm__ volatile("csrr %0, mcause" : "=r"(cause));
