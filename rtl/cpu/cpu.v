@@ -263,18 +263,18 @@ module cpu #(
             d_done    <= 1'b0;
             md_done_q <= 1'b0;
         end else begin
-            if (in_mem && dbus_ack) begin
-                d_done    <= 1'b1;
+            // "answered" flags exist only inside MEM / MULDIV, so no stale
+            // flag can reach another instruction (and the bus proof in
+            // tb/formal/cpu_bus_props.v closes by induction).
+            d_done    <= in_mem && !complete && (d_done || dbus_ack);
+            md_done_q <= in_md && !complete && (md_done_q || md_done);
+            if (in_mem && dbus_ack && !d_done) begin
                 d_err_q   <= dbus_err;
                 d_rdata_q <= dbus_rdata;
             end
-            if (md_done)
-                md_done_q <= 1'b1;
             if (complete) begin
                 state     <= to_exec ? S_EXEC : S_FETCH;
                 pc        <= next_pc;
-                d_done    <= 1'b0;
-                md_done_q <= 1'b0;
             end else begin
                 case (state)
                     S_FETCH: if (fetched) state <= S_EXEC;

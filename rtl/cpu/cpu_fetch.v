@@ -46,7 +46,7 @@ module cpu_fetch (
     reg        pf_err;
 
     assign pending   = pend;
-    assign ibus_req  = pend || start;
+    assign ibus_req  = !rst && (pend || start);  // quiet in reset, whatever pend powered up as
     assign ibus_addr = pend ? addr_q : start_addr;
     assign fetched   = waiting && pend && ibus_ack && !ibus_err;
     assign fault     = waiting && pend && ibus_ack && ibus_err;

@@ -21,8 +21,14 @@ module cpu_regfile (
     output wire [31:0] rdata1,
     output wire [31:0] rdata2
 );
+`ifdef FORMAL
+    // Yosys sat cannot take memory cells: the proofs see plain registers.
+    (* mem2reg *) reg [31:0] bank1 [0:31];
+    (* mem2reg *) reg [31:0] bank2 [0:31];
+`else
     reg [31:0] bank1 [0:31];
     reg [31:0] bank2 [0:31];
+`endif
     reg [31:0] q1, q2, fwd;
     reg        use_fwd1, use_fwd2, zero1, zero2;
 
