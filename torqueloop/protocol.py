@@ -151,11 +151,12 @@ def cobs_decode(data: bytes) -> bytes | None:
 
 
 def encode_frame(seq: int, cmd: int, payload: bytes = b"") -> bytes:
-    """One frame, delimiter included, ready for the wire."""
+    """One frame, ready for the wire: 0x00 on both sides, so text the bridge
+    inserted before it (``*HELLO*``) ends as its own bad chunk, not glued to the frame."""
     if len(payload) > MAX_PAYLOAD:
         raise ValueError(f"payload of {len(payload)} bytes > {MAX_PAYLOAD}")
     body = struct.pack("<HBB", seq & 0xFFFF, cmd, len(payload)) + payload
-    return cobs_encode(body + struct.pack("<H", crc16(body))) + b"\x00"
+    return b"\x00" + cobs_encode(body + struct.pack("<H", crc16(body))) + b"\x00"
 
 
 def parse_packet(raw: bytes) -> Frame | FrameError:
@@ -279,7 +280,8 @@ def c_header() -> str:
     for k in ("version", "max_payload", "header_bytes", "crc_bytes", "reply_flag", "telemetry_cmd",
               "error_cmd", "seq_window", "bootloader_magic", "firmware_version"):
         L.append(f"#define TLP_{k.upper()} 0x{META[k]:X}u")
-    L += [f"#define TLP_MAX_PACKET {MAX_PACKET}u", f"#define TLP_MAX_ENCODED {MAX_ENCODED}u", ""]
+    L += [f"#define TLP_MAX_PACKET {MAX_PACKET}u", f"#define TLP_MAX_ENCODED {MAX_ENCODED}u",
+          f"#define TLP_MAX_WIRE {MAX_ENCODED + 2}u  /* 0x00 COBS 0x00 */", ""]
     for n, v in STATUS.items():
         L.append(f"#define TLP_ST_{n} {v}u")
     L.append("")
@@ -330,7 +332,9 @@ def markdown() -> str:
          "`firmware/protocol/protocol.toml`; this page, `firmware/protocol/tl_protocol.h` and "
          "`torqueloop/protocol.py` come from it.", "",
          "## Framing", "",
-         "```", "wire:   COBS( seq:u16  cmd:u8  len:u8  payload[len]  crc:u16 )  0x00", "```", "",
+         "```", "wire:   0x00  COBS( seq:u16  cmd:u8  len:u8  payload[len]  crc:u16 )  0x00", "```", "",
+         "Both sides send a 0x00 before and after every frame: text the RN-XV inserts between frames "
+         "(`*HELLO*`) then ends as a chunk of its own instead of corrupting the next frame.", "",
          "* **COBS** removes every zero byte from the packet, so `0x00` only ever ends a frame. "
          "After noise, a lost byte or text injected by the RN-XV TCP bridge (`*HELLO*`, `*OPEN*`, `*CLOS*`), "
          "the receiver is back in step at the next `0x00`; the damaged chunk is counted and answered "

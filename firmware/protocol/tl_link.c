@@ -118,7 +118,7 @@ size_t tl_frame_encode(uint16_t seq, uint8_t cmd, const uint8_t *payload, uint8_
                        uint8_t *wire, size_t cap)
 {
     uint8_t pkt[TLP_MAX_PACKET];
-    if (len > TLP_MAX_PAYLOAD || cap < TLP_MAX_ENCODED + 1u)
+    if (len > TLP_MAX_PAYLOAD || cap < TLP_MAX_WIRE)
         return 0;
     tl_put_u16(pkt, seq);
     pkt[2] = cmd;
@@ -127,7 +127,9 @@ size_t tl_frame_encode(uint16_t seq, uint8_t cmd, const uint8_t *payload, uint8_
         pkt[TLP_HEADER_BYTES + i] = payload[i];
     size_t body = TLP_HEADER_BYTES + (size_t)len;
     tl_put_u16(&pkt[body], tl_crc16(pkt, body, 0xFFFFu));
-    size_t n = tl_cobs_encode(pkt, body + TLP_CRC_BYTES, wire);
+    /* 0x00 on both sides: bytes a bridge inserted before the frame end as their own chunk */
+    wire[0] = 0u;
+    size_t n = 1u + tl_cobs_encode(pkt, body + TLP_CRC_BYTES, &wire[1]);
     wire[n++] = 0u;
     return n;
 }

@@ -37,7 +37,7 @@ void tl_rx_init(tl_rx_t *rx);
  * TL_RX_ERROR with *status set (TLP_ST_CRC, FRAMING, LENGTH, OVERSIZE);
  * empty chunks (two delimiters in a row) give TL_RX_NONE. */
 tl_rx_result_t tl_rx_byte(tl_rx_t *rx, uint8_t byte, tl_frame_t *out, uint8_t *status);
-/* Encode a frame into wire bytes (delimiter included); returns the byte count. */
+/* Encode a frame into wire bytes (0x00, COBS, 0x00; cap >= TLP_MAX_WIRE); returns the byte count. */
 size_t tl_frame_encode(uint16_t seq, uint8_t cmd, const uint8_t *payload, uint8_t len,
                        uint8_t *wire, size_t cap);
 

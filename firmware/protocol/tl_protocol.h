@@ -16,6 +16,7 @@
 #define TLP_FIRMWARE_VERSION 0x100u
 #define TLP_MAX_PACKET 70u
 #define TLP_MAX_ENCODED 71u
+#define TLP_MAX_WIRE 73u  /* 0x00 COBS 0x00 */
 
 #define TLP_ST_OK 0u
 #define TLP_ST_CRC 1u

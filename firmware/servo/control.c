@@ -45,7 +45,6 @@ void tl_ctl_derive(tl_ctl_t *c, const tl_ctl_params_t *p, uint32_t period_us, ui
     c->amax_q16 = (int64_t)p->amax_cps2 * (int64_t)period_us * (int64_t)period_us * 16 / 244140625;
     if (c->amax_q16 < 1)
         c->amax_q16 = 1;
-    c->ad_max = (uint64_t)INT64_MAXV / (uint64_t)(2 * c->amax_q16);
 }
 
 void tl_ctl_move(tl_ctl_t *c, int32_t target, bool trapezoid)
@@ -68,9 +67,40 @@ void tl_ctl_hold(tl_ctl_t *c, int32_t pos)
     c->moving = false;
 }
 
-/* Trapezoidal profile: accelerate by a per sample up to vmax, decelerate when
- * the remaining distance d is within the discrete stopping distance
- * v^2 / (2a) + v / 2, creep at a, land exactly on the target (never beyond). */
+static uint64_t isqrt64(uint64_t x)
+{
+    uint64_t r = 0, bit = (uint64_t)1 << 62;
+    while (bit > x)
+        bit >>= 2;
+    while (bit) {
+        if (x >= r + bit) {
+            x -= r + bit;
+            r = (r >> 1) + bit;
+        } else {
+            r >>= 1;
+        }
+        bit >>= 2;
+    }
+    return r;
+}
+
+/* Fastest speed v (counts per sample, q16) from which braking by a per sample
+ * stops exactly after d: v + (v - a) + ... + (v - n a) = d with n = floor(v / a),
+ * i.e. n = largest with a n (n + 1) / 2 <= d, v = (d + a n (n + 1) / 2) / (n + 1). */
+static int64_t v_allow(uint64_t d, int64_t a)
+{
+    uint64_t ua = (uint64_t)a;
+    uint64_t n = (isqrt64(8u * (d / ua) + 1u) - 1u) / 2u;
+    while (n > 0u && ua * n * (n + 1u) / 2u > d)
+        n--;
+    while (ua * (n + 1u) * (n + 2u) / 2u <= d)
+        n++;
+    return (int64_t)((d + ua * n * (n + 1u) / 2u) / (n + 1u));
+}
+
+/* Trapezoidal profile: each sample the speed toward the target rises by at
+ * most a, never exceeds vmax, and never exceeds the speed from which braking
+ * by a per sample lands exactly on the target; the last step lands on it. */
 static void profile(tl_ctl_t *c)
 {
     if (!c->moving)
@@ -78,30 +108,17 @@ static void profile(tl_ctl_t *c)
     int64_t d = c->target_q16 - c->sp_q16;
     int64_t dir = d >= 0 ? 1 : -1;
     uint64_t ad = (uint64_t)abs64(d);
-    int64_t a = c->amax_q16, vm = c->vmax_q16;
-    int64_t vs = c->prof_v_q16 * dir;   /* speed toward the target */
-    if (vs < 0) {
-        vs += a;                        /* moving away (target changed): brake first */
-        if (vs > 0)
-            vs = 0;
-    } else {
-        uint64_t uvs = (uint64_t)vs;
-        bool decel = ad <= c->ad_max && 2u * (uint64_t)a * ad <= uvs * uvs + (uint64_t)a * uvs;
-        if (decel) {
-            vs -= a;
-            if (vs < a)
-                vs = a;
-        } else if (vs < vm) {
-            vs = vs + a < vm ? vs + a : vm;
-        } else {
-            vs = vm;
-        }
-        if ((uint64_t)vs >= ad) {
-            c->sp_q16 = c->target_q16;
-            c->prof_v_q16 = 0;
-            c->moving = false;
-            return;
-        }
+    int64_t vs = c->prof_v_q16 * dir + c->amax_q16;   /* speed toward the target, accelerated */
+    int64_t va = v_allow(ad, c->amax_q16);
+    if (vs > c->vmax_q16)
+        vs = c->vmax_q16;
+    if (vs > va)
+        vs = va;
+    if (vs >= 0 && (uint64_t)vs >= ad) {
+        c->sp_q16 = c->target_q16;
+        c->prof_v_q16 = 0;
+        c->moving = false;
+        return;
     }
     c->prof_v_q16 = vs * dir;
     c->sp_q16 += c->prof_v_q16;
@@ -192,7 +209,7 @@ int32_t tl_gain_phys_from_raw(int32_t raw, int32_t tau_max_mnm, int32_t counts_p
     if (raw <= 0 || tau_max_mnm <= 0 || counts_per_rev <= 0)
         return 0;
     uint64_t x = (uint64_t)tau_max_mnm * 1000u * (uint64_t)counts_per_rev * 113u;
-    uint64_t den = 1023u * 65536u * 710u;
+    uint64_t den = (uint64_t)1023u * 65536u * 710u;
     if ((uint64_t)raw > UINT64_MAX / x)
         return 100000000;
     uint64_t r = ((uint64_t)raw * x + den / 2u) / den;

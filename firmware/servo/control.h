@@ -38,7 +38,6 @@ typedef struct {
     int64_t e_max_for_ki;       /* |e_q16| clamp that keeps ki_dt_q32 * e in int64 */
     int64_t vmax_q16;           /* counts per sample, q16 */
     int64_t amax_q16;           /* counts per sample^2, q16 (>= 1) */
-    uint64_t ad_max;            /* distance beyond which 2 a d would overflow */
     uint32_t period_us;
     uint32_t clk_hz;
     /* state */

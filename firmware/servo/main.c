@@ -132,7 +132,7 @@ int main(void)
             tl_servo_rx_byte(&servo, (uint8_t)(rx & TL_UART_RX_DATA_DATA_MSK), tx_push);
         if (servo.telem_due) {
             uint8_t p[TLP_TELEM_LEN];
-            uint8_t wire[TLP_MAX_ENCODED + 1u];
+            uint8_t wire[TLP_MAX_WIRE];
             hal_irq_off();
             servo.telem_due = false;
             tl_servo_telemetry(&servo, p);

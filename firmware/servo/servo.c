@@ -163,7 +163,7 @@ static void sat_inc(uint16_t *c)
 
 static void send(tl_servo_t *s, tl_tx_fn tx, uint16_t seq, uint8_t cmd, const uint8_t *p, uint8_t len)
 {
-    uint8_t wire[TLP_MAX_ENCODED + 1u];
+    uint8_t wire[TLP_MAX_WIRE];
     uint32_t n = (uint32_t)tl_frame_encode(seq, cmd, p, len, wire, sizeof wire);
     if (n == 0u || !tx(wire, n))
         sat_inc(&s->cnt.tx_dropped);

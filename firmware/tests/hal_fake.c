@@ -1,0 +1,45 @@
+/* hal.h on the host: registers are fields of hal_fake (hal_fake.h). */
+#include "hal_fake.h"
+
+hal_fake_t hal_fake;
+
+void hal_fake_reset(void)
+{
+    hal_fake = (hal_fake_t){0};
+    /* power-up: the SoC latch holds the drives safe with its reset-time ESTOP bit */
+    hal_fake.safety = TL_HAL_SAFE_FORCED | TL_HAL_SAFE_ESTOP;
+}
+
+void hal_enc_read(uint32_t axis, tl_enc_sample_t *s) { *s = hal_fake.enc[axis]; }
+void hal_enc_clear_illegal(uint32_t axis)
+{
+    hal_fake.enc[axis].illegal = 0;
+    hal_fake.illegal_clears++;
+}
+void hal_pwm_cmd(uint32_t axis, int32_t cmd) { hal_fake.pwm_cmd[axis] = cmd; }
+void hal_pwm_enable(uint32_t axis, bool on, bool brake)
+{
+    hal_fake.pwm_on[axis] = on;
+    hal_fake.brake[axis] = brake;
+}
+void hal_pwm_config(uint32_t axis, uint32_t fdiv, uint32_t pw0, uint32_t pwmax)
+{
+    hal_fake.fdiv[axis] = fdiv;
+    hal_fake.pw0[axis] = pw0;
+    hal_fake.pwmax[axis] = pwmax;
+}
+uint32_t hal_safety(void) { return hal_fake.safety; }
+void hal_safety_ack(uint32_t bits)
+{
+    /* W1C; a cause still present (e-stop input) keeps its bit, as in soc_sys */
+    uint32_t keep = (hal_fake.safety & TL_HAL_SAFE_ESTOP_IN) ? TL_HAL_SAFE_ESTOP : 0u;
+    hal_fake.safety &= ~(bits & ~keep);
+    if (!(hal_fake.safety & (TL_HAL_SAFE_ESTOP | TL_HAL_SAFE_FAULT0 | TL_HAL_SAFE_FAULT1 | TL_HAL_SAFE_WDOG |
+                             TL_HAL_SAFE_ESTOP_IN)))
+        hal_fake.safety &= ~TL_HAL_SAFE_FORCED;
+}
+uint32_t hal_build_id(void) { return 0x1234ABCDu; }
+uint32_t hal_clk_hz(void) { return 50000000u; }
+void hal_set_baud_div(uint32_t div) { hal_fake.baud_div = div; }
+void hal_irq_off(void) { hal_fake.irq_depth++; }
+void hal_irq_on(void) { hal_fake.irq_depth--; }

@@ -1,0 +1,22 @@
+/* A fake of hal.h for host tests and the fuzzer: the "hardware" is this struct. */
+#ifndef TL_HAL_FAKE_H
+#define TL_HAL_FAKE_H
+
+#include "hal.h"
+
+typedef struct {
+    tl_enc_sample_t enc[2];
+    int32_t pwm_cmd[2];
+    bool pwm_on[2];
+    bool brake[2];
+    uint32_t fdiv[2], pw0[2], pwmax[2];
+    uint32_t safety;          /* TL_HAL_SAFE_* */
+    uint32_t baud_div;
+    uint32_t illegal_clears;
+    int irq_depth;
+} hal_fake_t;
+
+extern hal_fake_t hal_fake;
+void hal_fake_reset(void);
+
+#endif

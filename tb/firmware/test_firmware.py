@@ -1,0 +1,476 @@
+"""firmware: the servo firmware (firmware/servo) on the whole simulated SoC.
+
+The image is built by scripts/build_firmware.py with test defaults (1 Mbaud
+link so frames take microseconds, not milliseconds; 500 us control period)
+and loaded through RAM_INIT; the boot ROM stub jumps to it.  The bench talks
+to it only through the pins: the link protocol on uart_rx/uart_tx
+(cocotbext-uart + torqueloop.protocol, the host tool's own codec), encoder
+quadrature on enc_a/enc_b, e-stop and bridge-fault inputs, and it watches the
+bridge pins rpwm/lpwm/r_en/l_en.  Expected PWM commands come from
+torqueloop/ref/servo.py (the control law in Python integers).
+
+Verilator only: the firmware needs a few hundred thousand clocks per test,
+which Icarus runs ~30x slower (minutes per test).
+"""
+
+from __future__ import annotations
+
+import random
+import struct
+
+import cocotb
+import pytest
+from cocotb.clock import Clock
+from cocotb.queue import Queue
+from cocotb.triggers import ClockCycles, Edge, First, Timer, with_timeout
+
+from torqueloop import protocol as P
+from torqueloop.ref import servo as ref
+
+CLK_NS = 20
+BAUD = 1_000_000
+BAUD_DIV = 49                      # 50 MHz / 1 Mbaud - 1
+PERIOD_US = 500
+DEFINES = {"TL_DEFAULT_PERIOD_US": PERIOD_US, "TL_DEFAULT_BAUD_DIV": BAUD_DIV}
+STEP_NS = 4000                     # encoder state time: well above the 3 us filter
+QUAD = [(0, 0), (1, 0), (1, 1), (0, 1)]   # A leads B: counts up
+
+
+class TB:
+    def __init__(self, dut) -> None:
+        from cocotbext.uart import UartSink, UartSource
+        self.dut = dut
+        self.seq = 0
+        self.replies: Queue = Queue()
+        self.telemetry: list[tuple[int, dict]] = []
+        self.errors: list[P.Frame] = []
+        self.enc = [0, 0]
+        cocotb.start_soon(Clock(dut.clk, CLK_NS, unit="ns").start())
+        dut.sw.value = 0
+        dut.key_n.value = 0xF
+        dut.bridge_fault.value = 0
+        dut.enc_a.value = 0
+        dut.enc_b.value = 0
+        dut.enc_z.value = 0
+        dut.uart_rx.value = 1
+        dut.uart_cts_n.value = 0
+        dut.estop.value = 0
+        self.src = UartSource(dut.uart_rx, baud=BAUD, bits=8)
+        self.sink = UartSink(dut.uart_tx, baud=BAUD, bits=8)
+        self.dec = P.FrameDecoder()
+
+    async def start(self) -> None:
+        self.dut.rst.value = 1
+        await ClockCycles(self.dut.clk, 5)
+        self.dut.rst.value = 0
+        cocotb.start_soon(self._reader())
+        await Timer(2 * PERIOD_US, unit="us")   # boot, first control periods
+
+    async def _reader(self) -> None:
+        while True:
+            data = await self.sink.read()
+            for f in self.dec.feed(bytes(data)):
+                if isinstance(f, P.FrameError):
+                    raise AssertionError(f"firmware sent a bad frame: {f}")
+                if f.cmd == P.TELEMETRY_CMD:
+                    self.telemetry.append((cocotb.utils.get_sim_time("ns"), P.decode_telemetry(f)))
+                elif f.cmd == P.ERROR_CMD:
+                    self.errors.append(f)
+                else:
+                    await self.replies.put(f)
+
+    async def send_raw(self, data: bytes) -> None:
+        await self.src.write(data)
+        await self.src.wait()
+
+    async def cmd(self, name: str, expect: int | None = P.STATUS["OK"], **fields: int) -> dict:
+        self.seq = (self.seq + 1) & 0xFFFF
+        await self.send_raw(P.request(name, self.seq, **fields))
+        f = await with_timeout(self.replies.get(), 2000, "us")
+        assert f.seq == self.seq and f.cmd == P.COMMANDS[name].cmd | P.REPLY_FLAG, f"reply {f} to {name}"
+        r = P.decode_reply(f)
+        if expect is not None:
+            assert r["status"] == expect, f"{name}{fields}: status {P.STATUS_NAME[r['status']]}, " \
+                                          f"expected {P.STATUS_NAME[expect]}"
+        return r
+
+    async def set(self, axis: int, name: str, value: int, expect: int = P.STATUS["OK"]) -> dict:
+        return await self.cmd("SET_PARAM", expect, axis=axis, param=P.PARAMS[name].id, value=value)
+
+    async def get(self, axis: int, name: str) -> int:
+        return (await self.cmd("GET_PARAM", axis=axis, param=P.PARAMS[name].id))["value"]
+
+    async def status(self, axis: int) -> dict:
+        return await self.cmd("STATUS", axis=axis)
+
+    async def move_encoder(self, axis: int, target: int, step_ns: int = STEP_NS) -> None:
+        while self.enc[axis] != target:
+            self.enc[axis] += 1 if target > self.enc[axis] else -1
+            a, b = QUAD[self.enc[axis] % 4]
+            self._set_bit(self.dut.enc_a, axis, a)
+            self._set_bit(self.dut.enc_b, axis, b)
+            await Timer(step_ns, unit="ns")
+
+    @staticmethod
+    def _set_bit(sig, bit: int, v: int) -> None:
+        cur = int(sig.value)
+        sig.value = (cur & ~(1 << bit)) | (v << bit)
+
+    def pins_high(self) -> int:
+        return int(self.dut.rpwm.value) | int(self.dut.lpwm.value)
+
+    async def assert_quiet(self, us: float, what: str) -> None:
+        """No bridge PWM pin goes high for ``us`` microseconds."""
+        assert self.pins_high() == 0, f"{what}: PWM pin high at start"
+        t = Timer(us, unit="us")
+        while True:
+            r = await First(Edge(self.dut.rpwm), Edge(self.dut.lpwm), t)
+            if r is t:
+                return
+            assert self.pins_high() == 0, f"{what}: PWM pin rose (rpwm={self.dut.rpwm.value}, lpwm={self.dut.lpwm.value})"
+
+    async def duty(self, axis: int, pin: str, us: float) -> float:
+        """Fraction of ``us`` microseconds that rpwm/lpwm[axis] is high."""
+        sig = getattr(self.dut, pin)
+        t0 = cocotb.utils.get_sim_time("ns")
+        end = t0 + us * 1000
+        high_since = t0 if (int(sig.value) >> axis) & 1 else None
+        high = 0.0
+        t = Timer(us, unit="us")
+        while True:
+            r = await First(Edge(sig), t)
+            now = cocotb.utils.get_sim_time("ns")
+            lvl = (int(sig.value) >> axis) & 1
+            if r is t:
+                if high_since is not None:
+                    high += end - high_since
+                return high / (end - t0)
+            if lvl and high_since is None:
+                high_since = now
+            elif not lvl and high_since is not None:
+                high += now - high_since
+                high_since = None
+
+    async def fast_pwm(self) -> None:
+        for ax in (0, 1):
+            await self.set(ax, "FDIV", 1)     # 1023-clock PWM period: many periods per test
+
+
+async def _enable(tb: TB, mask: int = 3) -> None:
+    await tb.cmd("ENABLE", mask=mask, enable=1)
+
+
+@cocotb.test()
+async def identify_parameters_and_errors(dut):
+    tb = TB(dut)
+    await tb.start()
+    await tb.assert_quiet(200, "power-up")
+    r = await tb.cmd("IDENTIFY")
+    assert r["proto_version"] == P.PROTO_VERSION and r["fw_version"] == P.FIRMWARE_VERSION
+    assert r["axis_count"] == 2 and r["clk_hz"] == 50_000_000
+    # every parameter: default read back, a random in-range value stored, out of range rejected
+    for p in P.PARAMS.values():
+        axes = [P.GLOBAL_AXIS] if p.scope == "global" else [0, 1]
+        if p.name in ("BAUD_DIV",):
+            continue
+        for ax in axes:
+            v = random.randint(max(p.min, -10**6), min(p.max, 10**6)) if p.name not in ("PERIOD_US",) \
+                else random.choice([400, 500, 800])
+            if p.name == "SOFT_MIN":
+                v = min(v, await tb.get(ax, "SOFT_MAX"))
+            if p.name == "SOFT_MAX":
+                v = max(v, await tb.get(ax, "SOFT_MIN"))
+            got = (await tb.set(ax, p.name, v))["value"]
+            if p.name.startswith(("KP_U", "KD_U", "KI_U")):
+                tau, cpr = await tb.get(ax, "TAU_MAX_MNM"), await tb.get(ax, "COUNTS_PER_REV")
+                raw = P.gain_raw_from_phys(v, tau, cpr)
+                assert got == P.gain_phys_from_raw(raw, tau, cpr), f"{p.name} {v} -> {got}"
+                assert await tb.get(ax, p.name.split("_")[0] + "_Q16") == raw
+            else:
+                assert got == v and await tb.get(ax, p.name) == v, f"{p.name}[{ax}] = {v}, read {got}"
+            before = await tb.get(ax, p.name)
+            if p.max < 0x7FFF_FFFF:
+                await tb.set(ax, p.name, p.max + 1, expect=P.STATUS["RANGE"])
+            if p.min > -0x7FFF_FFFF:
+                await tb.set(ax, p.name, p.min - 1, expect=P.STATUS["RANGE"])
+            assert await tb.get(ax, p.name) == before
+    # wrong scope, unknown parameter, unknown command, wrong payload length
+    await tb.cmd("GET_PARAM", P.STATUS["BAD_ARG"], axis=0, param=P.PARAMS["PERIOD_US"].id)
+    await tb.cmd("GET_PARAM", P.STATUS["BAD_ARG"], axis=2, param=P.PARAMS["LAW"].id)
+    await tb.cmd("GET_PARAM", P.STATUS["BAD_ARG"], axis=0, param=99)
+    tb.seq += 1
+    await tb.send_raw(P.encode_frame(tb.seq, 0x55, b""))
+    f = await with_timeout(tb.replies.get(), 2000, "us")
+    assert P.decode_reply(f)["status"] == P.STATUS["UNKNOWN_CMD"]
+    tb.seq += 1
+    await tb.send_raw(P.encode_frame(tb.seq, P.COMMANDS["STOP"].cmd, b"\x01\x02"))
+    f = await with_timeout(tb.replies.get(), 2000, "us")
+    assert P.decode_reply(f)["status"] == P.STATUS["LENGTH"]
+    await tb.cmd("BOOTLOADER", P.STATUS["BAD_ARG"], magic=0x1234)
+    c = await tb.cmd("COUNTERS")
+    assert c["unknown"] == 1 and c["length"] == 1 and c["frames_ok"] > 50
+    await tb.assert_quiet(100, "after parameter traffic")
+
+
+@cocotb.test()
+async def each_law_drives_both_axes_as_the_reference(dut):
+    tb = TB(dut)
+    await tb.start()
+    await tb.fast_pwm()
+    await tb.cmd("MOVE", P.STATUS["STATE"], axis=0, mode=0, target=100)   # disabled: refused
+    for ax in (0, 1):
+        await tb.set(ax, "KP_Q16", 65536 * 2)        # 2 PWM steps per count
+        await tb.set(ax, "KD_Q16", 655)              # 0.01 step per count/s
+        await tb.set(ax, "KI_Q16", 65536 * 40)       # 40 steps per count*s
+        await tb.set(ax, "FOLLOW_LIMIT", 100000)
+    await _enable(tb)
+    for law_name, law in (("P", 1), ("PD", 2), ("PID", 3)):
+        for ax in (0, 1):
+            await tb.set(ax, "LAW", law)
+            await tb.cmd("STOP", mask=1 << ax)
+            pos = tb.enc[ax]
+            target = pos + random.choice([-1, 1]) * random.randint(60, 200)
+            await tb.cmd("MOVE", axis=ax, mode=0, target=target)
+            await Timer(3 * PERIOD_US, unit="us")
+            st = await tb.status(ax)
+            e = target - pos
+            assert st["setpoint"] == target and st["position"] == pos
+            if law != 3:
+                assert st["pwm_cmd"] == ref.clamp(ref.round_q16(2 * 65536 * e), 1023), \
+                    f"{law_name} axis {ax}: cmd {st['pwm_cmd']} for error {e}"
+            else:
+                assert abs(st["pwm_cmd"]) > abs(2 * e), f"PID integrates: cmd {st['pwm_cmd']} error {e}"
+            # the sign and magnitude reach the pins: the side named by the error's sign switches
+            side, other = ("rpwm", "lpwm") if st["pwm_cmd"] > 0 else ("lpwm", "rpwm")
+            d = await tb.duty(ax, side, 60)
+            expect = min(1023, abs(st["pwm_cmd"])) / 1023
+            if law != 3:
+                assert abs(d - expect) < 0.03, f"{law_name} axis {ax}: duty {d:.3f}, expected {expect:.3f}"
+            else:
+                assert d > 0.05
+            assert await tb.duty(ax, other, 20) == 0.0
+            # PD: the D term uses the measured velocity (encoder moving toward the target)
+            if law == 2:
+                mover = cocotb.start_soon(tb.move_encoder(ax, pos + (40 if e > 0 else -40), step_ns=10_000))
+                await Timer(250, unit="us")
+                st2 = await tb.status(ax)
+                v = st2["velocity_q8"] / 256
+                assert 80_000 < abs(v) < 120_000, f"velocity {v} counts/s, driven at 100000"
+                e2 = st2["setpoint"] - st2["position"]
+                p_only = ref.round_q16(2 * 65536 * e2)
+                assert abs(st2["pwm_cmd"]) < abs(p_only), "D term must oppose the motion"
+                await mover
+    await tb.cmd("ENABLE", mask=3, enable=0)
+    await tb.assert_quiet(50, "disabled")
+
+
+@cocotb.test()
+async def link_watchdog_stops_a_silent_link(dut):
+    tb = TB(dut)
+    await tb.start()
+    await tb.fast_pwm()
+    await tb.set(P.GLOBAL_AXIS, "LINK_TIMEOUT_MS", 10)
+    await _enable(tb, 1)
+    await tb.cmd("MOVE", axis=0, mode=0, target=300)
+    assert await tb.duty(0, "rpwm", 30) > 0.2
+    t0 = cocotb.utils.get_sim_time("us")
+    while tb.pins_high() or (await tb.duty(0, "rpwm", 20)) > 0:
+        await Timer(200, unit="us")
+        assert cocotb.utils.get_sim_time("us") - t0 < 15_000, "no stop after 15 ms of silence"
+    stopped = cocotb.utils.get_sim_time("us") - t0
+    assert stopped > 9_000, f"stopped after {stopped} us, the timeout is 10 ms"
+    st = await tb.status(0)
+    assert st["faults"] == P.FAULT["LINK"] and not st["enabled"]
+    await tb.assert_quiet(200, "after the link fault")
+    await tb.cmd("ENABLE", P.STATUS["STATE"], mask=1, enable=1)
+    await tb.cmd("CLEAR_FAULT", mask=1)
+    await _enable(tb, 1)                     # set-point = present position: no jump
+    assert (await tb.status(0))["setpoint"] == 0
+    await tb.assert_quiet(100, "re-enabled at its own position")
+
+
+@cocotb.test()
+async def estop_bridge_fault_following_soft_limit_and_encoder_faults(dut):
+    tb = TB(dut)
+    await tb.start()
+    await tb.fast_pwm()
+
+    async def running(ax: int, target: int) -> None:
+        await _enable(tb, 1 << ax)
+        await tb.cmd("MOVE", axis=ax, mode=0, target=target)
+        assert await tb.duty(ax, "rpwm" if target > tb.enc[ax] else "lpwm", 20) > 0.1
+
+    async def faulted(ax: int, fault: str) -> None:
+        await tb.assert_quiet(100, fault)
+        st = await tb.status(ax)
+        assert st["faults"] & P.FAULT[fault] and not st["enabled"], f"{fault}: {st}"
+
+    # e-stop (KEY0): pins low within the clock, fault latched, clear refused while pressed
+    await running(0, 200)
+    dut.estop.value = 1
+    await Timer(1, unit="ns")
+    assert tb.pins_high() == 0, "e-stop must drop the PWM pins combinationally"
+    await Timer(2 * PERIOD_US, unit="us")
+    await faulted(0, "ESTOP")
+    await tb.cmd("CLEAR_FAULT", P.STATUS["STATE"], mask=3)
+    await tb.cmd("ENABLE", P.STATUS["STATE"], mask=1, enable=1)
+    dut.estop.value = 0
+    await Timer(10, unit="us")
+    await tb.assert_quiet(2 * PERIOD_US, "e-stop released, fault still latched")
+    await tb.cmd("CLEAR_FAULT", mask=3)
+
+    # bridge fault of axis 1
+    await running(1, -150)
+    TB._set_bit(dut.bridge_fault, 1, 1)
+    await Timer(2 * PERIOD_US, unit="us")
+    await faulted(1, "BRIDGE")
+    await tb.cmd("CLEAR_FAULT", P.STATUS["STATE"], mask=2)
+    TB._set_bit(dut.bridge_fault, 1, 0)
+    await Timer(10, unit="us")
+    await tb.cmd("CLEAR_FAULT", mask=2)
+
+    # following error: the axis does not follow a step larger than the limit
+    await tb.set(0, "FOLLOW_LIMIT", 50)
+    await _enable(tb, 1)
+    await tb.cmd("MOVE", axis=0, mode=0, target=60)
+    await Timer(2 * PERIOD_US, unit="us")
+    await faulted(0, "FOLLOWING")
+    await tb.cmd("CLEAR_FAULT", mask=1)
+    await tb.set(0, "FOLLOW_LIMIT", 16800)
+
+    # soft limits: a target outside is refused; a position outside trips the axis
+    await tb.set(0, "SOFT_MAX", 20)
+    await _enable(tb, 1)
+    await tb.cmd("MOVE", P.STATUS["RANGE"], axis=0, mode=0, target=21)
+    await tb.move_encoder(0, 25)
+    await Timer(2 * PERIOD_US, unit="us")
+    await faulted(0, "SOFT_LIMIT")
+    await tb.cmd("CLEAR_FAULT", mask=1)
+    await tb.move_encoder(0, 0)
+    await tb.set(0, "SOFT_MAX", 1_000_000)
+
+    # illegal encoder transition (A and B change together)
+    await _enable(tb, 2)
+    dut.enc_a.value = int(dut.enc_a.value) ^ 2
+    dut.enc_b.value = int(dut.enc_b.value) ^ 2
+    await Timer(2 * PERIOD_US, unit="us")
+    await faulted(1, "ENCODER")
+    dut.enc_a.value = int(dut.enc_a.value) ^ 2
+    dut.enc_b.value = int(dut.enc_b.value) ^ 2
+    await Timer(20, unit="us")
+    await tb.cmd("CLEAR_FAULT", mask=2)
+    await _enable(tb, 2)
+    assert (await tb.status(1))["faults"] == 0
+
+
+@cocotb.test()
+async def corrupted_random_and_replayed_frames_change_nothing(dut):
+    tb = TB(dut)
+    await tb.start()
+    await tb.fast_pwm()
+    await _enable(tb, 1)                      # axis 0 holds at 0, axis 1 disabled
+    await tb.set(0, "KP_Q16", 70000)
+    old_seq = tb.seq
+    old_frame = P.request("SET_PARAM", old_seq, axis=0, param=P.PARAMS["KP_Q16"].id, value=70000)
+    await tb.set(0, "KP_Q16", 80000)
+    names = [(ax, p.name) for p in P.PARAMS.values() for ax in ([P.GLOBAL_AXIS] if p.scope == "global" else [0, 1])]
+    before = {k: await tb.get(*k) for k in names}
+    c0 = await tb.cmd("COUNTERS")
+    # commands that would move or reconfigure if any got through
+    templates = [P.request("MOVE", 0, axis=0, mode=0, target=5000),
+                 P.request("ENABLE", 0, mask=3, enable=1),
+                 P.request("SET_PARAM", 0, axis=0, param=P.PARAMS["KP_Q16"].id, value=1),
+                 P.request("SET_PARAM", 0, axis=P.GLOBAL_AXIS, param=P.PARAMS["PERIOD_US"].id, value=300)]
+    stream = bytearray()
+    sent = {"corrupt": 0, "random": 0, "truncated": 0, "oversize": 0, "replay": 0, "hello": 0}
+    for _ in range(60):
+        kind = random.choice(list(sent))
+        if kind == "corrupt":
+            fr = bytearray(random.choice(templates)[:-1])
+            for _ in range(random.randint(1, 3)):
+                i = random.randrange(len(fr))
+                fr[i] ^= 1 << random.randrange(8)
+            chunk = bytes(fr)
+        elif kind == "random":
+            chunk = bytes(random.randrange(256) for _ in range(random.randint(1, 40)))
+        elif kind == "truncated":
+            fr = random.choice(templates)
+            chunk = fr[:random.randint(2, len(fr) - 2)]
+        elif kind == "oversize":
+            chunk = bytes(random.randrange(1, 256) for _ in range(random.randint(P.MAX_ENCODED + 1, 120)))
+        elif kind == "replay":
+            chunk = old_frame[:-1]
+        else:
+            chunk = b"*HELLO*"
+        # skip the (2^-16) corruption that is itself a valid new command - that is not a firmware failure
+        for part in chunk.split(b"\x00"):
+            r = P.parse_packet(part) if part else None
+            if isinstance(r, P.Frame) and kind != "replay":
+                break
+        else:
+            sent[kind] += 1
+            stream += chunk + b"\x00"
+    cocotb.log.info(f"flood: {len(stream)} bytes, {sent}")
+    quiet = cocotb.start_soon(tb.assert_quiet(len(stream) * 10 + 2000, "flood"))
+    await tb.send_raw(bytes(stream))
+    await quiet
+    after = {k: await tb.get(*k) for k in names}
+    assert after == before, {k: (before[k], after[k]) for k in names if before[k] != after[k]}
+    st0, st1 = await tb.status(0), await tb.status(1)
+    assert st0["enabled"] and st0["setpoint"] == 0 and not st1["enabled"]
+    c1 = await tb.cmd("COUNTERS")
+    bad = sum(c1[k] - c0[k] for k in ("crc", "framing", "length", "oversize", "unknown", "replay"))
+    assert bad >= sum(sent.values()) - sent["random"], f"errors counted {bad}, sent {sent}"
+    assert c1["replay"] - c0["replay"] == sent["replay"]
+    assert len(tb.errors) > 0
+
+
+@cocotb.test()
+async def telemetry_trapezoid_and_bootloader_jump(dut):
+    tb = TB(dut)
+    await tb.start()
+    await tb.fast_pwm()
+    await tb.set(0, "VMAX", 40_000)
+    await tb.set(0, "AMAX", 20_000_000)
+    await tb.set(0, "FOLLOW_LIMIT", 1_000_000)
+    await _enable(tb, 1)
+    await tb.cmd("TELEMETRY", every=2)
+    await tb.cmd("MOVE", axis=0, mode=1, target=400)
+    await Timer(14_000, unit="us")
+    await tb.cmd("TELEMETRY", every=0)
+    await Timer(2 * PERIOD_US, unit="us")
+    n = len(tb.telemetry)
+    await Timer(4 * PERIOD_US, unit="us")
+    assert len(tb.telemetry) == n, "telemetry must stop"
+    t = [r["time_us"] for _, r in tb.telemetry]
+    assert all(b - a == 2 * PERIOD_US for a, b in zip(t, t[1:])), f"telemetry times {t[:8]}"
+    sp = [r["axes"][0]["setpoint"] for _, r in tb.telemetry]
+    dsp = [b - a for a, b in zip(sp, sp[1:])]
+    vmax_per_2T = 40_000 * 2 * PERIOD_US / 1e6
+    assert sp[-1] == 400 and all(0 <= d <= vmax_per_2T + 1 for d in dsp), f"set-points {sp}"
+    assert max(dsp) >= vmax_per_2T - 1, "the profile reaches its top speed"
+    # bootloader hook: refused with a bad magic, then drives off, reply, restart from the boot ROM
+    await tb.cmd("BOOTLOADER", magic=P.BOOTLOADER_MAGIC)
+    await Timer(2 * PERIOD_US, unit="us")
+    r = await tb.cmd("IDENTIFY")
+    assert r["last_seq"] == 0, "the image restarted through the boot ROM (fresh sequence state)"
+    st = await tb.status(0)
+    assert not st["enabled"] and st["loop_cycles_max"] > 0
+    await tb.assert_quiet(100, "after the bootloader jump")
+
+
+@pytest.mark.parametrize("sim", ["verilator"])
+def test_firmware(sim):
+    import sys
+    from torqueloop.hdl import REPO_ROOT
+    from torqueloop.simrun import run, sims_for
+    sys.path.insert(0, str(REPO_ROOT / "scripts"))
+    sys.path.insert(0, str(REPO_ROOT / "tb" / "soc"))
+    from build_firmware import build
+    from test_soc import _verilator_pch_fix
+    if sim not in sims_for("soc"):
+        pytest.skip(f"{sim} not selected")
+    img = build("servo_tb", {k: str(v) for k, v in DEFINES.items()})
+    with _verilator_pch_fix(sim):
+        run("soc", sim, "test_firmware",
+            parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'})

@@ -1,0 +1,157 @@
+"""Reference model of one servo axis (docs/firmware.md, "Control"), in Python
+integers: the oracle for firmware/servo/control.c (host tests drive both with
+the same random inputs) and for the on-SoC firmware bench.
+
+Formats: gains q16 (PWM steps per count, per count/s, per count*s), set-point
+q16 counts, velocity q8 counts/s, integrator q32 PWM steps; the PWM command
+is round(u) saturated to +-cmd_limit (eq. 19/25).  The law is eq. (20)-(22)
+with the derivative taken from the measured velocity:
+    u = Kp e - Kd v + I,    I_k = I_{k-1} + Ki T_s e_k   (held while saturated
+                                                         toward the error)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+INT64_MAX = (1 << 63) - 1
+
+
+def clamp(v: int, limit: int) -> int:
+    return max(-limit, min(limit, v))
+
+
+def round_q16(u_q16: int) -> int:
+    """Nearest integer of a q16 value, halves up (arithmetic shift, like the C)."""
+    return (u_q16 + 32768) >> 16
+
+
+def _tdiv(a: int, b: int) -> int:
+    """C integer division (truncates toward zero)."""
+    q = abs(a) // abs(b)
+    return q if (a >= 0) == (b >= 0) else -q
+
+
+@dataclass
+class AxisParams:
+    law: int = 1
+    kp_q16: int = 0
+    kd_q16: int = 0
+    ki_q16: int = 0
+    deadband_q16: int = 0x8000
+    cmd_limit: int = 1023
+    vel_mode: int = 1
+    vmax_cps: int = 8400
+    amax_cps2: int = 16800
+
+
+@dataclass
+class Axis:
+    p: AxisParams
+    period_us: int
+    clk_hz: int = 50_000_000
+    sp_q16: int = 0
+    target_q16: int = 0
+    prof_v_q16: int = 0
+    moving: bool = False
+    integ_q32: int = 0
+    saturated: bool = False
+    sat_sign: int = 0
+    vel_q8: int = 0
+    pos_prev: int = 0
+    pos_ref: int = 0
+    t_ref: int = 0
+    cmd: int = 0
+
+    def __post_init__(self) -> None:
+        self.derive()
+
+    def derive(self) -> None:
+        p, T = self.p, self.period_us
+        self.ki_dt_q32 = _tdiv(p.ki_q16 * T * 1024, 15625)
+        self.e_max = _tdiv(INT64_MAX // 4, self.ki_dt_q32) if self.ki_dt_q32 > 0 else INT64_MAX
+        self.vmax_q16 = max(1, _tdiv(p.vmax_cps * T * 1024, 15625))
+        self.amax_q16 = max(1, _tdiv(p.amax_cps2 * T * T * 16, 244140625))
+
+    def reset(self, pos: int, now: int) -> None:
+        self.sp_q16 = self.target_q16 = pos << 16
+        self.prof_v_q16, self.moving, self.integ_q32 = 0, False, 0
+        self.saturated, self.sat_sign, self.vel_q8 = False, 0, 0
+        self.pos_prev = self.pos_ref = pos
+        self.t_ref = now
+        self.cmd = 0
+
+    def move(self, target: int, trapezoid: bool) -> None:
+        self.target_q16 = target << 16
+        if trapezoid:
+            self.moving = True
+        else:
+            self.sp_q16, self.prof_v_q16, self.moving = self.target_q16, 0, False
+
+    def _profile(self) -> None:
+        if not self.moving:
+            return
+        d = self.target_q16 - self.sp_q16
+        direction = 1 if d >= 0 else -1
+        ad, a = abs(d), self.amax_q16
+        # fastest speed from which braking by a per sample stops exactly after ad
+        n = (math.isqrt(8 * (ad // a) + 1) - 1) // 2
+        while n > 0 and a * n * (n + 1) // 2 > ad:
+            n -= 1
+        while a * (n + 1) * (n + 2) // 2 <= ad:
+            n += 1
+        v_allow = (ad + a * n * (n + 1) // 2) // (n + 1)
+        vs = min(self.prof_v_q16 * direction + a, self.vmax_q16, v_allow)
+        if vs >= ad:
+            self.sp_q16, self.prof_v_q16, self.moving = self.target_q16, 0, False
+            return
+        self.prof_v_q16 = vs * direction
+        self.sp_q16 += self.prof_v_q16
+
+    def _velocity(self, pos: int, edge_time: int, now: int) -> None:
+        clamp32 = (1 << 31) - 1
+        if self.p.vel_mode == 0:
+            euler = _tdiv((pos - self.pos_prev) * 256 * 1_000_000, self.period_us)
+            self.vel_q8 = clamp(_tdiv(euler + self.vel_q8, 2), clamp32)
+        elif pos != self.pos_ref:
+            dt = (edge_time - self.t_ref) & 0xFFFFFFFF or 1
+            self.vel_q8 = clamp(_tdiv((pos - self.pos_ref) * 256 * self.clk_hz, dt), clamp32)
+            self.pos_ref, self.t_ref = pos, edge_time
+        else:
+            dt = (now - self.t_ref) & 0xFFFFFFFF
+            if dt > 0x7FFFFFFF:
+                self.t_ref = (now - 0x7FFFFFFF) & 0xFFFFFFFF
+            bound = _tdiv(256 * self.clk_hz, dt) if dt else clamp32
+            if abs(self.vel_q8) > bound:
+                self.vel_q8 = bound if self.vel_q8 > 0 else -bound
+        self.pos_prev = pos
+
+    def step(self, pos: int, edge_time: int, now: int, run: bool = True) -> int:
+        p = self.p
+        self._velocity(pos, edge_time, now)
+        self._profile()
+        e = self.sp_q16 - (pos << 16)
+        if not run or p.law == 0:
+            self.integ_q32, self.cmd = 0, 0
+            return 0
+        if abs(e) <= p.deadband_q16:
+            e = 0
+        e = clamp(e, (1 << 31) - 1)
+        lim = p.cmd_limit
+        u = (p.kp_q16 * e) >> 16
+        if p.law >= 2:
+            u -= (p.kd_q16 * self.vel_q8) >> 8
+        if p.law == 3:
+            sign = (e > 0) - (e < 0)
+            if not (self.saturated and sign == self.sat_sign):
+                inc = (self.ki_dt_q32 * clamp(e, self.e_max)) >> 16
+                self.integ_q32 = clamp(self.integ_q32 + inc, lim << 32)
+            u += self.integ_q32 >> 16
+        else:
+            self.integ_q32 = 0
+        out = round_q16(u)
+        self.saturated = abs(out) > lim
+        self.sat_sign = 1 if out > lim else (-1 if out < -lim else 0)
+        self.cmd = clamp(out, lim)
+        return self.cmd
