@@ -9,7 +9,8 @@
 # afterwards if you like.  `make quartus` does the same through
 # scripts/gen_quartus.py, which first checks that the committed .qsf is in
 # step with constraints/pins.toml and rtl/manifest.toml.
-# Firmware images named in constraints/pins.toml [firmware] must exist first.
+# The firmware images named in constraints/pins.toml [firmware] must exist
+# first: python3 scripts/build_firmware.py (needs riscv64-unknown-elf-gcc).
 
 set repo [file normalize [file join [file dirname [info script]] ..]]
 set proj_dir [file join $repo build quartus]

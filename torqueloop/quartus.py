@@ -70,17 +70,41 @@ def stale(prods: list[Product]) -> list[tuple[Product, str]]:
     return out
 
 
-def check_readmemh(image: Path) -> list[str]:
-    """Problems of a $readmemh image (hex words, optional @address lines, // comments)."""
+def check_readmemh(image: Path, max_words: int | None = None) -> list[str]:
+    """Problems of a $readmemh image (hex words, optional @address lines, //
+    comments), and whether its words fit ``max_words``."""
     if not image.exists():
-        return [f"{image.relative_to(REPO_ROOT)} does not exist (build the firmware first)"]
+        return [f"{image} does not exist (build the firmware first: scripts/build_firmware.py)"]
     problems = []
+    words = 0
     for n, line in enumerate(image.read_text().splitlines(), 1):
         body = line.split("//", 1)[0].strip()
         for word in body.split():
             if not re.fullmatch(r"@?[0-9a-fA-F_]{1,8}", word):
                 problems.append(f"{image.name}:{n}: {word!r} is not a 32-bit hex word")
+            elif not word.startswith("@"):
+                words += 1
+    if max_words is not None and words > max_words:
+        problems.append(f"{image.name}: {words} words do not fit a memory of {max_words}")
     return problems
+
+
+def memory_words() -> dict[str, int]:
+    """Words of the memory each image parameter initialises (rtl/soc/regmap.toml sizes)."""
+    from torqueloop import regs
+
+    return {"ROM_INIT": regs.BOOT_ROM_SIZE // 4, "RAM_INIT": regs.RAM_SIZE // 4}
+
+
+def build_firmware() -> None:
+    """scripts/build_firmware.py with its defaults (build/firmware/servo/)."""
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, str(REPO_ROOT / "scripts" / "build_firmware.py")],
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise SystemExit(f"gen_quartus: the firmware build failed:\n{proc.stdout}{proc.stderr}")
 
 
 def write_project(project_dir: Path = board.QUARTUS_DIR) -> Path:
@@ -88,8 +112,11 @@ def write_project(project_dir: Path = board.QUARTUS_DIR) -> Path:
     if project_dir.resolve() != board.QUARTUS_DIR.resolve():
         raise SystemExit("gen_quartus: the committed .qsf's relative paths assume build/quartus")
     table = board.load_pin_table()
+    if table.firmware:
+        build_firmware()
+    sizes = memory_words()
     for name, image in table.firmware:
-        for p in check_readmemh(image):
+        for p in check_readmemh(image, sizes.get(name)):
             raise SystemExit(f"gen_quartus: {name}: {p}")
     drift = stale(products(table))
     if drift:
