@@ -247,6 +247,8 @@ def test_readmemh_image_check(tmp_path):
     good = tmp_path / "ok.hex"
     good.write_text("// boot\n@0\n00000013\ndeadbeef\n")
     assert quartus.check_readmemh(good) == []
+    assert quartus.check_readmemh(good, max_words=2) == []
+    assert any("do not fit" in p for p in quartus.check_readmemh(good, max_words=1))
     bad = tmp_path / "bad.hex"
     bad.write_text("00000013\n:020000040000FA\n")     # an Intel HEX record is not $readmemh
     assert quartus.check_readmemh(bad)
