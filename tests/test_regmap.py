@@ -78,6 +78,13 @@ size = 0x8000
 """
 
 
+def test_version_register_follows_meta():
+    text = (REPO_ROOT / "rtl" / "soc" / "regmap.toml").read_text()
+    assert "version = 1 " in text
+    with pytest.raises(regmap.RegMapError, match="VERSION"):
+        _load_text(text.replace("version = 1 ", "version = 2 ", 1))
+
+
 @pytest.mark.parametrize("bad, why", [
     ('[[block]]\nname="A"\nbase=0x4000_0000\n[[block.reg]]\nname="R"\noffset=0\n'
      'field=[{name="X",bits=[3,0],access="rw"},{name="Y",bits=[4,3],access="rw"}]', "overlap"),

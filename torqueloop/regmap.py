@@ -236,6 +236,14 @@ def _check_layout(rm: RegMap) -> None:
     for b in rm.blocks:
         if b.base % PAGE_BYTES or not periph.base <= b.base < periph.base + periph.size:
             raise RegMapError(f"block {b.name}: base {b.base:#x} is not a page inside PERIPH")
+    # Values stated twice in the TOML (meta and a register's reset) must agree.
+    for blk, reg, want in (("SYS", "VERSION", rm.version), ("SYS", "CLK_HZ", rm.clk_hz)):
+        try:
+            got = rm.block(blk).reg(reg).reset
+        except KeyError:
+            continue
+        if got != want:
+            raise RegMapError(f"{blk}.{reg} reset {got} differs from meta ({want})")
 
 
 def load(path: Path = REGMAP_TOML) -> RegMap:
