@@ -10,6 +10,8 @@
 #      interrupt, which preempts it
 #   4. priority: external > software > timer when all are pending
 #   5. timer interrupts landing in divides: the results stay right
+#   6. (first, before any interrupt) the time CSR follows mtime, and mcycle
+#      counts clock cycles like mtime does
     .equ    MTIME,    0x40000000
     .equ    MTIMECMP, 0x40000008
     .equ    TESTIRQ,  0x40001000
@@ -32,6 +34,34 @@ _start:
     li      s1, TESTIRQ
     la      t0, handler
     csrw    mtvec, t0
+
+    # --- 6. counters ---
+    csrr    t0, time
+    lw      t1, 0(s0)
+    sub     t1, t1, t0          # mtime read a few cycles after time
+    bltz    t1, 30f
+    li      t2, 8
+    bge     t1, t2, 30f
+    csrr    a1, mcycle
+    lw      a2, 0(s0)
+    li      t1, 100
+31: addi    t1, t1, -1
+    bnez    t1, 31b
+    csrr    a3, mcycle
+    lw      a4, 0(s0)
+    sub     a1, a3, a1
+    sub     a2, a4, a2
+    sub     a1, a1, a2          # same cycle count over the loop
+    bnez    a1, 32f
+    rdcycle a3
+    csrr    a4, mcycle
+    sub     a3, a4, a3
+    li      t2, 2               # two cycles per CSR read
+    bne     a3, t2, 32f
+    j       33f
+30: fail    11
+32: fail    12
+33:
     li      t0, 0x888           # MEIE | MTIE | MSIE
     csrw    mie, t0
     csrsi   mstatus, 8
