@@ -185,6 +185,10 @@ def check_sdc(table: board.PinTable, sdc_text: str, top_port_bits: set[str] | No
             problems.append(f"the clock port is cut by a false path: {line}")
     if "derive_clock_uncertainty" not in sdc_text.split():
         problems.append("missing: derive_clock_uncertainty")
+    from torqueloop import regs
+
+    if round(1e9 / table.board.clock_period_ns) != regs.CLK_HZ:
+        problems.append(f"clock period {table.board.clock_period_ns} ns is not the SoC's CLK_HZ = {regs.CLK_HZ} Hz")
     return _result(name, problems)
 
 

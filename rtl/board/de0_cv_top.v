@@ -43,8 +43,17 @@ module de0_cv_top #(
     inout  wire [35:0] GPIO_1
 );
 
-    // Board frequency: the SoC's CLK_HZ default (regmap) must be 50 MHz too.
     localparam integer AXES = 2;
+
+    // CLOCK_50 drives everything, and the SoC derives its baud rate, PWM
+    // carrier and timer from its CLK_HZ (regmap: `TL_CLK_HZ): they must agree.
+    // A mismatch instantiates a module that does not exist, so elaboration
+    // stops with its name as the message.
+    generate
+        if (`TL_CLK_HZ != 50_000_000) begin : g_clk_check
+            tl_clk_hz_is_not_the_de0_cv_50_mhz u_clk_check ();
+        end
+    endgenerate
 
     wire clk = CLOCK_50;
     wire rst;
