@@ -265,14 +265,29 @@ async def servo_firmware_answers_the_protocol_on_the_header(dut):
     await _expect_all_low(dut, 2000, "e-stop held after ENABLE")
 
 
+def _publish(src: Path, dst: Path) -> Path:
+    """Move a freshly built image into place atomically, and only if it
+    changed: another make test on the same tree may be loading ``dst``."""
+    if dst.exists() and dst.read_bytes() == src.read_bytes():
+        src.unlink()
+    else:
+        src.replace(dst)
+    return dst
+
+
 def build_servo_images() -> tuple[Path, Path]:
     """The servo firmware built by scripts/build_firmware.py for simulation
     (1 Mbaud link, 1 ms control period): (boot-ROM stub, RAM image)."""
     out = BUILD_ROOT / "de0_cv_top" / "servo"
+    tmp = out / f"tmp{os.getpid()}"
     subprocess.run([sys.executable, str(REPO_ROOT / "scripts" / "build_firmware.py"), "--name", "servo_sim",
                     "-D", f"TL_DEFAULT_BAUD_DIV={SERVO_BAUD_DIV}", "-D", "TL_DEFAULT_PERIOD_US=1000",
-                    "--out", str(out)], check=True, capture_output=True, text=True)
-    return out / "servo_sim_rom.hex", out / "servo_sim_ram.hex"
+                    "--out", str(tmp)], check=True, capture_output=True, text=True)
+    images = tuple(_publish(tmp / f"servo_sim_{m}.hex", out / f"servo_sim_{m}.hex") for m in ("rom", "ram"))
+    for f in tmp.iterdir():
+        f.unlink()
+    tmp.rmdir()
+    return images
 
 
 def build_rom_image(name: str) -> Path:
@@ -280,7 +295,8 @@ def build_rom_image(name: str) -> Path:
     a boot-ROM $readmemh image (one 32-bit word per line)."""
     out = BUILD_ROOT / "de0_cv_top" / "prog"
     out.mkdir(parents=True, exist_ok=True)
-    elf, binf, hexf = out / f"{name}.elf", out / f"{name}.bin", out / f"{name}.hex"
+    pid = os.getpid()
+    elf, binf, hexf = out / f"{name}.{pid}.elf", out / f"{name}.{pid}.bin", out / f"{name}.hex"
     subprocess.run(
         ["riscv64-unknown-elf-gcc", "-march=rv32im_zicsr", "-mabi=ilp32", "-O2", "-nostdlib",
          "-ffreestanding", "-static", "-std=c11", "-Wall", "-Wextra", "-Werror",
@@ -289,11 +305,14 @@ def build_rom_image(name: str) -> Path:
         check=True, capture_output=True, text=True)
     subprocess.run(["riscv64-unknown-elf-objcopy", "-O", "binary", str(elf), str(binf)], check=True)
     data = binf.read_bytes()
+    elf.unlink()
+    binf.unlink()
     assert len(data) <= regs.BOOT_ROM_SIZE, f"{name}: {len(data)} bytes do not fit the boot ROM"
     data += bytes(regs.BOOT_ROM_SIZE - len(data))
     words = [int.from_bytes(data[i:i + 4], "little") for i in range(0, len(data), 4)]
-    hexf.write_text("".join(f"{w:08x}\n" for w in words))
-    return hexf
+    tmp = out / f"{name}.{os.getpid()}.hex"
+    tmp.write_text("".join(f"{w:08x}\n" for w in words))
+    return _publish(tmp, hexf)
 
 
 @contextlib.contextmanager
