@@ -320,7 +320,8 @@ def vhdl_package(rm: RegMap) -> str:
 
 def c_header(rm: RegMap) -> str:
     """C11 header: TL_<BLOCK>_<REG> is the register as a volatile lvalue,
-    _ADDR its address, _<FIELD>_POS/_MSK the field (CMSIS naming)."""
+    _ADDR its address; per layout TL_<KIND>_<REG>_OFS its offset in the page
+    and _<FIELD>_POS/_MSK the field (CMSIS naming)."""
     L = [f"/* {_BANNER} */", "#ifndef TORQUELOOP_REGS_H", "#define TORQUELOOP_REGS_H", "",
          "#include <stdint.h>", "",
          "#define TL_REG32(addr) (*(volatile uint32_t *)(uintptr_t)(addr))", "",
@@ -338,8 +339,9 @@ def c_header(rm: RegMap) -> str:
             L.append(f"#define {p} TL_REG32({p}_ADDR)")
             L.append(f"#define {p}_RESET 0x{r.reset:08X}u")
     for kind, b in rm.kinds.items():
-        L += ["", f"/* {kind} register fields */"]
+        L += ["", f"/* {kind} register offsets in the page (index several instances: base + _OFS) and fields */"]
         for r in b.registers:
+            L.append(f"#define TL_{kind}_{r.name}_OFS 0x{r.offset:03X}u")
             for f in r.fields:
                 q = f"TL_{kind}_{r.name}_{f.name}"
                 L.append(f"#define {q}_POS {f.lsb}u")
@@ -369,6 +371,7 @@ def python_module(rm: RegMap) -> str:
     for kind, b in rm.kinds.items():
         L.append("")
         for r in b.registers:
+            L.append(f"{kind}_{r.name}_OFS = 0x{r.offset:03X}")
             for f in r.fields:
                 L.append(f"{kind}_{r.name}_{f.name}_POS = {f.lsb}")
                 L.append(f"{kind}_{r.name}_{f.name}_MSK = 0x{f.mask:08X}")
