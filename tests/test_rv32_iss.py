@@ -113,23 +113,24 @@ def test_interrupt_priority_vectoring_and_mret():
 
 @pytest.mark.skipif(shutil.which("riscv64-unknown-elf-gcc") is None or shutil.which("gcc") is None,
                     reason="needs the RISC-V and the host compiler")
-def test_c_program_matches_host_compiled_results(tmp_path):
-    """bench.c's signature on the ISS equals the same C compiled for the host."""
+@pytest.mark.parametrize("name,words", [("bench", 16), ("cstress", 24)])
+def test_c_program_matches_host_compiled_results(tmp_path, name, words):
+    """A C test program's signature on the ISS equals the same C compiled for the host."""
     sys.path.insert(0, str(REPO_ROOT / "tb" / "cpu"))
     from cpu_progs import PROGS, build, run_iss
 
-    elf = build("bench", [PROGS / "bench.c"], tag="unit")
+    elf = build(name, [PROGS / f"{name}.c"], tag="unit")
     iss = run_iss(elf)
     assert iss.tohost == 1
     harness = tmp_path / "host_main.c"
     harness.write_text(
-        '#include <stdio.h>\n#include <stdint.h>\nextern volatile uint32_t sig[16];\n'
+        '#include <stdio.h>\n#include <stdint.h>\nextern volatile uint32_t sig[];\n'
         'int bench_main(void);\nint main(void) { int r = bench_main();\n'
-        '  for (int i = 0; i < 16; i++) printf("%u\\n", (unsigned)sig[i]); return r; }\n')
+        '  for (int i = 0; i < WORDS; i++) printf("%u\\n", (unsigned)sig[i]); return r; }\n')
     exe = tmp_path / "bench_host"
-    obj = tmp_path / "bench.o"
-    subprocess.run(["gcc", "-O2", "-std=c11", "-Dmain=bench_main", "-c", str(PROGS / "bench.c"), "-o", str(obj)],
+    obj = tmp_path / f"{name}.o"
+    subprocess.run(["gcc", "-O2", "-std=c11", "-Dmain=bench_main", "-c", str(PROGS / f"{name}.c"), "-o", str(obj)],
                    check=True)
-    subprocess.run(["gcc", "-O2", str(harness), str(obj), "-o", str(exe)], check=True)
+    subprocess.run(["gcc", "-O2", f"-DWORDS={words}", str(harness), str(obj), "-o", str(exe)], check=True)
     host = [int(l) for l in subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout.split()]
-    assert host == iss.signature[:16]
+    assert host == iss.signature[:words]

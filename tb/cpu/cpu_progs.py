@@ -33,7 +33,7 @@ def build(name: str, sources: list[Path], tag: str = "", opt: str = "-O2",
     srcs = ([PROGS / "crt0.S"] if crt0 else []) + list(sources)
     cmd = [GCC, *ARCH, opt, "-nostdlib", "-ffreestanding", "-static", "-std=c11",
            "-Wall", "-Werror", "-I", str(PROGS), "-T", str(PROGS / "link.ld"), "-Wl,--no-warn-rwx-segments",
-           "-o", str(tmp), *map(str, srcs)]
+           "-o", str(tmp), *map(str, srcs), "-lgcc"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)}\n{proc.stderr}")

@@ -67,6 +67,7 @@ DIRECTED = {
     "traps": (["traps.S"], False),
     "muldiv_corners": (["muldiv_corners.S"], False),
     "bench": (["bench.c"], True),
+    "cstress": (["cstress.c"], True),
 }
 
 
@@ -137,5 +138,5 @@ def test_cpu(sim):
     if sim == "icarus":
         env.update(CPU_RANDOM_PROGS="2", CPU_RANDOM_LEN="300", CPU_DIRECTED="traps,muldiv_corners")
     else:
-        env.update(CPU_RANDOM_PROGS="6", CPU_RANDOM_LEN="3000")
+        env.update(CPU_RANDOM_PROGS="12", CPU_RANDOM_LEN="3000")
     run("cpu_sim_top", sim, "test_cpu", extra_env=env)
