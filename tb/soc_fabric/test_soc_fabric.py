@@ -381,10 +381,9 @@ async def gpio_drives_leds_and_digits_and_reads_switches(dut):
 
 async def _pwm_running(tb: TB, axis_base: int) -> None:
     """Axis at a fast carrier with half torque: RPWM toggles."""
-    ofs = axis_base - regs.AXIS0_BASE
-    await tb.dbus.write(regs.AXIS0_FDIV + ofs, 1)        # tick every clock
-    await tb.dbus.write(regs.AXIS0_PWM_CMD + ofs, 512)
-    await tb.dbus.write(regs.AXIS0_PWM_CTRL + ofs, regs.AXIS_PWM_CTRL_ENABLE_MSK)
+    await tb.dbus.write(axis_base + regs.AXIS_FDIV_OFS, 1)        # tick every clock
+    await tb.dbus.write(axis_base + regs.AXIS_PWM_CMD_OFS, 512)
+    await tb.dbus.write(axis_base + regs.AXIS_PWM_CTRL_OFS, regs.AXIS_PWM_CTRL_ENABLE_MSK)
 
 
 async def _rpwm_toggles(dut, axis: int, cycles: int = 2200) -> bool:
@@ -455,9 +454,9 @@ async def encoder_counts_reach_the_position_register(dut):
     await tb.reset()
     axis = random.randrange(2)
     base = regs.AXIS0_BASE if axis == 0 else regs.AXIS1_BASE
-    await tb.dbus.write(base + (regs.AXIS0_ENC_CFG - regs.AXIS0_BASE), 1 << 16)      # ENC_CFG: sample every clock, filter 1
+    await tb.dbus.write(base + regs.AXIS_ENC_CFG_OFS, 1 << 16)      # ENC_CFG: sample every clock, filter 1
     await ClockCycles(dut.clk, 60)                  # the old 50-clock sample period runs out first
-    await tb.dbus.write(base + (regs.AXIS0_ENC_POS - regs.AXIS0_BASE), 1000)         # ENC_POS load
+    await tb.dbus.write(base + regs.AXIS_ENC_POS_OFS, 1000)         # ENC_POS load
     steps = random.randrange(5, 30)
     a = b = 0
     for _ in range(steps):                          # A leads B: count up
@@ -469,7 +468,7 @@ async def encoder_counts_reach_the_position_register(dut):
         dut.enc_b.value = b << axis
         await ClockCycles(dut.clk, 8)
     await ClockCycles(dut.clk, 8)
-    pos = await tb.dbus.read(base + (regs.AXIS0_ENC_POS - regs.AXIS0_BASE))
+    pos = await tb.dbus.read(base + regs.AXIS_ENC_POS_OFS)
     assert pos == 1000 + steps, f"axis {axis}: position {pos}, expected {1000 + steps}"
 
 
