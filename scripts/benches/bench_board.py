@@ -13,11 +13,8 @@ two blocks per 512 words; Quartus would use about half as many).
 
 from __future__ import annotations
 
-import json
 import math
-import sys
 import time
-from pathlib import Path
 
 from torqueloop import eda
 from torqueloop.board import load_pin_table
@@ -36,9 +33,6 @@ M10K_BOUND = 0.50
 #: (20 ns, roughly 0.5-1 ns per level plus routing) is at risk.
 DEPTH_BOUND = 20
 
-#: Cells whose outputs are registered: a path starts at them.
-_REGISTERED = {"MISTRAL_FF", "MISTRAL_M10K"}
-
 
 def alm_estimate(row: dict) -> tuple[int, int]:
     """(packed, upper): packed = a 6-input LUT per ALM, two smaller LUTs or
@@ -48,66 +42,6 @@ def alm_estimate(row: dict) -> tuple[int, int]:
     packed = lut6 + math.ceil((row["luts"] - lut6) / 2) + math.ceil(row["carry_cells"] / 2)
     upper = row["luts"] + math.ceil(row["carry_cells"] / 2)
     return packed, upper
-
-
-def logic_depth(netlist: Path, top: str) -> tuple[int, list[str]]:
-    """Longest path in LUT levels between registers / ports of a Yosys
-    synth_intel_alm netlist (write_json), and the names of the cells on it.
-    A LUT, NOT, MLAB read (address to data) or DSP multiplier is one level; a carry chain costs
-    one level where it is entered (A/B/C/D inputs), nothing along CI -> CO.
-    (Yosys 0.23's ltp reports -1 on these netlists, hence this walk.)"""
-    mod = json.loads(netlist.read_text())["modules"][top]
-    driver: dict[int, tuple[str, dict]] = {}
-    for name, cell in mod["cells"].items():
-        for port, bits in cell["connections"].items():
-            if cell["port_directions"].get(port) == "output":
-                for b in bits:
-                    if isinstance(b, int):
-                        driver[b] = (name, cell)
-    sys.setrecursionlimit(max(10_000, 4 * len(driver)))
-    level: dict[int, int] = {}
-    via: dict[int, int | None] = {}      # the input bit the longest path came through
-
-    def depth(bit: object) -> int:
-        if not isinstance(bit, int) or bit not in driver:
-            return 0                      # constant or module input
-        if bit in level:
-            return level[bit]
-        level[bit], via[bit] = 0, None    # breaks a (combinational) loop, if any
-        _, cell = driver[bit]
-        if cell["type"] in _REGISTERED:
-            return 0
-        best, best_in = 0, None
-        for port, bits in cell["connections"].items():
-            if cell["port_directions"].get(port) != "input":
-                continue
-            if cell["type"] == "MISTRAL_MLAB" and not port.startswith("B1ADDR"):
-                continue                  # MLAB writes are clocked; only the read address is combinational
-            step = 0 if (cell["type"] == "MISTRAL_ALUT_ARITH" and port == "CI") else 1
-            for b in bits:
-                d = depth(b) + step
-                if d > best:
-                    best, best_in = d, b
-        level[bit], via[bit] = best, best_in
-        return best
-
-    ends = []
-    for cell in mod["cells"].values():
-        if cell["type"] in _REGISTERED:
-            ends += [b for p, bits in cell["connections"].items()
-                     if cell["port_directions"].get(p) == "input" for b in bits]
-    for port in mod["ports"].values():
-        if port["direction"] in ("output", "inout"):
-            ends += port["bits"]
-    if not ends:
-        return 0, []
-    end = max(ends, key=depth)
-    path: list[str] = []
-    bit: object = end
-    while isinstance(bit, int) and bit in driver and driver[bit][1]["type"] not in _REGISTERED:
-        path.append(driver[bit][0])
-        bit = via.get(bit)
-    return depth(end), path[::-1]
 
 
 def main() -> int:
@@ -123,7 +57,7 @@ def main() -> int:
         print(f"[bench_board] synthesis failed:\n{row['error']}")
         return 1
     lo, hi = alm_estimate(row)
-    depth, path = logic_depth(eda.BUILD / "synth" / f"{top}_board" / "netlist.json", top)
+    depth = row["lut_levels"]
     print(f"board top {top}: Yosys synth_intel_alm -family cyclonev in {time.monotonic() - t0:.0f} s")
     print("| resource | used | device | share |")
     print("|---|---:|---:|---:|")
@@ -135,10 +69,7 @@ def main() -> int:
     print(f"| M10K | {row['m10k']} | {DEVICE_M10K} | {row['m10k'] / DEVICE_M10K:.1%} |")
     print(f"| MLAB | {row['mlab']} | | |")
     print(f"| DSP | {row['dsp']} | 66 | {row['dsp'] / 66:.1%} |")
-    print(f"| logic depth (LUT levels) | {depth} | bound {DEPTH_BOUND} | |")
-    if path:
-        print(f"deepest path starts at {path[0]}")
-        print(f"           and ends at {path[-1]}")
+    print(f"| logic depth (LUT levels, eda.lut_levels) | {depth} | bound {DEPTH_BOUND} | |")
     bad = []
     if lo > ALM_BOUND * DEVICE_ALMS:
         bad.append(f"ALM estimate {lo} above {ALM_BOUND:.0%} of the device")
