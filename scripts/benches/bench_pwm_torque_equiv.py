@@ -2,7 +2,8 @@
 
 make lint proves the twins equivalent at PWM_BITS = 6 (core pwm_torque_equiv,
 about 1.5 s); at 10 bits the 10x10 multiplier makes Yosys equiv_induct take
-about three minutes, so the full-width proof lives here."""
+185 CPU-s on an idle machine (proven, 203 of 203 $equiv cells), so the
+full-width proof lives here."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from torqueloop.hdl import core
 
 def main() -> int:
     c = replace(core("pwm_torque"), name="pwm_torque_w10", synth_params={"PWM_BITS": 10})
-    print("proving pwm_torque.vhd == pwm_torque.v at PWM_BITS = 10 (about 3 minutes) ...", flush=True)
+    print("proving pwm_torque.vhd == pwm_torque.v at PWM_BITS = 10 (3+ CPU-minutes) ...", flush=True)
     t0 = time.monotonic()
     r = eda.equivalence(c)
     print(f"{'PROVEN' if r.ok else 'FAILED'} in {time.monotonic() - t0:.1f} s: {r.detail[-600:]}")
