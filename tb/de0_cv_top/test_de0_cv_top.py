@@ -1,16 +1,19 @@
 """de0_cv_top: the whole board image with the bridges, encoders and RN-XV on
-its header pins (tb/de0_cv_top/de0_cv_top_tb.v is the cable harness).
+its header pins (tb/de0_cv_top/de0_cv_top_tb.v is the cable harness), and
+the plant model (sim_models) on the bridge pins.
 
 The boot ROM runs prog/careless.c, a firmware that always asks both axes for
 torque and acknowledges every stop and fault in the SoC's safety latch at
 once.  On the header pins the bench checks what the board must guarantee
 whatever the firmware does:
-  - after reset, with SW[0] already up, no bridge input is ever driven;
+  - after reset, with SW[0] already up, no bridge input is ever driven and
+    the plant's motors carry no current and stand still;
   - SW[0] down and up arms the drives: the firmware's PWM reaches the pins
-    (axis 1 forward on RPWM, axis 2 reverse on LPWM, enables high);
+    (axis 1 forward on RPWM, axis 2 reverse on LPWM, enables high) and the
+    plant's motor currents and angles follow with the right signs;
   - KEY[0] (e-stop) drops every bridge input within a few clocks, and they
     stay low after release although the firmware has cleared its latch,
-    until SW[0] is moved down and up again;
+    until SW[0] is moved down and up again; the motor currents decay to zero;
   - a bridge fault lasting 250 clocks trips the same way, a shorter glitch
     does not;
   - the UART on GPIO_0 pins 13/14 carries bytes both ways (the firmware
@@ -35,7 +38,8 @@ from pathlib import Path
 import cocotb
 import pytest
 from cocotb.clock import Clock
-from cocotb.triggers import ClockCycles, FallingEdge
+from cocotb.simtime import get_sim_time
+from cocotb.triggers import ClockCycles, FallingEdge, First, Timer
 
 from torqueloop import regs
 from torqueloop.board import load_pin_table
@@ -57,6 +61,48 @@ SERVO_BAUD = 50_000_000 // (SERVO_BAUD_DIV + 1)
 #: The firmware sets that divisor at the end of its start-up, measured at
 #: 11,900 clocks (when this bench was written); bytes sent earlier are garbled.
 SERVO_STARTUP_CLOCKS = 20_000
+
+
+class PlantOnPins:
+    """The two-axis plant (sim_models: BTS7960 bridges, DC motors, ball
+    screws) driven by the IBT-2 pins of the board image: each time a bridge
+    pin changes, or at least every CHUNK_NS, the plant is advanced with the
+    pin levels that held since the last update.  Its encoders are not fed
+    back (a few milliseconds of simulation turn a motor by less than one
+    count); the bench turns the encoder pins itself."""
+
+    CHUNK_NS = 4_000
+
+    def __init__(self, dut) -> None:
+        from sim_models.bridge import Pins
+        from sim_models.stepper import TwoAxisPlant
+
+        self._pins_type = Pins
+        self.dut = dut
+        self.plant = TwoAxisPlant(glitch_rate_hz=0.0, seed=1)
+        self.pins = [Pins(0, 0, 0, 0), Pins(0, 0, 0, 0)]
+        self.t_ns = get_sim_time("ns")
+        cocotb.start_soon(self._run())
+
+    def _read(self) -> list:
+        raw = {n: getattr(self.dut, n).value for n in ("rpwm", "lpwm", "r_en", "l_en")}
+        bits = {n: (int(v) if v.is_resolvable else 0) for n, v in raw.items()}
+        return [self._pins_type(*((bits[n] >> a) & 1 for n in ("rpwm", "lpwm", "r_en", "l_en"))) for a in (0, 1)]
+
+    def sync(self) -> None:
+        """Advance the plant to now with the pins that held since the last update."""
+        now = get_sim_time("ns")
+        if now > self.t_ns:
+            self.plant.advance((now - self.t_ns) * 1e-9, self.pins)
+            self.t_ns = now
+        self.pins = self._read()
+
+    async def _run(self) -> None:
+        d = self.dut
+        while True:
+            await First(d.rpwm.value_change, d.lpwm.value_change, d.r_en.value_change,
+                        d.l_en.value_change, Timer(self.CHUNK_NS, unit="ns"))
+            self.sync()
 
 
 def _bridge(dut) -> dict[str, int]:
@@ -138,9 +184,15 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
     sink = UartSink(dut.rnxv_rx, baud=UART_BAUD, bits=8)
     await ClockCycles(dut.clk, 5)
     dut.reset_n.value = 1
+    plant = PlantOnPins(dut)
 
     # 1. Power-up with the arm switch up: the firmware asks for torque, nothing moves.
     await _expect_all_low(dut, 4 * PWM_PERIOD, "after reset, switch up")
+    plant.sync()
+    for a in (0, 1):
+        # (1e-6 rad: numerical rest, against 0.098 rad per encoder count)
+        assert plant.plant.current(a) == 0.0 and abs(plant.plant.motor_angle(a)) < 1e-6, \
+            f"axis {a + 1} moved before arming: {plant.plant.current(a)} A, {plant.plant.motor_angle(a)} rad"
     assert int(dut.ledr.value) >> 8 == 0, "LEDR[9:8] must show disarmed, no trip"
     if cocotb.SIM_NAME.lower().startswith("icarus"):
         # Four-state: every header pin the pin table does not use must float.
@@ -162,6 +214,10 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
     await _arm(dut)
     assert (int(dut.ledr.value) >> 8) == 0b10, "LEDR[9] = armed"
     _check_driving(await _watch_armed(dut, 3 * PWM_PERIOD), 3 * PWM_PERIOD, "armed")
+    plant.sync()
+    i1, i2 = plant.plant.current(0), plant.plant.current(1)
+    assert i1 > 0.1 and plant.plant.motor_angle(0) > 0, f"axis 1 not driven forward: {i1} A"
+    assert i2 < -0.1 and plant.plant.motor_angle(1) < 0, f"axis 2 not driven in reverse: {i2} A"
 
     # 3. E-stop: off within STOP_LATENCY clocks, and off after release until re-armed.
     await FallingEdge(dut.clk)
@@ -170,6 +226,9 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
     await _expect_all_low(dut, PWM_PERIOD, "e-stop pressed")
     dut.key.value = 0xF
     await _expect_all_low(dut, 3 * PWM_PERIOD, "e-stop released, firmware acknowledged, not re-armed")
+    plant.sync()
+    for a in (0, 1):
+        assert plant.plant.current(a) == 0.0, f"axis {a + 1}: {plant.plant.current(a)} A after the stop: torque"
     assert (int(dut.ledr.value) >> 8) == 0b01, "LEDR[8] = tripped, LEDR[9] = disarmed"
     await _arm(dut)
     _check_driving(await _watch_armed(dut, 2 * PWM_PERIOD), 2 * PWM_PERIOD, "re-armed")
