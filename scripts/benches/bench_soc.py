@@ -31,7 +31,7 @@ def main() -> int:
             return 1
         print(f"{name} (RAM {ram // 1024} KiB): {row['luts']} LUTs, {row['carry_cells']} carry, "
               f"{row['ffs']} FFs, {row['m10k']} M10K of {DEVICE_M10K}, {row['mlab']} MLAB, "
-              f"{row['dsp']} DSP, longest path {row['longest_path_cells']} cells "
+              f"{row['dsp']} DSP, {row.get('lut_levels', '?')} LUT levels "
               f"(synthesis {row['seconds']} s)")
     print(eda.write_synth_table(rows, out_dir=eda.BUILD / "synth" / "soc_64k").read_text())
     soc = rows[-1]
