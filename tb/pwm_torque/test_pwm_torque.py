@@ -16,6 +16,8 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, ReadOnly, RisingEdge, Timer
 
+from torqueloop.hdl import REPO_ROOT
+from torqueloop.ref.freq_div import FreqDivParams, carrier_hz, count_max
 from torqueloop.ref.pwm_torque import (PIPE_CLOCKS, PwmInputs, PwmOutputs, PwmTorqueModel,
                                        full_scale, map_duty, safe_pins)
 from torqueloop.simrun import run, sims_for
@@ -308,6 +310,56 @@ async def full_width_duty_table(dut):
         await check_pwm_pair(tb, 1, cmd, pw0, pw_max)
 
 
+@cocotb.test()
+async def chain_carrier_matches_ref(dut):
+    """freq_div driving pwm_torque (pwm_chain_top): the carrier period and pulse
+    width on RPWM, timed in ns, equal torqueloop.ref.freq_div.carrier_hz() and
+    map_duty() for the reset default (eq. 4 Count_max) and written divisors."""
+    p = FreqDivParams(clk_hz=int(dut.CLK_HZ.value), pwm_bits=int(dut.PWM_BITS.value),
+                      div_bits=int(dut.DIV_BITS.value), default_motor_hz=int(dut.DEFAULT_MOTOR_HZ.value))
+    n, m = p.pwm_bits, full_scale(p.pwm_bits)
+    clk_ns = 1e9 / p.clk_hz
+    cocotb.start_soon(Clock(dut.clk, clk_ns, unit="ns").start())
+    cmd = random.randint(1, m - 1)
+    dut.rst.value = 1
+    dut.div_we.value = 0
+    dut.div_in.value = 0
+    dut.cmd.value = cmd
+    dut.pw0.value = 0
+    dut.pw_max.value = m
+    dut.enable.value = 1
+    for _ in range(2):
+        await RisingEdge(dut.clk)
+    await FallingEdge(dut.clk)
+    dut.rst.value = 0
+    divs = [None, count_max(25_000, p.clk_hz, n, p.div_bits), random.randint(2, 9)]
+    for div in divs:
+        if div is not None:
+            await FallingEdge(dut.clk)
+            dut.div_in.value = div
+            dut.div_we.value = 1
+            await FallingEdge(dut.clk)
+            dut.div_we.value = 0
+        want_div = p.default_div if div is None else div
+        assert int(dut.div.value) == want_div
+        # Skip the period the write disturbed, then time two whole periods.
+        rises = []
+        for _ in range(4):
+            await RisingEdge(dut.rpwm)
+            rises.append(cocotb.utils.get_sim_time(unit="ns"))
+            if len(rises) == 3:
+                await FallingEdge(dut.rpwm)
+                high_ns = cocotb.utils.get_sim_time(unit="ns") - rises[-1]
+        periods = [b - a for a, b in zip(rises[1:], rises[2:])]
+        want_period_ns = 1e9 / carrier_hz(want_div, p.clk_hz, n)
+        assert periods == pytest.approx([want_period_ns] * 2, abs=1e-3), \
+            f"div {want_div}: carrier periods {periods} ns, ref {want_period_ns} ns"
+        want_high_ns = map_duty(cmd, 0, m, n) * want_div * clk_ns
+        dut._log.info("div %d: carrier %.2f Hz measured, %.2f Hz ref; high %.0f ns", want_div,
+                      1e9 / periods[-1], carrier_hz(want_div, p.clk_hz, n), high_ns)
+        assert high_ns == pytest.approx(want_high_ns, abs=1e-3), f"div {want_div}: high {high_ns} ns"
+
+
 # Small periods (PWM_BITS = 6: 63 ticks) keep the run short; one build at the
 # paper's 10 bits runs the 1023-count table.
 SETS = {
@@ -328,3 +380,16 @@ CASES = [(sim, "n6") for sim in sims_for("pwm_torque")] + \
 def test_pwm_torque(sim, pset):
     params, tests = SETS[pset]
     run("pwm_torque", sim, "test_pwm_torque", parameters=params, testcase=",".join(tests))
+
+
+CHAIN_DIR = REPO_ROOT / "tb" / "pwm_torque"
+
+
+@pytest.mark.parametrize("sim", [s for s in sims_for("pwm_torque") if s != "verilator"])
+def test_pwm_torque_chain(sim):
+    """freq_div + pwm_torque together (Icarus and GHDL: a cheap build each)."""
+    run("pwm_torque", sim, "test_pwm_torque", toplevel="pwm_chain_top",
+        parameters={"PWM_BITS": 6, "DEFAULT_MOTOR_HZ": 20_000},
+        extra_verilog=[REPO_ROOT / "rtl" / "motion" / "freq_div.v", CHAIN_DIR / "pwm_chain_top.v"],
+        extra_vhdl=[REPO_ROOT / "rtl" / "motion" / "freq_div.vhd", CHAIN_DIR / "pwm_chain_top.vhd"],
+        testcase="chain_carrier_matches_ref")
