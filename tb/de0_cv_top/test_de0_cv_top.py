@@ -49,7 +49,7 @@ from torqueloop.simrun import BUILD_ROOT, run, sims_for
 HERE = Path(__file__).resolve().parent
 SOC_PROG = REPO_ROOT / "tb" / "soc" / "prog"   # the SoC bench's crt0 and linker script (4 KiB RAM)
 RAM_BYTES_TB = 4096
-UART_BAUD = 115_200            # the UART core's reset default
+UART_BAUD = 1_000_000          # careless.c sets BAUD_DIV = 49 (tb/soc covers the 115200 default)
 FAULT_FILTER_CLKS = 250        # de0_cv_top's drive_interlock
 PWM_PERIOD = 1023              # careless.c: FDIV = 1
 #: Clocks from a stop request on a pin to all bridge inputs low: two

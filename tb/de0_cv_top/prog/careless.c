@@ -14,6 +14,7 @@ int main(void)
 {
     /* Count_max = 1: one PWM tick per clock, a 1023-clock carrier, so a
        period fits in a short simulation. */
+    TL_UART_BAUD_DIV = 49u;                         /* 1 Mbaud: 50 clocks per bit, a short simulation */
     TL_AXIS0_FDIV = 1u;
     TL_AXIS1_FDIV = 1u;
     TL_AXIS0_PWM_CMD = 600u;                        /* forward: RPWM */
