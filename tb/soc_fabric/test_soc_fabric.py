@@ -562,6 +562,49 @@ async def uart_moves_bytes_both_ways_and_flags_errors(dut):
     assert await tb.dbus.read(regs.UART_FRAME_COUNT) == 0
 
 
+@cocotb.test()
+async def uart_flow_control_holds_the_peer_and_waits_for_cts(dut):
+    """RTS/CTS (CTRL.FLOW_EN, the RN-XV's `set uart flow 1`): RTS_N rises when
+    the RX FIFO fills to its threshold (16 - 4 bytes) and falls when firmware
+    drains it; with CTS_N high the transmitter holds a byte until CTS_N falls."""
+    from cocotbext.uart import UartSink, UartSource
+
+    tb = TB(dut)
+    await tb.reset()
+    div = 15
+    baud = 50_000_000 // (div + 1)
+    bit_cycles = div + 1
+    await tb.dbus.write(regs.UART_BAUD_DIV, div)
+    await tb.dbus.write(regs.UART_CTRL, regs.UART_CTRL_FLOW_EN_MSK)
+    source = UartSource(dut.uart_rx, baud=baud, bits=8)
+    sink = UartSink(dut.uart_tx, baud=baud, bits=8)
+    assert int(dut.uart_rts_n.value) == 0
+    threshold = 16 - 4
+    await source.write(bytes(range(threshold - 1)))
+    await source.wait()
+    await ClockCycles(dut.clk, 3 * bit_cycles)
+    assert int(dut.uart_rts_n.value) == 0, f"RTS_N high with {threshold - 1} bytes waiting"
+    await source.write(b"\x55")
+    await source.wait()
+    await ClockCycles(dut.clk, 3 * bit_cycles)
+    assert int(dut.uart_rts_n.value) == 1, f"RTS_N still low with {threshold} bytes waiting"
+    assert await tb.dbus.read(regs.UART_STATUS) & regs.UART_STATUS_RTS_N_MSK
+    assert await tb.dbus.read(regs.UART_RX_DATA) == regs.UART_RX_DATA_VALID_MSK | 0
+    await ClockCycles(dut.clk, 3)
+    assert int(dut.uart_rts_n.value) == 0, "RTS_N must fall once a byte is read"
+
+    # CTS_N high: the byte waits in the FIFO, the line stays idle.
+    dut.uart_cts_n.value = 1
+    await ClockCycles(dut.clk, 4)
+    await tb.dbus.write(regs.UART_TX_DATA, 0xA7)
+    for _ in range(30 * bit_cycles):
+        await FallingEdge(dut.clk)
+        assert int(dut.uart_tx.value) == 1, "transmitter started while CTS_N was high"
+    assert not await tb.dbus.read(regs.UART_STATUS) & regs.UART_STATUS_TX_IDLE_MSK
+    dut.uart_cts_n.value = 0
+    assert bytes(await sink.read(1)) == b"\xa7"
+
+
 # --- pytest entry ----------------------------------------------------------------------------
 
 def _images() -> tuple[Path, Path]:
