@@ -1,11 +1,16 @@
 `default_nettype none
-// M extension: MUL/MULH/MULHSU/MULHU in 2 cycles, DIV/DIVU/REM/REMU in 34
+// M extension: MUL/MULH/MULHSU/MULHU in 3 cycles, DIV/DIVU/REM/REMU in 34
 // (counted from `start` to `done`).
 //
-// Multiply: operands are registered at `start` and the selected half of the
-// 33x33 signed product is registered one cycle later, when `done` pulses
-// (DSP blocks between registers, so neither the register file nor the
-// write-back mux sits in the multiplier path).
+// Multiply: operands are registered at `start` as 33-bit signed numbers
+// (sign or zero extended per instruction), each split into a signed high
+// part h (17 bits) and an unsigned low part l (16 bits):
+//   a*b = ah*bh*2^32 + (ah*bl + al*bh)*2^16 + al*bl
+// MUL1: the four 17x17 products (one DSP block each) and the middle sum.
+// MUL2: the low and high result words, the high one carry-selected on the
+//       carry out of the low one, so that no stage holds more than one
+//       ~35-bit carry chain (one 66-bit product in one cycle made the
+//       longest path of the core; see docs/cpu.md).
 //
 // Divide: radix-2 restoring division of the magnitudes, one quotient bit per
 // cycle (a 33-bit subtractor, no DSP), then the signs are applied.  The
@@ -25,15 +30,25 @@ module cpu_muldiv (
     output reg         done,       // one-cycle pulse, result valid
     output reg  [31:0] result
 );
-    localparam [1:0] IDLE = 2'd0, MUL = 2'd1, DIV = 2'd2, FIN = 2'd3;
-    reg [1:0]  state;
+    localparam [2:0] IDLE = 3'd0, MUL1 = 3'd1, MUL2 = 3'd2, DIV = 3'd3, FIN = 3'd4;
+    reg [2:0]  state;
     reg [1:0]  op;             // funct3[1:0]: which half / quotient or remainder
     reg [32:0] ma, mb;             // sign/zero-extended multiply operands
-    // 66-bit signed product of which bits 63:0 are the 32x32 result; 65:64
-    // are only the sign extension.
+    // MUL1: partial products (bits above 31 of p_hh and above 34 of the
+    // middle sum only weigh 2^64 and more)
     /* verilator lint_off UNUSEDSIGNAL */
-    wire [65:0] product = $signed(ma) * $signed(mb);
+    wire [31:0] pp_ll = ma[15:0] * mb[15:0];
+    wire [33:0] pp_lh = $signed({1'b0, ma[15:0]}) * $signed(mb[32:16]);
+    wire [33:0] pp_hl = $signed(ma[32:16]) * $signed({1'b0, mb[15:0]});
+    wire [33:0] pp_hh = $signed(ma[32:16]) * $signed(mb[32:16]);
     /* verilator lint_on UNUSEDSIGNAL */
+    reg  [31:0] p_ll, p_hh;
+    reg  [34:0] p_mid;
+    // MUL2: low word = p_ll + p_mid * 2^16; high word = p_hh + p_mid / 2^16 + carry
+    wire [16:0] lo_hi16 = {1'b0, p_ll[31:16]} + {1'b0, p_mid[15:0]};
+    wire [31:0] mid_hi  = {{13{p_mid[34]}}, p_mid[34:16]};
+    wire [31:0] hi_c0   = p_hh + mid_hi;
+    wire [31:0] hi_c1   = p_hh + mid_hi + 32'd1;
     reg [31:0] quo, rem, divisor;
     reg [5:0]  count;
     reg        neg_q, neg_r;
@@ -60,7 +75,7 @@ module cpu_muldiv (
                     if (!funct3[2]) begin
                         ma <= {a_neg, a};
                         mb <= {b_neg, b};
-                        state <= MUL;
+                        state <= MUL1;
                     end else begin
                         quo     <= a_neg ? 32'd0 - a : a;   // dividend magnitude, shifted out MSB first
                         divisor <= b_neg ? 32'd0 - b : b;
@@ -71,10 +86,19 @@ module cpu_muldiv (
                         state   <= DIV;
                     end
                 end
-                MUL: begin
-                    result <= (op[1:0] == 2'b00) ? product[31:0] : product[63:32];
-                    done   <= 1'b1;
-                    state  <= IDLE;
+                MUL1: begin
+                    p_ll  <= pp_ll;
+                    p_hh  <= pp_hh[31:0];
+                    p_mid <= {pp_lh[33], pp_lh} + {pp_hl[33], pp_hl};
+                    state <= MUL2;
+                end
+                MUL2: begin
+                    if (op == 2'b00)
+                        result <= {lo_hi16[15:0], p_ll[15:0]};
+                    else
+                        result <= lo_hi16[16] ? hi_c1 : hi_c0;
+                    done  <= 1'b1;
+                    state <= IDLE;
                 end
                 DIV: begin
                     if (!trial[32]) begin

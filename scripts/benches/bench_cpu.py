@@ -102,8 +102,8 @@ def main() -> int:
     depth_core = logic_depth(netlist, "u_muldiv")
     print(f"Cyclone V (yosys synth_intel_alm): {row['luts']} LUTs, {row['carry_cells']} carry cells, "
           f"{row['ffs']} FFs, {row['dsp']} DSP blocks, {row['m10k']} M10K, {row['mlab']} MLAB")
-    print(f"logic depth (ltp, cells between registers incl. carry-chain cells): {depth}; "
-          f"without the multiplier: {depth_core}")
+    print(f"logic depth: {row.get('lut_levels', '?')} LUT levels (eda.lut_levels: carry hops free); "
+          f"{depth} cells by ltp counting every carry-chain cell (without the multiplier: {depth_core})")
     return 0
 
 
