@@ -1,0 +1,591 @@
+"""``torqueloop``: tune, move, plot and (later) upload firmware over serial, WiFi
+or the simulated board.  docs/host.md is the user's guide.
+
+    torqueloop sim                                   # simulated board on socket://127.0.0.1:2000
+    torqueloop -u socket://127.0.0.1:2000 info
+    torqueloop set kp 0.82 ; torqueloop step-test 6.28rad --out build/step
+
+The link URL comes from ``--url`` or ``$TORQUELOOP_URL``.  Every command can
+print ``--json`` for scripts.  Exit status: 0 done, 1 refused by the board or
+bad input, 3 no answer.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+from torqueloop import protocol as P
+from torqueloop.host import analysis, units
+from torqueloop.host import config as hconfig
+from torqueloop.host.client import Client, NoAnswer, ProtocolError, decode_faults, describe_faults
+from torqueloop.host.transport import DEFAULT_BAUD, LinkOpenError, open_link
+
+DEFAULT_URL = "socket://127.0.0.1:2000"
+KEEPALIVE_S = 0.15   # a command this often keeps the firmware's link watchdog (>= 10 ms, default 0.5 s) quiet
+
+
+class Ctx:
+    def __init__(self, args: argparse.Namespace) -> None:
+        self.args = args
+        self._client: Client | None = None
+
+    @property
+    def client(self) -> Client:
+        if self._client is None:
+            link, info = open_link(self.args.url, self.args.baud)
+            self._client = Client(link, info, timeout=self.args.timeout, retries=self.args.retries)
+            self._client.connect()
+        return self._client
+
+    def mech(self, axis: int) -> units.Mechanics:
+        c = self.client
+        return units.Mechanics(c.get_param("COUNTS_PER_REV", axis), c.get_param("PITCH_UM", axis))
+
+    def out(self, obj: Any, text: str | Callable[[], str]) -> None:
+        if self.args.json:
+            print(json.dumps(obj, default=_jsonable))
+        else:
+            print(text() if callable(text) else text)
+
+    def close(self) -> None:
+        if self._client is not None:
+            self._client.close()
+
+
+def _jsonable(o: Any) -> Any:
+    if isinstance(o, float) and math.isnan(o):
+        return None
+    if hasattr(o, "tolist"):
+        return o.tolist()
+    return str(o)
+
+
+def _axes(args: argparse.Namespace) -> list[int]:
+    return list(range(P.AXIS_COUNT)) if getattr(args, "all", False) else [args.axis]
+
+
+def _mask(axes: list[int]) -> int:
+    return sum(1 << a for a in axes)
+
+
+def progress(done: float, total: float, label: str, width: int = 30) -> None:
+    """A plain-text progress bar on stderr (stays off stdout so --json stays clean)."""
+    frac = 0.0 if total <= 0 else max(0.0, min(1.0, done / total))
+    n = int(frac * width)
+    sys.stderr.write(f"\r{label} [{'#' * n}{'.' * (width - n)}] {frac * 100:5.1f} %")
+    if frac >= 1.0:
+        sys.stderr.write("\n")
+    sys.stderr.flush()
+
+
+# ---- commands -------------------------------------------------------------------
+
+def cmd_info(ctx: Ctx) -> int:
+    c = ctx.client
+    ident = dict(c.identity or c.identify())
+    cnt = c.counters()
+    obj = {"url": ctx.args.url, "proto_version": ident["proto_version"],
+           "fw_version": f"{ident['fw_version'] >> 8}.{ident['fw_version'] & 0xFF}",
+           "build_id": f"0x{ident['build_id']:08x}", "axis_count": ident["axis_count"],
+           "clk_hz": ident["clk_hz"], "board_counters": {k: v for k, v in cnt.items() if k != "status"},
+           "host_counters": {k: v for k, v in vars(c.stats).items() if k != "text_sample"}}
+    ctx.out(obj, lambda: "\n".join([
+        f"board at {obj['url']}: firmware {obj['fw_version']}, build id {obj['build_id']}, "
+        f"protocol {obj['proto_version']}, {obj['axis_count']} axes, clock {obj['clk_hz'] / 1e6:g} MHz",
+        "board link counters: " + ", ".join(f"{k} {v}" for k, v in obj["board_counters"].items()),
+        f"this session: {c.stats.replies} replies, {c.stats.crc_errors} CRC errors, "
+        f"{c.stats.bad_chunks} damaged chunks, {c.stats.retries} retries"]))
+    return 0
+
+
+def _status_text(a: int, s: dict[str, int], mech: units.Mechanics, unit: str) -> str:
+    pos = mech.from_counts(s["position"], unit)
+    sp = mech.from_counts(s["setpoint"], unit)
+    return (f"axis {a}: {'ENABLED' if s['enabled'] else 'disabled'}{', moving' if s['moving'] else ''}; "
+            f"position {s['position']} counts ({pos:.4f} {unit}), set-point {s['setpoint']} ({sp:.4f} {unit}), "
+            f"velocity {s['velocity_q8'] / 256:.1f} counts/s, PWM {s['pwm_cmd']}; "
+            f"faults: {describe_faults(s['faults'])}; link errors seen by the board: {s['rx_errors']}")
+
+
+def cmd_status(ctx: Ctx) -> int:
+    res = {}
+    lines = []
+    for a in _axes(ctx.args):
+        s = ctx.client.status(a)
+        s = {k: v for k, v in s.items() if k != "status"}
+        s["fault_names"] = decode_faults(s["faults"])
+        res[a] = s
+        lines.append(_status_text(a, s, ctx.mech(a), ctx.args.unit))
+    ctx.out(res, "\n".join(lines))
+    return 0
+
+
+def cmd_get(ctx: Ctx) -> int:
+    a = ctx.args
+    names = a.names or [p.name for p in P.PARAMS.values()]
+    clk = (ctx.client.identity or {}).get("clk_hz", units.CLK_HZ)
+    res: dict[str, Any] = {}
+    lines = []
+    for name in names:
+        param, _ = units.resolve(name)
+        raw = ctx.client.get_param(param, a.axis)
+        val, unit = units.from_raw(name, raw, clk)
+        res[name] = {"value": val, "unit": unit, "param": param, "raw": raw}
+        lines.append(f"{name} = {val} {unit}".rstrip() + (f"   ({param} = {raw})" if param != name else ""))
+    ctx.out(res, "\n".join(lines))
+    return 0
+
+
+def cmd_set(ctx: Ctx) -> int:
+    a = ctx.args
+    clk = (ctx.client.identity or {}).get("clk_hz", units.CLK_HZ)
+    param, raw = units.to_raw(a.name, a.value, clk)
+    if param == "BAUD_DIV":
+        print("warning: the board changes its baud rate after this reply; reconnect with --baud",
+              file=sys.stderr)
+    stored = ctx.client.set_param(param, raw, a.axis)
+    val, unit = units.from_raw(a.name, stored, clk)
+    ctx.out({"name": a.name, "param": param, "raw": stored, "value": val, "unit": unit},
+            f"{a.name} = {val} {unit}   ({param} = {stored})")
+    return 0
+
+
+def cmd_enable(ctx: Ctx, on: bool) -> int:
+    axes = _axes(ctx.args)
+    ctx.client.enable(_mask(axes), on)
+    ctx.out({"axes": axes, "enabled": on}, f"axes {axes} {'enabled' if on else 'disabled'}")
+    if on and not ctx.args.json:
+        timeout = ctx.client.get_param("LINK_TIMEOUT_MS")
+        print(f"note: the board disables an axis after {timeout} ms without a command (LINK_TIMEOUT_MS); "
+              "`move --wait`, `monitor`, `plot` and `step-test` keep the link busy", file=sys.stderr)
+    return 0
+
+
+def _wait_settled(ctx: Ctx, axis: int, limit_s: float, tol: int) -> dict[str, int]:
+    c = ctx.client
+    t0 = time.monotonic()
+    try:
+        return _poll_settled(ctx, axis, limit_s, tol, t0)
+    finally:
+        if not ctx.args.json:
+            sys.stderr.write("\n")
+
+
+def _poll_settled(ctx: Ctx, axis: int, limit_s: float, tol: int, t0: float) -> dict[str, int]:
+    c = ctx.client
+    while True:
+        s = c.status(axis)
+        if s["faults"]:
+            raise ProtocolError(f"axis {axis} faulted during the move: {describe_faults(s['faults'])}")
+        if not s["moving"] and abs(s["setpoint"] - s["position"]) <= tol and abs(s["velocity_q8"]) < 256 * 50:
+            return s
+        if time.monotonic() - t0 > limit_s:
+            return s
+        if not ctx.args.json:
+            progress(min(time.monotonic() - t0, limit_s), limit_s, f"axis {axis} moving")
+        time.sleep(KEEPALIVE_S)
+
+
+def cmd_move(ctx: Ctx) -> int:
+    a = ctx.args
+    mech = ctx.mech(a.axis)
+    target = units.parse_position(a.target, mech, a.unit if a.unit != "counts" else "counts")
+    if a.relative:
+        target += ctx.client.status(a.axis)["position"]
+    if a.enable:
+        ctx.client.enable(1 << a.axis, True)
+    ctx.client.move(a.axis, target, a.trapezoid)
+    res: dict[str, Any] = {"axis": a.axis, "target_counts": target, "mode": "trapezoid" if a.trapezoid else "step"}
+    text = f"axis {a.axis} -> {target} counts ({mech.from_counts(target, a.unit):.4f} {a.unit})"
+    if a.wait:
+        s = _wait_settled(ctx, a.axis, a.wait, a.tolerance)
+        res["position_counts"] = s["position"]
+        res["error_counts"] = target - s["position"]
+        text += f"; at {s['position']} counts (error {target - s['position']})"
+    ctx.out(res, text)
+    return 0
+
+
+def cmd_stop(ctx: Ctx) -> int:
+    axes = _axes(ctx.args)
+    ctx.client.stop(_mask(axes))
+    ctx.out({"axes": axes, "stopped": True}, f"axes {axes} hold their position")
+    return 0
+
+
+def cmd_clear_fault(ctx: Ctx) -> int:
+    axes = _axes(ctx.args)
+    before = {a: ctx.client.status(a)["faults"] for a in axes}
+    f0, f1 = ctx.client.clear_fault(_mask(axes))
+    after = {0: f0, 1: f1}
+    ctx.out({"before": {a: decode_faults(v) for a, v in before.items()},
+             "after": {a: decode_faults(after[a]) for a in axes}},
+            "\n".join(f"axis {a}: cleared {', '.join(decode_faults(before[a])) or 'nothing'}; "
+                      f"latched now: {describe_faults(after[a])}" for a in axes))
+    return 0
+
+
+def capture(ctx: Ctx, duration: float, every: int = 1, on_record: Callable[[dict], None] | None = None,
+            label: str = "capture", start: Callable[[], None] | None = None) -> list[dict]:
+    """Stream telemetry for ``duration`` s (keeping the link watchdog fed); returns the records."""
+    c = ctx.client
+    c.take_telemetry()
+    c.set_telemetry(every)
+    records: list[dict] = []
+    try:
+        if start:
+            start()
+        t0 = last_keep = time.monotonic()
+        while (now := time.monotonic()) - t0 < duration:
+            c.pump(0.02)
+            new = c.take_telemetry()
+            records += new
+            if on_record:
+                for r in new:
+                    on_record(r)
+            if now - last_keep > KEEPALIVE_S:
+                c.status(ctx.args.axis)
+                last_keep = now
+            if not ctx.args.json and on_record is None:
+                progress(now - t0, duration, label)
+        if not ctx.args.json and on_record is None:
+            progress(duration, duration, label)
+    finally:
+        c.set_telemetry(0)
+        c.pump(0.05)
+        records += c.take_telemetry()
+    return records
+
+
+def cmd_monitor(ctx: Ctx) -> int:
+    a = ctx.args
+    mech = ctx.mech(a.axis)
+    tty = sys.stdout.isatty() and not a.json
+
+    def show(r: dict) -> None:
+        if a.json:
+            print(json.dumps(r), flush=True)
+            return
+        parts = [f"t {r['time_us'] / 1e6:9.3f} s"]
+        for i, ax in enumerate(r["axes"]):
+            parts.append(f"| ax{i} {'EN' if ax['enabled'] else '--'} pos {mech.from_counts(ax['position'], a.unit):9.4f} "
+                         f"sp {mech.from_counts(ax['setpoint'], a.unit):9.4f} err {ax['error']:6d} cts "
+                         f"v {ax['velocity_q8'] / 256:8.1f} cts/s pwm {ax['pwm_cmd']:5d}"
+                         + (f" FAULT {','.join(decode_faults(ax['faults']))}" if ax["faults"] else ""))
+        line = " ".join(parts)
+        print(("\r" + line) if tty else line, end="" if tty else "\n", flush=True)
+
+    try:
+        capture(ctx, a.duration if a.duration > 0 else float("inf"), a.every, on_record=show)
+    except KeyboardInterrupt:
+        pass
+    if tty:
+        print()
+    return 0
+
+
+def cmd_plot(ctx: Ctx) -> int:
+    a = ctx.args
+    mech = ctx.mech(a.axis)
+    if a.save:
+        records = capture(ctx, a.duration, a.every)
+        cap = analysis.to_capture(records)
+        png, csvp = Path(a.save).with_suffix(".png"), Path(a.save).with_suffix(".csv")
+        png.parent.mkdir(parents=True, exist_ok=True)
+        analysis.write_csv(csvp, cap, mech, a.unit)
+        analysis.plot(png, cap, mech, a.unit, axes=_axes(a), title=f"{a.url}, {a.duration:g} s")
+        ctx.out({"png": str(png), "csv": str(csvp), "records": cap.n}, f"wrote {png} and {csvp} ({cap.n} records)")
+        return 0
+    import matplotlib.pyplot as plt  # live window
+
+    records: list[dict] = []
+    fig = None
+
+    def live(r: dict) -> None:
+        nonlocal fig
+        records.append(r)
+        if len(records) % 4 == 0:
+            cap = analysis.to_capture(records[-2000:])
+            plt.close(fig) if fig is not None else None
+            fig = analysis.plot(None, cap, mech, a.unit, axes=_axes(a))
+            plt.pause(0.001)
+
+    plt.ion()
+    try:
+        capture(ctx, a.duration if a.duration > 0 else float("inf"), a.every, on_record=live)
+    except KeyboardInterrupt:
+        pass
+    return 0
+
+
+def cmd_step_test(ctx: Ctx) -> int:
+    a = ctx.args
+    c = ctx.client
+    mech = ctx.mech(a.axis)
+    s0 = c.status(a.axis)
+    start = s0["position"]
+    target = units.parse_position(a.target, mech, a.unit)
+    if a.relative:
+        target += start
+    if s0["faults"]:
+        raise ProtocolError(f"axis {a.axis} has latched faults: {describe_faults(s0['faults'])}; "
+                            "`torqueloop clear-fault` first")
+    was_enabled = bool(s0["enabled"])
+    if not was_enabled:
+        c.enable(1 << a.axis, True)
+    t_move: list[float] = []
+
+    def go() -> None:
+        # a few samples before the step show where it started from
+        c.pump(a.pre)
+        t_move.append(time.monotonic())
+        c.move(a.axis, target, a.trapezoid)
+
+    try:
+        records = capture(ctx, a.duration + a.pre, 1, label=f"step-test axis {a.axis}", start=go)
+    finally:
+        if not was_enabled and not a.keep_enabled:
+            c.enable(1 << a.axis, False)
+    cap = analysis.to_capture(records)
+    sp = cap.data["setpoint"][:, a.axis]
+    moved = [k for k in range(cap.n) if sp[k] != sp[0]] if a.trapezoid else \
+        [k for k in range(cap.n) if sp[k] == target]
+    if not moved:
+        raise ProtocolError("the capture holds no sample after the move command (telemetry lost?)")
+    k0 = max(0, moved[0] - 1) if not a.trapezoid else max(0, moved[0] - 1)
+    t = cap.t[k0:] - cap.t[k0]
+    x = cap.data["position"][k0:, a.axis]
+    fig = analysis.step_figures(t, x, sp[k0:], start, target, a.axis, a.band / 100)
+    faults = int(max(cap.data["faults"][:, a.axis]))
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = out / f"step_axis{a.axis}"
+    analysis.write_csv(stem.with_suffix(".csv"), cap, mech, a.unit)
+    analysis.plot(stem.with_suffix(".png"), cap, mech, a.unit, axes=[a.axis],
+                  title=f"step {mech.from_counts(start, a.unit):.4g} -> {mech.from_counts(target, a.unit):.4g} "
+                        f"{a.unit}, axis {a.axis}", figures=[fig])
+    figs = fig.in_unit(mech, a.unit)
+    figs["faults"] = decode_faults(faults)
+    figs["records"] = cap.n
+    (stem.with_suffix(".json")).write_text(json.dumps(figs, indent=2, default=_jsonable) + "\n")
+    ctx.out({"figures": figs, "png": str(stem.with_suffix(".png")), "csv": str(stem.with_suffix(".csv"))},
+            lambda: "\n".join([
+                f"step {start} -> {target} counts on axis {a.axis} ({cap.n} samples)",
+                f"  overshoot      {fig.overshoot_pct:.2f} %",
+                f"  rise (10-90 %) {fig.rise_time_s:.3f} s",
+                f"  settling       {fig.settling_time_s:.3f} s  (band +-{fig.band_counts:.0f} counts)",
+                f"  final error    {fig.steady_state_error_counts:.1f} counts "
+                f"({mech.from_counts(fig.steady_state_error_counts, a.unit):.4g} {a.unit})",
+                f"  RMSE eq. (26)  {fig.rmse_counts:.1f} counts ({mech.from_counts(fig.rmse_counts, a.unit):.4g} {a.unit})",
+                f"  faults         {describe_faults(faults)}",
+                f"wrote {stem}.png, .csv, .json"]))
+    return 0 if not faults else 1
+
+
+def cmd_config(ctx: Ctx) -> int:
+    a = ctx.args
+    c = ctx.client
+    if a.action == "save":
+        ident = c.identity or c.identify()
+        glob = {k: c.get_param(k) for k in hconfig.GLOBAL_PARAMS}
+        axes = tuple({k: c.get_param(k, i) for k in hconfig.AXIS_PARAMS} for i in range(P.AXIS_COUNT))
+        readable = {"axes": [{"kp_N_m_per_rad": c.get_param("KP_UNM_RAD", i) / 1e6,
+                              "kd_N_m_s_per_rad": c.get_param("KD_UNMS_RAD", i) / 1e6,
+                              "ki_N_m_per_rad_s": c.get_param("KI_UNM_RADS", i) / 1e6,
+                              "pwm_freq_hz": round(units.hz_from_fdiv(axes[i]["FDIV"], ident["clk_hz"]), 3)}
+                             for i in range(P.AXIS_COUNT)]}
+        cfg = hconfig.HostConfig(axes, glob, ident["build_id"], ident["proto_version"], "host")
+        Path(a.file).write_text(hconfig.to_json(cfg, readable))
+        ctx.out({"file": a.file, "build_id": f"0x{ident['build_id']:08x}"},
+                f"saved {len(glob) + sum(map(len, axes))} parameters to {a.file} (build id 0x{ident['build_id']:08x})")
+        return 0
+    cfg = hconfig.load_file(a.file)
+    ident = c.identity or c.identify()
+    warn = []
+    if cfg.proto_version is not None and cfg.proto_version != ident["proto_version"]:
+        raise hconfig.HostConfigError(f"{a.file} was saved with protocol {cfg.proto_version}, the board speaks "
+                                      f"{ident['proto_version']}")
+    if cfg.build_id is not None and cfg.build_id != ident["build_id"]:
+        warn.append(f"saved from firmware build 0x{cfg.build_id:08x}, the board runs 0x{ident['build_id']:08x}")
+        if not a.force:
+            raise hconfig.HostConfigError(f"{a.file}: {warn[-1]}; parameters may differ in meaning - "
+                                          "check and use --force")
+    enabled = [i for i in range(P.AXIS_COUNT) if c.status(i)["enabled"]]
+    if enabled:
+        raise hconfig.HostConfigError(f"axes {enabled} are enabled: `torqueloop disable --all` before loading")
+    writes = hconfig.apply_order(cfg)
+    for n, (axis, name, value) in enumerate(writes):
+        c.set_param(name, value, 0 if axis == P.GLOBAL_AXIS else axis)
+        if not a.json:
+            progress(n + 1, len(writes), "config load")
+    mismatch = [(ax, k, v) for ax, k, v in writes
+                if c.get_param(k, 0 if ax == P.GLOBAL_AXIS else ax) != v and k not in ("SOFT_MIN",)]
+    mismatch += [(i, "SOFT_MIN", ax["SOFT_MIN"]) for i, ax in enumerate(cfg.axes)
+                 if "SOFT_MIN" in ax and c.get_param("SOFT_MIN", i) != ax["SOFT_MIN"]]
+    if mismatch:
+        raise ProtocolError(f"read back differs after loading: {mismatch}")
+    ctx.out({"file": a.file, "source": cfg.source, "writes": len(writes), "warnings": warn},
+            f"loaded {a.file} ({cfg.source}): {len(writes)} writes, read back and checked"
+            + "".join(f"\nwarning: {w}" for w in warn))
+    return 0
+
+
+def cmd_upload(ctx: Ctx) -> int:
+    from torqueloop.host import upload
+
+    img = upload.read_image(ctx.args.file)
+    info = {"file": ctx.args.file, "load_addr": f"0x{img.load_addr:08x}", "bytes": len(img.data),
+            "crc32": f"0x{img.crc32:08x}", "entry": f"0x{img.entry:08x}"}
+    if not upload.BOOTLOADER_AVAILABLE:
+        info["error"] = upload.NOT_AVAILABLE
+        ctx.out(info, f"image {ctx.args.file}: {len(img.data)} bytes at 0x{img.load_addr:08x}, "
+                      f"CRC-32 0x{img.crc32:08x}\n{upload.NOT_AVAILABLE}")
+        return 1
+    raise AssertionError("unreachable until the bootloader exists")
+
+
+def cmd_sim(ctx: Ctx) -> int:
+    from torqueloop.host.server import BoardServer
+    from torqueloop.host.simboard import SimBoard
+
+    a = ctx.args
+    board = SimBoard(build_id=int(a.build_id, 0), seed=a.seed)
+    srv = BoardServer(board, a.host, a.port, speed=a.speed, hello=a.hello)
+    print(f"simulated board (servo firmware + plant model) on socket://{a.host}:{srv.port} "
+          f"- build id 0x{board.build_id:08x}; Ctrl-C stops it", flush=True)
+    try:
+        srv.serve_forever()
+    except KeyboardInterrupt:
+        pass
+    return 0
+
+
+# ---- argument parsing --------------------------------------------------------------
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="torqueloop", description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter,
+                                epilog="docs/host.md has the walk-through; docs/protocol.md the parameters.")
+    p.add_argument("-u", "--url", default=os.environ.get("TORQUELOOP_URL", DEFAULT_URL),
+                   help="/dev/ttyUSB0, socket://HOST:2000 (RN-XV or `torqueloop sim`) "
+                        f"[$TORQUELOOP_URL or {DEFAULT_URL}]")
+    p.add_argument("-b", "--baud", type=int, default=DEFAULT_BAUD, help="serial baud rate [115200]")
+    p.add_argument("--timeout", type=float, default=0.5, help="seconds to wait for each reply [0.5]")
+    p.add_argument("--retries", type=int, default=3, help="resends before giving up [3]")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    def axis_opts(sp: argparse.ArgumentParser, all_ok: bool = True) -> None:
+        sp.add_argument("-a", "--axis", type=int, default=0, choices=range(P.AXIS_COUNT), help="axis [0]")
+        if all_ok:
+            sp.add_argument("--all", action="store_true", help="both axes")
+
+    def unit_opt(sp: argparse.ArgumentParser, default: str = "rad") -> None:
+        sp.add_argument("--unit", default=default, choices=["rad", "mm", "rev", "deg", "counts"],
+                        help=f"position unit for output and bare numbers [{default}]")
+
+    sp = sub.add_parser("info", help="firmware identity, build id and link counters")
+    sp.set_defaults(fn=cmd_info)
+    sp = sub.add_parser("status", help="state, position and decoded faults of an axis")
+    axis_opts(sp)
+    unit_opt(sp)
+    sp.set_defaults(fn=cmd_status)
+    sp = sub.add_parser("get", help="read parameters (no name: all of them)")
+    sp.add_argument("names", nargs="*", help="kp, kd, ki, law, pwm_freq, pw0, period ... or protocol names")
+    axis_opts(sp, False)
+    sp.set_defaults(fn=cmd_get)
+    sp = sub.add_parser("set", help="write one parameter in physical units (kp 0.82, pwm_freq 450, law pid)")
+    sp.add_argument("name")
+    sp.add_argument("value")
+    axis_opts(sp, False)
+    sp.set_defaults(fn=cmd_set)
+    for name, on in (("enable", True), ("disable", False)):
+        sp = sub.add_parser(name, help=f"{name} the drive of an axis")
+        axis_opts(sp)
+        sp.set_defaults(fn=lambda ctx, on=on: cmd_enable(ctx, on))
+    sp = sub.add_parser("move", help="new target: 6.28rad, 4mm, 1rev or counts")
+    sp.add_argument("target")
+    axis_opts(sp, False)
+    unit_opt(sp, "counts")
+    sp.add_argument("--trapezoid", action="store_true", help="trapezoidal profile (VMAX, AMAX) instead of a step")
+    sp.add_argument("--relative", action="store_true", help="target is relative to the present position")
+    sp.add_argument("--enable", action="store_true", help="enable the axis first")
+    sp.add_argument("--wait", type=float, default=0.0, metavar="S",
+                    help="wait up to S seconds for the axis to settle, keeping the link alive")
+    sp.add_argument("--tolerance", type=int, default=20, help="settled within this many counts [20]")
+    sp.set_defaults(fn=cmd_move)
+    sp = sub.add_parser("stop", help="hold the present position")
+    axis_opts(sp)
+    sp.set_defaults(fn=cmd_stop)
+    sp = sub.add_parser("clear-fault", help="clear latched faults whose cause is gone")
+    axis_opts(sp)
+    sp.set_defaults(fn=cmd_clear_fault)
+    sp = sub.add_parser("monitor", help="live terminal view of the telemetry")
+    axis_opts(sp, False)
+    unit_opt(sp)
+    sp.add_argument("--duration", type=float, default=0.0, help="seconds (0 = until Ctrl-C)")
+    sp.add_argument("--every", type=int, default=4, help="one record every N control periods [4]")
+    sp.set_defaults(fn=cmd_monitor)
+    sp = sub.add_parser("plot", help="live plot; --save PREFIX writes PREFIX.png and PREFIX.csv")
+    axis_opts(sp)
+    unit_opt(sp)
+    sp.add_argument("--duration", type=float, default=0.0, help="seconds (0 = until Ctrl-C; needed with --save)")
+    sp.add_argument("--every", type=int, default=1, help="one record every N control periods [1]")
+    sp.add_argument("--save", metavar="PREFIX")
+    sp.set_defaults(fn=cmd_plot)
+    sp = sub.add_parser("step-test", help="step, capture, plot + CSV + overshoot/settling/RMSE")
+    sp.add_argument("target", help="6.28rad, 4mm, 1rev, counts")
+    axis_opts(sp, False)
+    unit_opt(sp)
+    sp.add_argument("--relative", action="store_true", help="step relative to the present position")
+    sp.add_argument("--trapezoid", action="store_true")
+    sp.add_argument("--duration", type=float, default=2.0, help="seconds captured after the step [2]")
+    sp.add_argument("--pre", type=float, default=0.1, help="seconds captured before the step [0.1]")
+    sp.add_argument("--band", type=float, default=2.0, help="settling band, %% of the step [2]")
+    sp.add_argument("--out", default="build/step", help="output folder [build/step]")
+    sp.add_argument("--keep-enabled", action="store_true", help="leave the axis enabled afterwards")
+    sp.set_defaults(fn=cmd_step_test)
+    sp = sub.add_parser("config", help="save or load all parameters (JSON); load also takes "
+                                       "the characterisation file")
+    sp.add_argument("action", choices=["save", "load"])
+    sp.add_argument("file")
+    sp.add_argument("--force", action="store_true", help="load even if saved from another build id")
+    sp.set_defaults(fn=cmd_config)
+    sp = sub.add_parser("upload", help="load firmware through the bootloader (not available yet)")
+    sp.add_argument("file", help="FIRMWARE.elf or .bin")
+    sp.set_defaults(fn=cmd_upload)
+    sp = sub.add_parser("sim", help="run the simulated board on a local TCP port")
+    sp.add_argument("--host", default="127.0.0.1")
+    sp.add_argument("--port", type=int, default=2000, help="TCP port (0 = any free one) [2000]")
+    sp.add_argument("--speed", type=float, default=1.0, help="simulated seconds per wall second [1]")
+    sp.add_argument("--hello", action="store_true", help="send *HELLO* on connect, like an RN-XV")
+    sp.add_argument("--build-id", default="0x51b00001", help="build id the board reports")
+    sp.add_argument("--seed", type=int, default=0, help="plant random seed")
+    sp.set_defaults(fn=cmd_sim)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    ctx = Ctx(args)
+    try:
+        return args.fn(ctx)
+    except NoAnswer as e:
+        print(f"torqueloop: {e}", file=sys.stderr)
+        return 3
+    except (ProtocolError, LinkOpenError, hconfig.HostConfigError, ValueError, OSError) as e:
+        print(f"torqueloop: {e}", file=sys.stderr)
+        return 1
+    finally:
+        ctx.close()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,301 @@
+"""The protocol client: one command, one reply, over any :class:`Link`.
+
+All framing, CRC, payload layouts and codes come from the generated
+:mod:`torqueloop.protocol` (single definition firmware/protocol/protocol.toml);
+this module adds what a host needs on a real link:
+
+- **seq**: on connect, IDENTIFY (accepted at any seq) tells the last seq the
+  board accepted; the client continues after it.  A REPLAY answer to a first
+  attempt means another host moved the seq on: resynchronise and send again.
+- **retries**: no reply within ``timeout`` -> the same frame again, same seq,
+  so a command whose reply was lost is not executed twice (the board answers
+  REPLAY).  Then read-only commands are asked again with a fresh seq,
+  SET_PARAM reads the stored value back with GET_PARAM, and other commands raise
+  :class:`ReplyLost` (executed once, result unknown: look at ``status``).
+- **errors a person can act on**: :class:`NoAnswer` says whether nothing at
+  all came back (port, cable, RN-XV not in data mode) or bytes that were
+  never a frame (baud rate, RN-XV text such as ``CMD`` or ``*HELLO*``);
+  damaged chunks, CRC errors and bridge text are counted in :class:`LinkStats`.
+- telemetry frames arriving between replies are queued, not lost.
+"""
+
+from __future__ import annotations
+
+import collections
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Iterator
+
+from torqueloop import protocol as P
+
+from .transport import Link, LinkInfo
+
+READ_ONLY = frozenset({"IDENTIFY", "GET_PARAM", "STATUS", "COUNTERS"})
+FAULT_DESC: dict[str, str] = {f["name"]: f["desc"] for f in P.SPEC["fault"]}
+STATUS_DESC: dict[int, str] = {s["code"]: s["desc"] for s in P.SPEC["status"]}
+
+
+class ProtocolError(Exception):
+    """Base of the errors the client raises; ``str()`` is meant for a person."""
+
+
+class NoAnswer(ProtocolError):
+    pass
+
+
+class ReplyLost(ProtocolError):
+    pass
+
+
+class CommandRejected(ProtocolError):
+    def __init__(self, command: str, status: int, detail: str = "") -> None:
+        self.command, self.status = command, status
+        name = P.STATUS_NAME.get(status, f"status {status}")
+        msg = f"{command} refused: {name} ({STATUS_DESC.get(status, 'unknown status')})"
+        super().__init__(msg + (f" {detail}" if detail else ""))
+
+
+@dataclass
+class LinkStats:
+    """What the host saw on the link (the board keeps its own: COUNTERS)."""
+
+    frames_tx: int = 0
+    replies: int = 0
+    telemetry: int = 0
+    crc_errors: int = 0          # chunks with a bad CRC (noise)
+    bad_chunks: int = 0          # chunks that were no frame at all (COBS, length, oversize)
+    text_bytes: int = 0          # printable bytes in bad chunks (*HELLO*, CMD ...)
+    board_naks: int = 0          # error replies: the board got a damaged chunk from us
+    stale_replies: int = 0       # replies to an earlier seq (after a retry)
+    timeouts: int = 0
+    retries: int = 0
+    resyncs: int = 0
+    rx_bytes: int = 0
+    text_sample: bytes = field(default=b"", repr=False)
+
+
+def decode_faults(mask: int) -> list[str]:
+    """Fault bits to names (``FOLLOWING``) in bit order."""
+    return [name for name, bit in P.FAULT.items() if mask & bit]
+
+
+def describe_faults(mask: int) -> str:
+    if not mask:
+        return "none"
+    return "; ".join(f"{n}: {FAULT_DESC[n]}" for n in decode_faults(mask))
+
+
+def _printable(raw: bytes) -> int:
+    return sum(32 <= b < 127 for b in raw)
+
+
+class Client:
+    """Protocol client.  ``clock`` and the link are injectable for tests."""
+
+    def __init__(self, link: Link, info: LinkInfo | None = None, *, timeout: float = 0.5,
+                 retries: int = 3, clock: Callable[[], float] = time.monotonic) -> None:
+        self.link, self.info = link, info
+        self.timeout, self.retries = timeout, retries
+        self.clock = clock
+        self.stats = LinkStats()
+        self._dec = P.FrameDecoder()
+        self._seq = 0
+        self._synced = False
+        self.telemetry_queue: collections.deque[dict] = collections.deque(maxlen=100_000)
+        self.identity: dict[str, int] | None = None
+
+    # ---- bytes in ----------------------------------------------------------
+    def _read_some(self) -> bytes:
+        n = getattr(self.link, "in_waiting", 0) or 0
+        data = self.link.read(max(1, min(n, 4096)))
+        if data:
+            more = getattr(self.link, "in_waiting", 0) or 0
+            if more:
+                data += self.link.read(min(more, 4096))
+        self.stats.rx_bytes += len(data)
+        return data
+
+    def _frames(self, data: bytes) -> Iterator[P.Frame]:
+        for item in self._dec.feed(data):
+            if isinstance(item, P.FrameError):
+                if item.status == P.STATUS["CRC"]:
+                    self.stats.crc_errors += 1
+                else:
+                    self.stats.bad_chunks += 1
+                t = _printable(item.raw)
+                self.stats.text_bytes += t
+                if t and len(self.stats.text_sample) < 64:
+                    self.stats.text_sample += item.raw[:64]
+                continue
+            if item.cmd == P.TELEMETRY_CMD:
+                self.stats.telemetry += 1
+                try:
+                    self.telemetry_queue.append(P.decode_telemetry(item))
+                except Exception:   # a CRC-valid frame of the wrong length: count, do not die
+                    self.stats.bad_chunks += 1
+                continue
+            yield item
+
+    def pump(self, duration: float) -> None:
+        """Read for ``duration`` seconds, queueing telemetry."""
+        end = self.clock() + duration
+        while self.clock() < end:
+            for f in self._frames(self._read_some()):
+                self.stats.stale_replies += 1
+
+    # ---- one transaction -----------------------------------------------------
+    def _next_seq(self) -> int:
+        self._seq = (self._seq + 1) & 0xFFFF
+        return self._seq
+
+    def _exchange(self, name: str, seq: int, fields: dict[str, int]) -> tuple[dict[str, int], int]:
+        """Send with retries; returns (decoded reply, attempt that got it)."""
+        c = P.COMMANDS[name]
+        wire = P.request(name, seq, **fields)
+        want = c.cmd | P.REPLY_FLAG
+        for attempt in range(self.retries + 1):
+            if attempt:
+                self.stats.retries += 1
+            self.link.write(wire)
+            self.stats.frames_tx += 1
+            deadline = self.clock() + self.timeout
+            resend = False
+            while not resend and self.clock() < deadline:
+                for f in self._frames(self._read_some()):
+                    if f.cmd == P.ERROR_CMD:
+                        # Something we sent (or text the bridge inserted) arrived
+                        # damaged; our frame may be the one: send it again now.
+                        self.stats.board_naks += 1
+                        resend = attempt < self.retries
+                    elif f.cmd == want and f.seq == seq:
+                        self.stats.replies += 1
+                        return P.decode_reply(f), attempt
+                    else:
+                        self.stats.stale_replies += 1
+            if not resend:
+                self.stats.timeouts += 1
+        raise NoAnswer(self._no_answer_hint(name))
+
+    def _no_answer_hint(self, name: str) -> str:
+        s = self.stats
+        where = f" from {self.info.url}" if self.info else ""
+        msg = f"no answer to {name}{where} after {self.retries + 1} tries of {self.timeout:g} s."
+        kind = self.info.kind if self.info else "other"
+        if s.rx_bytes == 0:
+            if kind == "tcp":
+                return (msg + " Nothing came back at all: the TCP connection is open but the board is silent. "
+                        "Check that the RN-XV is in data mode (after `$$$` configuration it needs `exit`), "
+                        "that its UART baud rate equals the firmware's (115200 by default: `set uart baud "
+                        "115200`, `save`, `reboot`), that its TX/RX go to the FPGA header pins of docs/hardware.md, "
+                        "and that the FPGA is configured and running the servo firmware.")
+            return (msg + " Nothing came back at all: check the port name, that TX and RX are crossed "
+                    "(adapter TX -> FPGA RX), the common ground, 3.3 V levels, and that the FPGA is "
+                    "configured and running the servo firmware.")
+        text = s.text_sample.decode("ascii", "replace")
+        if b"CMD" in s.text_sample:
+            return msg + f" The RN-XV is in command mode (it said {text!r}): send `exit` then reconnect."
+        return (msg + f" {s.rx_bytes} bytes arrived but {s.replies} valid replies ({s.crc_errors} CRC errors, "
+                f"{s.bad_chunks} chunks that were no frame, text seen: {text!r}). Most likely a baud-rate "
+                f"mismatch (this end: {self.info.baud if self.info else '?'} baud; firmware default 115200) "
+                "or an RN-XV that inserts text (`set comm remote 0`, `set comm open 0`, `set comm close 0`).")
+
+    def transact(self, name: str, **fields: int) -> dict[str, int]:
+        """Run one command; returns the reply fields (status OK) or raises."""
+        if not self._synced and name != "IDENTIFY":
+            self.connect()
+        seq = self._next_seq()
+        rep, attempt = self._exchange(name, seq, fields)
+        st = rep["status"]
+        if st == P.STATUS["REPLAY"]:
+            if attempt == 0:
+                # Another host (or an earlier session) moved the board's seq on.
+                self.stats.resyncs += 1
+                self.connect()
+                seq = self._next_seq()
+                rep, attempt = self._exchange(name, seq, fields)
+                st = rep["status"]
+            if st == P.STATUS["REPLAY"]:
+                # The first copy was accepted and executed; its reply was lost.
+                if name in READ_ONLY:
+                    return self.transact(name, **fields)
+                if name == "SET_PARAM":
+                    got = self.transact("GET_PARAM", axis=fields["axis"], param=fields["param"])
+                    return {"status": 0, "value": got["value"]}
+                raise ReplyLost(f"{name} (seq {seq}) reached the board but its reply was lost twice; "
+                                "it ran at most once - check `torqueloop status` before repeating it")
+        if st != P.STATUS["OK"]:
+            raise CommandRejected(name, st)
+        return rep
+
+    # ---- commands ---------------------------------------------------------------
+    def connect(self) -> dict[str, int]:
+        """IDENTIFY and continue after the board's last accepted seq."""
+        self._seq = (self._seq + 1) & 0xFFFF
+        rep, _ = self._exchange("IDENTIFY", self._seq, {})
+        if rep["status"] != P.STATUS["OK"]:
+            raise CommandRejected("IDENTIFY", rep["status"])
+        if rep["proto_version"] != P.PROTO_VERSION:
+            raise ProtocolError(f"board speaks protocol version {rep['proto_version']}, this tool "
+                                f"{P.PROTO_VERSION}: update the tool or the firmware")
+        self._seq = rep["last_seq"]
+        self._synced = True
+        self.identity = rep
+        return rep
+
+    def identify(self) -> dict[str, int]:
+        return self.connect()
+
+    def get_param(self, name: str, axis: int = 0) -> int:
+        p = P.PARAMS[name]
+        ax = P.GLOBAL_AXIS if p.scope == "global" else axis
+        return self.transact("GET_PARAM", axis=ax, param=p.id)["value"]
+
+    def set_param(self, name: str, value: int, axis: int = 0) -> int:
+        p = P.PARAMS[name]
+        if not p.min <= value <= p.max:
+            raise CommandRejected("SET_PARAM", P.STATUS["RANGE"],
+                                  f"{name} = {value} is outside [{p.min}, {p.max}]")
+        ax = P.GLOBAL_AXIS if p.scope == "global" else axis
+        return self.transact("SET_PARAM", axis=ax, param=p.id, value=value)["value"]
+
+    def enable(self, mask: int, on: bool = True) -> None:
+        try:
+            self.transact("ENABLE", mask=mask, enable=int(on))
+        except CommandRejected as e:
+            if e.status == P.STATUS["STATE"]:
+                faults = [self.status(a)["faults"] for a in range(P.AXIS_COUNT) if mask & (1 << a)]
+                detail = "; ".join(f"axis {a}: {describe_faults(f)}"
+                                   for a, f in zip([a for a in range(P.AXIS_COUNT) if mask & (1 << a)], faults))
+                raise CommandRejected("ENABLE", e.status, f"- latched faults: {detail} "
+                                      "(remove the cause, then `torqueloop clear-fault`)") from None
+            raise
+
+    def move(self, axis: int, target_counts: int, trapezoid: bool = False) -> None:
+        self.transact("MOVE", axis=axis, mode=int(trapezoid), target=target_counts)
+
+    def stop(self, mask: int) -> None:
+        self.transact("STOP", mask=mask)
+
+    def status(self, axis: int = 0) -> dict[str, int]:
+        return self.transact("STATUS", axis=axis)
+
+    def clear_fault(self, mask: int) -> tuple[int, int]:
+        r = self.transact("CLEAR_FAULT", mask=mask)
+        return r["faults0"], r["faults1"]
+
+    def counters(self) -> dict[str, int]:
+        return self.transact("COUNTERS")
+
+    def set_telemetry(self, every: int) -> None:
+        self.transact("TELEMETRY", every=every)
+
+    def bootloader(self) -> None:
+        self.transact("BOOTLOADER", magic=P.BOOTLOADER_MAGIC)
+
+    def take_telemetry(self) -> list[dict]:
+        out = list(self.telemetry_queue)
+        self.telemetry_queue.clear()
+        return out
+
+    def close(self) -> None:
+        self.link.close()
