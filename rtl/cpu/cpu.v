@@ -21,7 +21,7 @@
 //   MEM    : wait for dbus_ack and the prefetch (load write-back, or access fault).
 //   MULDIV : wait for the multiply/divide unit and the prefetch.
 // With a zero-wait-state bus (ack in the cycle after the request) that is
-// 2 cycles per ALU/branch/jump/CSR instruction and per load/store, 3 per
+// 2 cycles per ALU/branch/jump/CSR instruction and per load/store, 4 per
 // multiply and 35 per divide.  The handshake itself sets the floor of 2:
 // a slave cannot accept a new request in its ack cycle.
 // Interrupts are taken in EXEC before the instruction executes (mepc = its
