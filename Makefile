@@ -21,7 +21,7 @@ export TORQUELOOP_SIM := $(SIM)
 PYTEST_K := $(if $(TB),-k "$(TB)",)
 XDIST    := $(if $(filter 1,$(JOBS)),,-n $(JOBS))
 
-.PHONY: help setup sim lint test unit synth run bench characterize clean
+.PHONY: help setup sim lint test unit synth run bench characterize quartus clean
 
 help: ## this list
 	@grep -hE '^[a-z][a-zA-Z_-]*:.*## ' $(MAKEFILE_LIST) | \
@@ -38,14 +38,16 @@ $(STAMP): pyproject.toml scripts/setup.sh $(wildcard */__init__.py)
 sim: $(STAMP) ## all cocotb test benches on every applicable simulator
 	$(PY) -m pytest tb $(PYTEST_K) $(XDIST)
 
-lint: $(STAMP) ## Verilator -Wall, GHDL --std=08 analysis, Yosys synth check, VHDL/Verilog equivalence
+lint: $(STAMP) ## Verilator -Wall, GHDL --std=08, Yosys synth check, VHDL/Verilog equivalence, SAT properties, board constraints
 	$(PY) scripts/lint.py
+	$(PY) scripts/check_constraints.py
 
 unit: $(STAMP) ## Python unit tests (plant, reference models, tools)
 	$(PY) -m pytest tests $(PYTEST_K) $(XDIST)
 
 test: $(STAMP) ## lint + sim + unit: what CI runs
 	$(PY) scripts/lint.py
+	$(PY) scripts/check_constraints.py
 	$(PY) -m pytest tb tests $(PYTEST_K) $(XDIST)
 
 synth: $(STAMP) ## Yosys synth_intel_alm (Cyclone V) resource table in build/synth/
@@ -59,6 +61,9 @@ bench: $(STAMP) ## benchmarks that print numbers
 
 characterize: $(STAMP) ## the characterisation method (steps 1-8) on the simulated bench: build/characterize/
 	$(PY) scripts/characterize.py sim --out-dir build/characterize
+
+quartus: $(STAMP) ## Quartus project for the DE0-CV in build/quartus (compiled when quartus_sh is on PATH)
+	$(PY) scripts/gen_quartus.py --project --compile
 
 clean: ## remove build output (keeps .venv)
 	rm -rf build

@@ -46,3 +46,24 @@ def test_equivalence_proof_catches_a_broken_vhdl_twin(tmp_path):
     f.write_text(broken)
     assert eda.equivalence(c, work=tmp_path / "equiv_good").ok
     assert not eda.equivalence(c, vhdl_override=[f], work=tmp_path / "equiv").ok
+
+
+def test_manifest_uses_brings_sources_once_in_dependency_order(tmp_path):
+    from torqueloop.hdl import load_manifest as load
+    (tmp_path / "a.v").write_text("")
+    (tmp_path / "b.v").write_text("")
+    m = tmp_path / "m.toml"
+    rel_a = os.path.relpath(tmp_path / "a.v", REPO_ROOT)
+    rel_b = os.path.relpath(tmp_path / "b.v", REPO_ROOT)
+    m.write_text(f'[core.a]\nverilog = ["{rel_a}"]\n'
+                 f'[core.b]\nuses = ["a"]\nverilog = ["{rel_a}", "{rel_b}"]\n')
+    cores = load(m)
+    assert [p.name for p in cores["b"].verilog] == ["a.v", "b.v"]
+    m.write_text('[core.a]\nuses = ["b"]\n[core.b]\nuses = ["a"]\n')
+    with pytest.raises(ValueError, match="cycle"):
+        load(m)
+
+
+def test_board_top_holds_every_soc_file():
+    cores = load_manifest()
+    assert set(cores["soc"].verilog) <= set(cores["de0_cv_top"].verilog)

@@ -53,20 +53,35 @@ def _paths(entries: list[str], core: str) -> tuple[Path, ...]:
     return tuple(out)
 
 
+def _with_uses(specs: dict, name: str, lang: str, seen: tuple[str, ...] = ()) -> list[str]:
+    """A core's sources with those of the cores it ``uses`` first (recursively),
+    each file once, in dependency order; so a top never copies a list."""
+    if name in seen:
+        raise ValueError(f"rtl/manifest.toml: 'uses' cycle {' -> '.join((*seen, name))}")
+    if name not in specs:
+        raise KeyError(f"rtl/manifest.toml: core '{seen[-1]}' uses unknown core '{name}'")
+    out: list[str] = []
+    for used in specs[name].get("uses", []):
+        out += _with_uses(specs, used, lang, (*seen, name))
+    out += specs[name].get(lang, [])
+    return list(dict.fromkeys(out))
+
+
 def load_manifest(path: Path = MANIFEST) -> dict[str, Core]:
     """Parse the manifest; raise with the core's name on any missing file."""
     with open(path, "rb") as f:
         data = tomllib.load(f)
+    specs = data.get("core", {})
     cores: dict[str, Core] = {}
-    for name, spec in data.get("core", {}).items():
-        unknown = set(spec) - {"verilog", "vhdl", "top", "synth", "equiv", "synth_params", "formal"}
+    for name, spec in specs.items():
+        unknown = set(spec) - {"verilog", "vhdl", "top", "synth", "equiv", "synth_params", "formal", "uses"}
         if unknown:
             raise ValueError(f"rtl/manifest.toml: core '{name}' has unknown keys {sorted(unknown)}")
         cores[name] = Core(
             name=name,
             top=spec.get("top", name),
-            verilog=_paths(spec.get("verilog", []), name),
-            vhdl=_paths(spec.get("vhdl", []), name),
+            verilog=_paths(_with_uses(specs, name, "verilog"), name),
+            vhdl=_paths(_with_uses(specs, name, "vhdl"), name),
             synth=bool(spec.get("synth", False)),
             equiv=bool(spec.get("equiv", False)),
             synth_params=dict(spec.get("synth_params", {})),
