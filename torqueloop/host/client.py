@@ -116,7 +116,10 @@ class Client:
         return data
 
     def _frames(self, data: bytes) -> Iterator[P.Frame]:
-        for item in self._dec.feed(data):
+        # Run the decoder over all of ``data`` first: FrameDecoder.feed is a generator
+        # that clears its buffer only after the consumer resumes it, and _exchange
+        # stops consuming at its reply.
+        for item in list(self._dec.feed(data)):
             if isinstance(item, P.FrameError):
                 if item.status == P.STATUS["CRC"]:
                     self.stats.crc_errors += 1
