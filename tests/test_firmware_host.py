@@ -69,8 +69,9 @@ def _random_run(rng: random.Random) -> tuple[list[str], list[tuple[int, int, int
             pos += rng.randrange(-300, 300)
             edge = (t - rng.randrange(period * 50)) & 0xFFFFFFFF
         run = int(rng.random() < 0.9)
-        cmd = ax.step(pos, edge, t, bool(run))
-        lines.append(f"S {pos} {edge} {t} {run}")
+        interval = rng.randrange(1, period * 50)
+        cmd = ax.step(pos, edge, t, bool(run), interval)
+        lines.append(f"S {pos} {edge} {t} {run} {interval}")
         expect.append((cmd, ax.sp_q16, ax.vel_q8, ax.integ_q32))
     return lines, expect
 

@@ -27,7 +27,7 @@ void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now)
     c->pos_prev = pos;
     c->pos_ref = pos;
     c->t_ref = t_now;
-    c->have_prev = true;
+    c->moved_last = false;
     c->err_counts = 0;
     c->cmd = 0;
 }
@@ -124,23 +124,33 @@ static void profile(tl_ctl_t *c)
     c->sp_q16 += c->prof_v_q16;
 }
 
-static void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t edge_time, uint32_t now)
+static void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t edge_time, uint32_t now,
+                     uint32_t interval)
 {
     if (p->vel_mode == 0u) {
         /* The paper: Euler difference over T_s, low-pass weight 1/2 (sim_models/control.py). */
         int64_t euler = (int64_t)(pos - c->pos_prev) * 256 * 1000000 / (int64_t)c->period_us;
         c->vel_q8 = (int32_t)clamp64((euler + c->vel_q8) / 2, -0x7FFFFFFF, 0x7FFFFFFF);
     } else if (pos != c->pos_ref) {
-        /* Counts seen since the last count-bearing sample: distance over the time between
-         * the decoder's edge timestamps - exact average speed, no sampling quantisation. */
+        /* Moving since the last sample: distance over the time between the decoder's edge
+         * timestamps - the exact average speed, free of sampling quantisation.  First counts
+         * after a silent sample: the old reference edge dates from before the standstill,
+         * so take one count over the decoder's last edge interval instead. */
+        int64_t d = pos - c->pos_ref;
         uint32_t dt = edge_time - c->t_ref;
+        if (!c->moved_last) {
+            d = d > 0 ? 1 : -1;
+            dt = interval;
+        }
         if (dt == 0u)
             dt = 1u;
-        int64_t v = (int64_t)(pos - c->pos_ref) * 256 * (int64_t)c->clk_hz / (int64_t)dt;
+        int64_t v = d * 256 * (int64_t)c->clk_hz / (int64_t)dt;
         c->vel_q8 = (int32_t)clamp64(v, -0x7FFFFFFF, 0x7FFFFFFF);
         c->pos_ref = pos;
         c->t_ref = edge_time;
+        c->moved_last = true;
     } else {
+        c->moved_last = false;
         /* No count this sample: the speed cannot exceed one count over the time since the
          * last edge, so the estimate decays as 1/t to zero when the axis stops. */
         uint32_t dt = now - c->t_ref;
@@ -155,9 +165,9 @@ static void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_
 }
 
 int32_t tl_ctl_step(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t edge_time, uint32_t now,
-                    bool run_law)
+                    uint32_t interval, bool run_law)
 {
-    velocity(c, p, pos, edge_time, now);
+    velocity(c, p, pos, edge_time, now, interval);
     profile(c);
     int64_t e_q16 = c->sp_q16 - (int64_t)pos * 65536;
     c->err_counts = (int32_t)clamp64((e_q16 + 32768) >> 16, -0x7FFFFFFF, 0x7FFFFFFF);

@@ -52,7 +52,7 @@ typedef struct {
     int32_t pos_prev;
     int32_t pos_ref;            /* position and decoder time of the last sample that saw a count */
     uint32_t t_ref;
-    bool have_prev;
+    bool moved_last;            /* the previous sample saw a count */
     int32_t err_counts;         /* last error (rounded counts), for telemetry */
     int32_t cmd;                /* last PWM command */
 } tl_ctl_t;
@@ -62,7 +62,7 @@ void tl_ctl_derive(tl_ctl_t *c, const tl_ctl_params_t *p, uint32_t period_us, ui
 /* One sample: update velocity from (pos, edge_time, now) in decoder clock
  * cycles, advance the profile, run the law.  Returns the PWM command. */
 int32_t tl_ctl_step(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t edge_time, uint32_t now,
-                    bool run_law);
+                    uint32_t interval, bool run_law);
 void tl_ctl_move(tl_ctl_t *c, int32_t target, bool trapezoid);
 void tl_ctl_hold(tl_ctl_t *c, int32_t pos);
 

@@ -10,6 +10,7 @@ typedef struct {
     int32_t pos;            /* encoder counts */
     uint32_t edge_time;     /* decoder clock cycles of the last count */
     uint32_t now;           /* decoder clock now */
+    uint32_t interval;      /* decoder clock cycles between the last two counts */
     uint32_t illegal;       /* illegal-transition count */
     bool bridge_fault;      /* bridge fault input now */
 } tl_enc_sample_t;

@@ -14,6 +14,7 @@ void hal_enc_read(uint32_t axis, tl_enc_sample_t *s)
     do {
         t0 = AX(axis, ENC_EDGE_TIME);
         s->pos = (int32_t)AX(axis, ENC_POS);
+        s->interval = AX(axis, ENC_EDGE_INTERVAL);
         t1 = AX(axis, ENC_EDGE_TIME);
     } while (t0 != t1);
     s->edge_time = t1;

@@ -146,7 +146,7 @@ void tl_servo_tick(tl_servo_t *s)
         a->faults |= f;
         if (a->enabled && a->faults)
             disable_axis(s, i);
-        int32_t cmd = tl_ctl_step(&a->c, &a->ctl, e.pos, e.edge_time, e.now, a->enabled);
+        int32_t cmd = tl_ctl_step(&a->c, &a->ctl, e.pos, e.edge_time, e.now, e.interval, a->enabled);
         hal_pwm_cmd(i, a->enabled ? cmd : 0);
     }
     if (s->telem_every && (s->ticks % s->telem_every) == 0u)

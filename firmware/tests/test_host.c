@@ -341,7 +341,7 @@ static void test_profile(void)
         int steps = 0;
         bool ok = true;
         while (c.moving && steps < 2000000) {
-            (void)tl_ctl_step(&c, &p, start, 0, 0, false);
+            (void)tl_ctl_step(&c, &p, start, 0, 0, 0, false);
             int64_t v = c.sp_q16 - prev_sp;
             int64_t dv = v - prev_v;
             if ((v < 0 ? -v : v) > c.vmax_q16 + c.amax_q16 || (dv < 0 ? -dv : dv) > c.amax_q16)
@@ -384,7 +384,7 @@ static int ctl_main(void)
         case 'R': tl_ctl_reset(&c, (int32_t)a[0], (uint32_t)a[1]); break;
         case 'M': tl_ctl_move(&c, (int32_t)a[0], a[1] != 0); break;
         case 'S': {
-            int32_t cmd = tl_ctl_step(&c, &p, (int32_t)a[0], (uint32_t)a[1], (uint32_t)a[2], a[3] != 0);
+            int32_t cmd = tl_ctl_step(&c, &p, (int32_t)a[0], (uint32_t)a[1], (uint32_t)a[2], (uint32_t)a[4], a[3] != 0);
             printf("%" PRId32 " %" PRId64 " %" PRId32 " %" PRId64 "\n", cmd, c.sp_q16, c.vel_q8, c.integ_q32);
             break;
         }

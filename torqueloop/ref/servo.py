@@ -61,6 +61,7 @@ class Axis:
     vel_q8: int = 0
     pos_prev: int = 0
     pos_ref: int = 0
+    moved_last: bool = False
     t_ref: int = 0
     cmd: int = 0
 
@@ -80,6 +81,7 @@ class Axis:
         self.saturated, self.sat_sign, self.vel_q8 = False, 0, 0
         self.pos_prev = self.pos_ref = pos
         self.t_ref = now
+        self.moved_last = False
         self.cmd = 0
 
     def move(self, target: int, trapezoid: bool) -> None:
@@ -109,16 +111,21 @@ class Axis:
         self.prof_v_q16 = vs * direction
         self.sp_q16 += self.prof_v_q16
 
-    def _velocity(self, pos: int, edge_time: int, now: int) -> None:
+    def _velocity(self, pos: int, edge_time: int, now: int, interval: int) -> None:
         clamp32 = (1 << 31) - 1
         if self.p.vel_mode == 0:
             euler = _tdiv((pos - self.pos_prev) * 256 * 1_000_000, self.period_us)
             self.vel_q8 = clamp(_tdiv(euler + self.vel_q8, 2), clamp32)
         elif pos != self.pos_ref:
-            dt = (edge_time - self.t_ref) & 0xFFFFFFFF or 1
-            self.vel_q8 = clamp(_tdiv((pos - self.pos_ref) * 256 * self.clk_hz, dt), clamp32)
-            self.pos_ref, self.t_ref = pos, edge_time
+            # edge-to-edge average while moving; one count over the last edge interval
+            # for the first counts after a silent sample
+            d, dt = pos - self.pos_ref, (edge_time - self.t_ref) & 0xFFFFFFFF
+            if not self.moved_last:
+                d, dt = (1 if d > 0 else -1), interval
+            self.vel_q8 = clamp(_tdiv(d * 256 * self.clk_hz, dt or 1), clamp32)
+            self.pos_ref, self.t_ref, self.moved_last = pos, edge_time, True
         else:
+            self.moved_last = False
             dt = (now - self.t_ref) & 0xFFFFFFFF
             if dt > 0x7FFFFFFF:
                 self.t_ref = (now - 0x7FFFFFFF) & 0xFFFFFFFF
@@ -127,9 +134,9 @@ class Axis:
                 self.vel_q8 = bound if self.vel_q8 > 0 else -bound
         self.pos_prev = pos
 
-    def step(self, pos: int, edge_time: int, now: int, run: bool = True) -> int:
+    def step(self, pos: int, edge_time: int, now: int, run: bool = True, interval: int = 0) -> int:
         p = self.p
-        self._velocity(pos, edge_time, now)
+        self._velocity(pos, edge_time, now, interval)
         self._profile()
         e = self.sp_q16 - (pos << 16)
         if not run or p.law == 0:
