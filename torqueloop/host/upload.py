@@ -45,12 +45,16 @@ def read_elf(raw: bytes) -> Image:
     """Loadable segments of a little-endian ELF32 RISC-V file, gaps filled with 0."""
     if raw[:4] != b"\x7fELF":
         raise ImageError("not an ELF file")
+    if len(raw) < 52:
+        raise ImageError(f"truncated ELF: {len(raw)} bytes, shorter than the 52-byte ELF32 header")
     if raw[4] != 1 or raw[5] != 1:
         raise ImageError("not a 32-bit little-endian ELF (the torqueloop CPU is RV32)")
     (e_type, e_machine, _v, e_entry, e_phoff, _sh, _fl, _eh, e_phentsize, e_phnum) = \
         struct.unpack_from("<HHIIIIIHHH", raw, 16)
     if e_machine != EM_RISCV:
         raise ImageError(f"ELF machine {e_machine}, not RISC-V ({EM_RISCV})")
+    if e_phoff + e_phnum * e_phentsize > len(raw) or (e_phnum and e_phentsize < 32):
+        raise ImageError("truncated ELF: the program headers run past the end of the file")
     segs = []
     for i in range(e_phnum):
         p_type, p_offset, _va, p_paddr, p_filesz, _memsz, _f, _a = \

@@ -1,0 +1,195 @@
+"""End to end: the ``torqueloop`` command against the simulated board over TCP.
+
+``torqueloop sim`` runs in its own process (the servo firmware's C and the
+plant model, real time, sending ``*HELLO*`` on every connect like an
+unconfigured RN-XV); every command here goes through the CLI's ``main`` with
+``--json``, over a fresh TCP connection, exactly as a user's would.
+Checked: info, set/get round trips in physical units, a move the plant
+follows, a step test's files and figures, a following-error fault decoded
+and cleared, config save/load round trip (and the characterisation file),
+and that upload refuses honestly and leaves the board working.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from torqueloop import cli
+
+BUILD_ID = 0x0DDC0DE5
+
+
+@pytest.fixture(scope="module")
+def url():
+    p = subprocess.Popen([sys.executable, "-m", "torqueloop.cli", "sim", "--port", "0", "--hello",
+                          "--build-id", hex(BUILD_ID)], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                         text=True)
+    try:
+        line = p.stdout.readline()
+        assert "socket://" in line, line
+        yield line.split()[line.split().index("on") + 1]
+    finally:
+        p.send_signal(signal.SIGINT)
+        try:
+            p.wait(5)
+        except subprocess.TimeoutExpired:
+            p.kill()
+
+
+def run(url: str, capsys, *args: str, rc: int = 0):
+    capsys.readouterr()
+    got = cli.main(["-u", url, "--json", *args])
+    out, err = capsys.readouterr()
+    assert got == rc, f"torqueloop {' '.join(args)} -> {got}\n{out}\n{err}"
+    return (json.loads(out.strip().splitlines()[-1]) if out.strip() else None), err
+
+
+def test_info(url, capsys) -> None:
+    info, _ = run(url, capsys, "info")
+    assert info["build_id"] == f"0x{BUILD_ID:08x}"
+    assert info["axis_count"] == 2 and info["clk_hz"] == 50_000_000
+    # the *HELLO* the server sent was seen, skipped and counted
+    assert info["host_counters"]["text_bytes"] >= len("*HELLO*")
+
+
+def test_set_get_round_trip_in_physical_units(url, capsys) -> None:
+    for name, value, tol in (("kp", "0.61", 1e-4), ("kd", "0.013", 1e-4), ("pwm_freq", "200", 2.0),
+                             ("period", "0.01", 0), ("tau_max", "2.2", 0)):
+        run(url, capsys, "set", name, value, "--axis", "1")
+        got, _ = run(url, capsys, "get", name, "--axis", "1")
+        assert abs(got[name]["value"] - float(value)) <= tol, (name, got)
+    run(url, capsys, "set", "law", "pid", "--axis", "1")
+    got, _ = run(url, capsys, "get", "law", "--axis", "1")
+    assert got["law"]["value"] == "pid"
+    run(url, capsys, "set", "period", "0.025")
+    # out of range: refused by the tool with the limits named, nothing changed
+    _, err = run(url, capsys, "set", "cmd_limit", "4000", rc=1)
+    assert "RANGE" in err and "1023" in err
+    got, _ = run(url, capsys, "get", "cmd_limit")
+    assert got["cmd_limit"]["value"] == 1023
+
+
+def test_move_is_followed_by_the_plant(url, capsys) -> None:
+    res, _ = run(url, capsys, "move", "2mm", "--enable", "--wait", "6", "--axis", "0")
+    assert res["target_counts"] == 4200          # 2 mm at 4 mm and 8400 counts per turn
+    assert abs(res["error_counts"]) <= 20, res
+    st, _ = run(url, capsys, "status", "--axis", "0")
+    assert abs(st["0"]["position"] - 4200) <= 40
+    run(url, capsys, "disable", "--all")
+
+
+def test_step_test_writes_plot_csv_and_figures(url, capsys, tmp_path: Path) -> None:
+    run(url, capsys, "clear-fault", "--all")
+    res, _ = run(url, capsys, "step-test", "1rev", "--relative", "--duration", "2.5", "--out", str(tmp_path))
+    f = res["figures"]
+    for ext in ("png", "csv", "json"):
+        assert (tmp_path / f"step_axis0.{ext}").stat().st_size > 100
+    assert f["faults"] == [] and f["records"] > 80
+    assert f["target_counts"] - f["start_counts"] == 8400
+    # P control of axis x with the paper's Table 1 gain: it gets there
+    assert abs(f["steady_state_error_counts"]) < 100
+    assert 0 < f["rise_time_s"] < 1.5 and not math.isnan(f["settling_time_s"])
+    assert f["rmse_counts"] > 0
+    csv_lines = (tmp_path / "step_axis0.csv").read_text().splitlines()
+    assert csv_lines[0].startswith("t_s,setpoint_0_counts") and len(csv_lines) == f["records"] + 1
+
+
+def test_fault_is_decoded_and_cleared(url, capsys) -> None:
+    run(url, capsys, "clear-fault", "--all")
+    run(url, capsys, "set", "follow_limit", "50", "--axis", "1")
+    run(url, capsys, "move", "3000", "--relative", "--enable", "--axis", "1")
+    _, err = run(url, capsys, "move", "0", "--wait", "2", "--axis", "1", rc=1)
+    st, _ = run(url, capsys, "status", "--axis", "1")
+    assert "FOLLOWING" in st["1"]["fault_names"] and st["1"]["enabled"] == 0
+    _, err = run(url, capsys, "enable", "--axis", "1", rc=1)
+    assert "FOLLOWING" in err and "clear-fault" in err
+    res, _ = run(url, capsys, "clear-fault", "--axis", "1")
+    assert "FOLLOWING" in res["before"]["1"] and res["after"]["1"] == []
+    run(url, capsys, "set", "follow_limit", "16800", "--axis", "1")
+    run(url, capsys, "enable", "--axis", "1")
+    run(url, capsys, "disable", "--axis", "1")
+
+
+def test_config_save_load_round_trip(url, capsys, tmp_path: Path) -> None:
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    run(url, capsys, "disable", "--all")
+    run(url, capsys, "config", "save", str(a))
+    doc = json.loads(a.read_text())
+    assert doc["firmware"]["build_id"] == f"0x{BUILD_ID:08x}"
+    kp0 = doc["axes"][0]["KP_Q16"]
+    run(url, capsys, "set", "kp", "0.3")
+    run(url, capsys, "set", "soft_max", "-5", "--axis", "1")
+    run(url, capsys, "set", "soft_min", "-9", "--axis", "1")
+    run(url, capsys, "config", "load", str(a))
+    got, _ = run(url, capsys, "get", "KP_Q16")
+    assert got["KP_Q16"]["raw"] == kp0
+    run(url, capsys, "config", "save", str(b))
+    assert a.read_text() == b.read_text()
+    # a file from another build is refused unless forced; a broken one names its field
+    doc["firmware"]["build_id"] = "0x00000001"
+    a.write_text(json.dumps(doc))
+    _, err = run(url, capsys, "config", "load", str(a), rc=1)
+    assert "0x00000001" in err and "--force" in err
+    doc["axes"][1]["PW0"] = 5000
+    a.write_text(json.dumps(doc))
+    _, err = run(url, capsys, "config", "load", str(a), "--force", rc=1)
+    assert "axes[1].PW0" in err
+
+
+def test_config_load_takes_the_characterisation_file(url, capsys, tmp_path: Path) -> None:
+    from torqueloop.characterize.config import default_divider
+
+    div = default_divider()
+    axes = {}
+    for name, f, pw0 in (("x", 450.0, 31), ("z", 200.0, 44)):
+        cm = div.count_max(f, 50_000_000, 10)
+        ach = div.achieved_hz(cm, 50_000_000, 10)
+        axes[name] = {"motor": name, "pwm_freq_hz": ach, "count_max": cm, "achieved_hz": ach,
+                      "freq_error_pct": 0.0, "pw0_counts": pw0, "pw_max_counts": 1000, "tau_max_nm": 2.31,
+                      "duty_pw0_pct": pw0 / 10.23, "duty_pwf_pct": 97.75, "torque_per_count_nm": 0.0024,
+                      "step7": {}, "provenance": {}}
+    p = tmp_path / "characterization.json"
+    p.write_text(json.dumps({"schema": "torqueloop-characterization", "schema_version": 1,
+                             "clk_hz": 50_000_000, "pwm_bits": 10, "axes": axes, "provenance": {}}))
+    run(url, capsys, "config", "load", str(p))
+    for axis, name in ((0, "x"), (1, "z")):
+        got, _ = run(url, capsys, "get", "pw0", "pwmax", "FDIV", "tau_max", "--axis", str(axis))
+        assert got["pw0"]["raw"] == axes[name]["pw0_counts"] and got["pwmax"]["raw"] == 1000
+        assert got["FDIV"]["raw"] == axes[name]["count_max"] and got["tau_max"]["raw"] == 2310
+
+
+def test_upload_refuses_honestly_and_the_board_keeps_working(url, capsys, tmp_path: Path) -> None:
+    img = tmp_path / "fw.bin"
+    img.write_bytes(os.urandom(1024))
+    res, _ = run(url, capsys, "upload", str(img), rc=1)
+    assert "not available" in res["error"]
+    bad = tmp_path / "bad.elf"
+    bad.write_bytes(b"\x7fELF\x01\x01" + bytes(10))       # truncated ELF: refused before any byte is sent
+    _, err = run(url, capsys, "upload", str(bad), rc=1)
+    assert "ELF" in err
+    info, _ = run(url, capsys, "info")
+    assert info["build_id"] == f"0x{BUILD_ID:08x}"
+
+
+def test_no_answer_names_the_likely_cause(capsys) -> None:
+    import socket
+
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    s.listen(1)                     # accepts, never answers: a bridge whose UART side is dead
+    port = s.getsockname()[1]
+    try:
+        capsys.readouterr()
+        rc = cli.main(["-u", f"socket://127.0.0.1:{port}", "--timeout", "0.1", "--retries", "1", "info"])
+        err = capsys.readouterr().err
+    finally:
+        s.close()
+    assert rc == 3 and "data mode" in err
