@@ -98,10 +98,14 @@ SPECIAL = {"law": "LAW", "pwm_freq": "FDIV"}
 
 
 def fdiv_from_hz(f_hz: float, clk_hz: int = CLK_HZ) -> int:
-    """Eq. (4): Count_max = clk / (f * (2^10 - 1)), rounded (pwm_torque's period is 1023 ticks)."""
+    """Eq. (4): Count_max = clk / (f * (2^10 - 1)) (pwm_torque's period is 1023 ticks),
+    the integer whose carrier is nearest to ``f_hz`` (rounding the divisor is not:
+    at 20 kHz the divisors 2 and 3 give 24.4 and 16.3 kHz)."""
     if f_hz <= 0:
         raise ValueError("PWM frequency must be positive")
-    return max(1, int(round(clk_hz / (f_hz * PWM_FULL))))
+    exact = clk_hz / (f_hz * PWM_FULL)
+    cands = {max(1, math.floor(exact)), max(1, math.ceil(exact))}
+    return min(sorted(cands), key=lambda d: abs(hz_from_fdiv(d, clk_hz) - f_hz))
 
 
 def hz_from_fdiv(fdiv: int, clk_hz: int = CLK_HZ) -> float:
@@ -109,7 +113,10 @@ def hz_from_fdiv(fdiv: int, clk_hz: int = CLK_HZ) -> float:
 
 
 def resolve(name: str) -> tuple[str, str]:
-    """User name -> (protocol parameter, kind): kind 'friendly', 'special' or 'raw'."""
+    """User name -> (protocol parameter, kind): kind 'friendly', 'special' or 'raw'.
+    A protocol name spelt as in docs/protocol.md (upper case) is always raw."""
+    if name in P.PARAMS:
+        return name, "raw"
     low = name.lower()
     if low in FRIENDLY:
         return FRIENDLY[low].param, "friendly"
@@ -147,5 +154,5 @@ def from_raw(name: str, raw: int, clk_hz: int = CLK_HZ) -> tuple[float | int | s
         return round(hz_from_fdiv(raw, clk_hz), 3), "Hz"
     if kind == "friendly":
         f = FRIENDLY[name.lower()]
-        return raw / f.scale, f.unit
+        return (raw if f.scale == 1 else raw / f.scale), f.unit
     return raw, ""

@@ -1,0 +1,147 @@
+"""Host tool pieces without a board: position units, PWM frequency, step
+figures against closed-form first- and second-order responses, CSV round
+trip, and the config file's validation and write order."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from torqueloop import protocol as P
+from torqueloop.host import analysis, units
+from torqueloop.host import config as hc
+from torqueloop.ref import freq_div
+
+MECH = units.Mechanics(8400, 4000)
+
+
+@pytest.mark.parametrize("text,counts", [("6.283185307rad", 8400), ("4mm", 8400), ("-2mm", -4200),
+                                         ("1rev", 8400), ("0.5 rev", 4200), ("90deg", 2100),
+                                         ("1234", 1234), ("1234counts", 1234), ("1e3", 1000)])
+def test_positions(text: str, counts: int) -> None:
+    assert units.parse_position(text, MECH) == counts
+
+
+def test_bad_positions_are_named() -> None:
+    for bad in ("4 furlongs", "mm", "1..2rad"):
+        with pytest.raises(ValueError):
+            units.parse_position(bad, MECH)
+
+
+@pytest.mark.parametrize("f", [200.0, 450.0, 1000.0, 20_000.0])
+def test_pwm_frequency_goes_through_the_divider_of_eq_4(f: float) -> None:
+    fdiv = units.fdiv_from_hz(f)
+    # the carrier the frequency-divider and PWM cores really make (their reference model)
+    got = freq_div.carrier_hz(fdiv)
+    assert abs(got - f) <= abs(freq_div.carrier_hz(fdiv + 1) - f) and abs(got - f) <= abs(
+        freq_div.carrier_hz(max(1, fdiv - 1)) - f)
+    assert units.hz_from_fdiv(fdiv) == pytest.approx(got)
+
+
+def test_friendly_parameters_scale_to_the_protocol() -> None:
+    assert units.to_raw("kp", "0.82") == ("KP_UNM_RAD", 820_000)
+    assert units.to_raw("period", "0.025") == ("PERIOD_US", 25_000)
+    assert units.to_raw("law", "PID") == ("LAW", 3)
+    assert units.to_raw("KP_Q16", "0x10000") == ("KP_Q16", 65536)
+    assert units.from_raw("tau_max", 2080) == (2.08, "N m")
+    with pytest.raises(ValueError, match="friendly names"):
+        units.resolve("kq")
+    for f in units.FRIENDLY.values():
+        assert f.param in P.PARAMS
+
+
+def test_first_order_step_figures_match_closed_form() -> None:
+    tau, T = 0.2, 3.0
+    t = np.linspace(0, T, 3001)
+    x = 1000 * (1 - np.exp(-t / tau))
+    f = analysis.step_figures(t, x, np.full_like(t, 1000.0), 0, 1000, band_frac=0.02, band_min_counts=0)
+    assert f.overshoot_pct == 0
+    assert f.rise_time_s == pytest.approx(tau * math.log(9), rel=1e-3)
+    assert f.settling_time_s == pytest.approx(tau * math.log(50), abs=2e-3)
+    rmse = 1000 * math.sqrt(tau / (2 * T) * (1 - math.exp(-2 * T / tau)))
+    assert f.rmse_counts == pytest.approx(rmse, rel=1e-4)
+
+
+def test_second_order_overshoot_and_direction() -> None:
+    z, wn = 0.4, 10.0
+    wd = wn * math.sqrt(1 - z * z)
+    t = np.linspace(0, 4, 8001)
+    y = 1 - np.exp(-z * wn * t) * (np.cos(wd * t) + z / math.sqrt(1 - z * z) * np.sin(wd * t))
+    expect = 100 * math.exp(-math.pi * z / math.sqrt(1 - z * z))
+    for start, target in ((0, 500), (300, -700)):          # a step down measures the same
+        x = start + (target - start) * y
+        f = analysis.step_figures(t, x, np.full_like(t, target), start, target)
+        assert f.overshoot_pct == pytest.approx(expect, rel=1e-3)
+        assert f.peak_counts == pytest.approx(start + (target - start) * (1 + expect / 100), rel=1e-3)
+
+
+def test_a_response_that_never_settles_says_so() -> None:
+    t = np.linspace(0, 1, 101)
+    x = 100 * t
+    assert math.isnan(analysis.step_figures(t, x, np.full_like(t, 200.0), 0, 200).settling_time_s)
+
+
+def _records(n: int) -> list[dict]:
+    rng = np.random.default_rng(3)
+    out = []
+    for k in range(n):
+        ax = [{"setpoint": int(rng.integers(-9999, 9999)), "position": int(rng.integers(-9999, 9999)),
+               "velocity_q8": int(rng.integers(-10**6, 10**6)), "error": int(rng.integers(-99, 99)),
+               "pwm_cmd": int(rng.integers(-1023, 1023)), "faults": int(rng.integers(0, 4)), "enabled": 1}
+              for _ in range(2)]
+        # time_us wraps at 2^32 in the middle of the capture
+        out.append({"time_us": (2**32 - 50_000 + 25_000 * k) % 2**32, "axes": ax})
+    return out
+
+
+def test_capture_unwraps_time_and_csv_round_trips(tmp_path) -> None:
+    cap = analysis.to_capture(_records(6))
+    assert np.allclose(np.diff(cap.t), 0.025)
+    p = tmp_path / "c.csv"
+    analysis.write_csv(p, cap, MECH, "mm")
+    back = analysis.read_csv(p)
+    for fld in analysis.FIELDS:
+        assert np.allclose(back.data[fld], cap.data[fld], atol=0.01), fld
+
+
+def _doc() -> dict:
+    axes = [{k: P.PARAMS[k].default for k in hc.AXIS_PARAMS} for _ in range(2)]
+    return {"schema": hc.SCHEMA, "schema_version": 1,
+            "firmware": {"build_id": "0x51b00001", "proto_version": 1},
+            "global": {k: P.PARAMS[k].default for k in hc.GLOBAL_PARAMS}, "axes": axes}
+
+
+def test_config_round_trip_and_validation() -> None:
+    cfg = hc.parse(_doc())
+    assert cfg.build_id == 0x51B00001 and "BAUD_DIV" not in cfg.globals
+    again = hc.parse(json.loads(hc.to_json(cfg)))
+    assert again == cfg
+    for mutate, field in ((lambda d: d["axes"][0].pop("KP_Q16"), "missing KP_Q16"),
+                          (lambda d: d["axes"][1].update(CMD_LIMIT=2000), "axes[1].CMD_LIMIT"),
+                          (lambda d: d["axes"][1].update(KP_Q16=1.5), "must be an integer"),
+                          (lambda d: d["global"].update(BAUD_DIV=433), "global.BAUD_DIV"),
+                          (lambda d: d["axes"][0].update(SOFT_MIN=10, SOFT_MAX=5), "SOFT_MIN 10 > SOFT_MAX"),
+                          (lambda d: d.update(schema="x"), "schema"),
+                          (lambda d: d["axes"].pop(), "list of 2")):
+        d = _doc()
+        mutate(d)
+        with pytest.raises(hc.HostConfigError, match=field.replace("[", r"\[").replace("]", r"\]")):
+            hc.parse(d)
+
+
+def test_write_order_satisfies_the_firmware_soft_limit_rule() -> None:
+    # firmware (servo.c set_param): SOFT_MIN <= SOFT_MAX must hold after every write
+    d = _doc()
+    d["axes"][0].update(SOFT_MIN=2_000_000, SOFT_MAX=3_000_000)
+    d["axes"][1].update(SOFT_MIN=-3_000_000, SOFT_MAX=-2_000_000)
+    board = [{"SOFT_MIN": -1_000_000, "SOFT_MAX": 1_000_000} for _ in range(2)]
+    for axis, name, value in hc.apply_order(hc.parse(d)):
+        if name in ("SOFT_MIN", "SOFT_MAX"):
+            new = dict(board[axis], **{name: value})
+            assert new["SOFT_MIN"] <= new["SOFT_MAX"], (axis, name, value)
+            board[axis] = new
+    assert board == [{"SOFT_MIN": 2_000_000, "SOFT_MAX": 3_000_000},
+                     {"SOFT_MIN": -3_000_000, "SOFT_MAX": -2_000_000}]
