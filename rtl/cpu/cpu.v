@@ -25,8 +25,8 @@
 // multiply and 35 per divide.  The handshake itself sets the floor of 2:
 // a slave cannot accept a new request in its ack cycle.
 // Interrupts are taken in EXEC before the instruction executes (mepc = its
-// pc); multi-cycle instructions run to completion first, so they are never
-// half-done when a trap is taken.
+// pc), or during a multiply/divide, which is then abandoned and re-executed
+// after mret; loads and stores always complete.
 //
 // Port contract unchanged since the first version (rtl/soc instantiates it).
 module cpu #(
@@ -179,6 +179,13 @@ module cpu #(
             S_MEM: if (d_fin && pf_done && d_error) begin
                 trap = 1'b1; trap_code = is_store ? 4'd7 : 4'd5; trap_tval = eff_addr;
             end
+            // An interrupt abandons a multiply/divide still in progress (it
+            // is re-executed after mret: mepc = its pc, rd not written), so
+            // the interrupt latency does not grow with the divider's 34
+            // cycles.  The prefetch must have answered first.
+            S_MULDIV: if (irq_pending && pf_done && !md_fin) begin
+                trap = 1'b1; trap_irq = 1'b1; trap_code = irq_code;
+            end
             default: ;
         endcase
     end
@@ -207,7 +214,7 @@ module cpu #(
     wire [31:0] md_result;
     /* verilator lint_off PINCONNECTEMPTY */
     cpu_muldiv u_muldiv (
-        .clk(clk), .rst(rst), .start(exec_md && !rst), .funct3(funct3),
+        .clk(clk), .rst(rst), .start(exec_md && !rst), .abort(in_md && trap), .funct3(funct3),
         .a(rs1_val), .b(rs2_val), .busy(), .done(md_done), .result(md_result)
     );
     /* verilator lint_on PINCONNECTEMPTY */

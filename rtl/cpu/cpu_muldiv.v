@@ -23,6 +23,7 @@ module cpu_muldiv (
     input  wire        clk,
     input  wire        rst,
     input  wire        start,      // one-cycle pulse with funct3 and operands valid
+    input  wire        abort,      // drop the operation in progress (interrupt)
     input  wire [2:0]  funct3,
     input  wire [31:0] a,          // rs1
     input  wire [31:0] b,          // rs2
@@ -66,7 +67,7 @@ module cpu_muldiv (
 
     always @(posedge clk) begin
         done <= 1'b0;
-        if (rst) begin
+        if (rst || abort) begin
             state <= IDLE;
         end else begin
             case (state)

@@ -128,7 +128,8 @@ async def interrupts_latency_nesting_and_divide(dut):
                   len(in_div), len(samples), max(in_div) if in_div else None)
     assert max(spin) <= 6, f"spin-loop latency {spin}"
     assert len(in_div) >= 5, "too few interrupts landed in a divide to test that case"
-    assert max(in_div) <= 40, f"latency in a divide {max(in_div)}"
+    # a divide in progress is abandoned for the interrupt: no 34-cycle wait
+    assert max(in_div) <= 3, f"latency in a divide {max(in_div)}"
     dut._log.info("%d traps logged, %d cycles", count, res.cycles)
 
 

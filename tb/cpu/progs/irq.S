@@ -165,7 +165,14 @@ _start:
     mul     t4, t2, s7
     add     t4, t4, t3
     bne     t4, s4, 17f
-    bltu    t3, s7, 18f         # unsigned remainder < divisor
+    bgeu    t3, s7, 17f         # unsigned remainder < divisor
+    mv      t5, s4
+    divu    t5, t5, s7          # rd = rs1: an abandoned divide must not have written it
+    bne     t5, t2, 17f
+    mv      t6, s7
+    mul     t6, t6, t2          # rd = rs1 for an abandoned multiply too
+    mul     t4, s7, t2
+    beq     t6, t4, 18f
 17: fail    8
 18: addi    s5, s5, 1
     li      t0, 40
