@@ -131,8 +131,8 @@ class TB:
         """No bridge PWM pin goes high for ``us`` microseconds."""
         assert self.pins_high() == 0, f"{what}: PWM pin high at start"
         end = now_ns() + us * 1000
-        while (left := end - now_ns()) > 0:
-            t = Timer(left, unit="ns")     # a fresh timer each time: awaiting one again restarts it
+        while (left := end - now_ns()) >= 1:
+            t = Timer(round(left), unit="ns")     # a fresh timer each time: awaiting one again restarts it
             r = await First(Edge(self.dut.rpwm), Edge(self.dut.lpwm), t)
             if r is t:
                 return
@@ -147,7 +147,7 @@ class TB:
         high = 0.0
         while True:
             left = end - now_ns()
-            t = Timer(left, unit="ns") if left > 0 else None
+            t = Timer(round(left), unit="ns") if left >= 1 else None
             r = await First(Edge(sig), t) if t else t
             now = now_ns()
             lvl = (int(sig.value) >> axis) & 1
