@@ -7,7 +7,8 @@ unconfigured RN-XV); every command here goes through the CLI's ``main`` with
 Checked: info, set/get round trips in physical units, a move the plant
 follows, a step test's files and figures, a following-error fault decoded
 and cleared, config save/load round trip (and the characterisation file),
-and that upload refuses honestly and leaves the board working.
+an upload that changes the build id, and a corrupted one that the boot ROM
+refuses, leaving the factory firmware working.
 """
 
 from __future__ import annotations
@@ -166,17 +167,62 @@ def test_config_load_takes_the_characterisation_file(url, capsys, tmp_path: Path
         assert got["FDIV"]["raw"] == axes[name]["count_max"] and got["tau_max"]["raw"] == 2310
 
 
-def test_upload_refuses_honestly_and_the_board_keeps_working(url, capsys, tmp_path: Path) -> None:
-    img = tmp_path / "fw.bin"
-    img.write_bytes(os.urandom(1024))
-    res, _ = run(url, capsys, "upload", str(img), rc=1)
-    assert "not available" in res["error"]
-    bad = tmp_path / "bad.elf"
-    bad.write_bytes(b"\x7fELF\x01\x01" + bytes(10))       # truncated ELF: refused before any byte is sent
-    _, err = run(url, capsys, "upload", str(bad), rc=1)
-    assert "ELF" in err
+def test_upload_changes_the_build_id(url, capsys, tmp_path: Path) -> None:
+    bp = pytest.importorskip("torqueloop.bootproto")
+    image = os.urandom(3000)
+    (tmp_path / "fw.bin").write_bytes(image)
+    res, _ = run(url, capsys, "upload", str(tmp_path / "fw.bin"))
+    assert res["ok"] and res["bootloader_replies"][:2] == ["W", "K"]
+    # the simulated board reports the running image's CRC-32 as its build id
+    assert res["new_build_id"] == f"0x{bp.crc32(image):08x}" != res["old_build_id"]
     info, _ = run(url, capsys, "info")
-    assert info["build_id"] == f"0x{BUILD_ID:08x}"
+    assert info["build_id"] == res["new_build_id"]
+
+
+class FlipOneImageByte:
+    """The link, with one byte of the upload frame's image changed on the way."""
+
+    def __init__(self, link, at: int) -> None:
+        self.link, self.at, self.sent = link, at, 0
+
+    def write(self, data: bytes) -> int:
+        b = bytearray(data)
+        if self.sent <= self.at < self.sent + len(b):
+            b[self.at - self.sent] ^= 0x40
+        self.sent += len(b)
+        return self.link.write(bytes(b))
+
+    def __getattr__(self, name: str):
+        return getattr(self.link, name)
+
+
+def test_corrupted_upload_is_refused_and_the_board_keeps_working(url, capsys, tmp_path: Path) -> None:
+    bp = pytest.importorskip("torqueloop.bootproto")
+    from torqueloop.host.client import Client
+    from torqueloop.host.transport import open_link
+    from torqueloop.host.upload import run_upload
+
+    link, info = open_link(url)
+    c = Client(link, info)
+    try:
+        r = run_upload(c, os.urandom(2000), port=FlipOneImageByte(link, bp.FRAME_OVERHEAD + 1500))
+    finally:
+        c.close()
+    assert not r.ok and "CRC-32" in r.message and "factory" in r.message
+    assert r.replies == ["W", "C", "F"]
+    assert r.new_build_id == BUILD_ID               # the factory firmware answers
+    # ... and works: a move the plant follows
+    run(url, capsys, "clear-fault", "--all")
+    res, _ = run(url, capsys, "move", "1000", "--relative", "--enable", "--wait", "4")
+    assert abs(res["error_counts"]) <= 20
+    run(url, capsys, "disable", "--all")
+    # a damaged file is refused before anything is sent
+    bad = tmp_path / "bad.elf"
+    bad.write_bytes(b"\x7fELF\x01\x01" + bytes(10))
+    _, err = run(url, capsys, "upload", str(bad), rc=1)
+    assert "bad.elf" in err
+    info_, _ = run(url, capsys, "info")
+    assert info_["build_id"] == f"0x{BUILD_ID:08x}"
 
 
 def test_no_answer_names_the_likely_cause(capsys) -> None:

@@ -1,4 +1,4 @@
-"""``torqueloop``: tune, move, plot and (later) upload firmware over serial, WiFi
+"""``torqueloop``: tune, move, plot and upload firmware over serial, WiFi
 or the simulated board.  docs/host.md is the user's guide.
 
     torqueloop sim                                   # simulated board on socket://127.0.0.1:2000
@@ -440,15 +440,16 @@ def cmd_config(ctx: Ctx) -> int:
 def cmd_upload(ctx: Ctx) -> int:
     from torqueloop.host import upload
 
-    img = upload.read_image(ctx.args.file)
-    info = {"file": ctx.args.file, "load_addr": f"0x{img.load_addr:08x}", "bytes": len(img.data),
-            "crc32": f"0x{img.crc32:08x}", "entry": f"0x{img.entry:08x}"}
-    if not upload.BOOTLOADER_AVAILABLE:
-        info["error"] = upload.NOT_AVAILABLE
-        ctx.out(info, f"image {ctx.args.file}: {len(img.data)} bytes at 0x{img.load_addr:08x}, "
-                      f"CRC-32 0x{img.crc32:08x}\n{upload.NOT_AVAILABLE}")
-        return 1
-    raise AssertionError("unreachable until the bootloader exists")
+    image = upload.load_image(ctx.args.file)
+    show = None if ctx.args.json else (lambda done, total: progress(done, total, "upload"))
+    r = upload.run_upload(ctx.client, image, show, window_s=ctx.args.window)
+    obj = {"ok": r.ok, "message": r.message, "bytes": r.bytes, "crc32": f"0x{r.crc32:08x}",
+           "old_build_id": f"0x{r.old_build_id:08x}",
+           "new_build_id": None if r.new_build_id is None else f"0x{r.new_build_id:08x}",
+           "bootloader_replies": r.replies, "seconds": round(r.seconds, 3)}
+    ctx.out(obj, lambda: (f"upload {'done' if r.ok else 'REFUSED'}: {r.message} ({r.seconds:.1f} s)\n"
+                          f"build id 0x{r.old_build_id:08x} -> {obj['new_build_id']}"))
+    return 0 if r.ok else 1
 
 
 def cmd_sim(ctx: Ctx) -> int:
@@ -558,8 +559,9 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("file")
     sp.add_argument("--force", action="store_true", help="load even if saved from another build id")
     sp.set_defaults(fn=cmd_config)
-    sp = sub.add_parser("upload", help="load firmware through the bootloader (not available yet)")
-    sp.add_argument("file", help="FIRMWARE.elf or .bin")
+    sp = sub.add_parser("upload", help="load firmware through the boot ROM bootloader, then check it answers")
+    sp.add_argument("file", help="FIRMWARE.elf (RAM-linked RV32) or a flat .bin")
+    sp.add_argument("--window", type=float, default=5.0, help="seconds to wait for the bootloader [5]")
     sp.set_defaults(fn=cmd_upload)
     sp = sub.add_parser("sim", help="run the simulated board on a local TCP port")
     sp.add_argument("--host", default="127.0.0.1")

@@ -103,6 +103,7 @@ class Client:
         self._synced = False
         self.telemetry_queue: collections.deque[dict] = collections.deque(maxlen=100_000)
         self.identity: dict[str, int] | None = None
+        self.raw_tap: bytearray | None = None   # when set, every byte read is appended (upload)
 
     # ---- bytes in ----------------------------------------------------------
     def _read_some(self) -> bytes:
@@ -113,6 +114,8 @@ class Client:
             if more:
                 data += self.link.read(min(more, 4096))
         self.stats.rx_bytes += len(data)
+        if self.raw_tap is not None:
+            self.raw_tap += data
         return data
 
     def _frames(self, data: bytes) -> Iterator[P.Frame]:

@@ -101,6 +101,9 @@ class SimBoard:
         self._drive = (ctypes.c_int32 * 6)()
         self.bridge_fault = [False, False]
         self.build_id = build_id
+        self.factory_build_id = build_id
+        self.boot: SimBootRom | None = None
+        self._boot_out = b""
         self._sync_encoders()
         self._lib.sb_reset(ctypes.c_uint32(build_id))
         self._next_tick_at = self._period_ticks()
@@ -111,16 +114,34 @@ class SimBoard:
         return self.tick / CLK_HZ
 
     def write(self, data: bytes) -> None:
-        if data:
+        if not data:
+            return
+        if self.boot is not None:
+            self.boot.rx(data, self.tick)
+        else:
             self._lib.sb_rx(data, ctypes.c_uint32(len(data)))
 
     def read(self) -> bytes:
         n = self._lib.sb_tx_take(self._txbuf, ctypes.c_uint32(len(self._txbuf)))
-        return self._txbuf.raw[:n]
+        out = self._txbuf.raw[:n]
+        if self.boot is not None or self._boot_out:
+            out, self._boot_out = out + self._boot_out, b""
+        return out
 
     def advance(self, max_dt: float) -> float:
         """Run to the next control iteration (or ``max_dt``, whichever is first)."""
         t0 = self.tick
+        if self.boot is None and self._lib.sb_bootloader_requested():
+            # main.c's jump_to_bootloader: the reply is out, the firmware stops
+            self.boot = SimBootRom(self.tick)
+        if self.boot is not None:
+            self._run_pwm_until(self.tick + max(1, int(max_dt * CLK_HZ)))
+            started = self.boot.poll(self.tick)
+            self._boot_out += self.boot.take_tx()
+            if started is not None:
+                self.boot = None
+                self.restart(self.factory_build_id if started == "factory" else started)
+            return (self.tick - t0) / CLK_HZ
         end = min(self._next_tick_at, self.tick + max(1, int(max_dt * CLK_HZ)))
         self._run_pwm_until(end)
         if self.tick == self._next_tick_at:
@@ -128,6 +149,13 @@ class SimBoard:
             self._lib.sb_tick()
             self._next_tick_at += self._period_ticks()
         return (self.tick - t0) / CLK_HZ
+
+    def restart(self, build_id: int) -> None:
+        """A firmware start (reset or the boot ROM's jump): fresh firmware state."""
+        self.build_id = build_id
+        self._sync_encoders()
+        self._lib.sb_reset(ctypes.c_uint32(build_id))
+        self._next_tick_at = self.tick + self._period_ticks()
 
     # ---- test handles -------------------------------------------------------------
     def set_estop(self, pressed: bool) -> None:
@@ -187,3 +215,89 @@ class SimBoard:
         if cmd == 0 or duty == 0 or not in_on_phase:
             return Pins(0, 0, 1, 1)    # running bridge, off phase: both low sides on (pwm_torque)
         return Pins(1, 0, 1, 1) if cmd > 0 else Pins(0, 1, 1, 1)
+
+
+class SimBootRom:
+    """The boot ROM's upload state machine (docs/bootloader.md) for the
+    simulated board, in simulated time; frames and CRCs through
+    ``torqueloop.bootproto`` (the protocol's single definition).
+
+    The simulated board cannot execute RV32 code: an accepted image
+    restarts the same host-compiled servo firmware, reporting the image's
+    CRC-32 as its build id, so a host sees which image "runs"; a rejected
+    one restarts the factory firmware with the factory build id.
+    ``poll`` returns None while listening, then "factory" or the new build id.
+    """
+
+    def __init__(self, now: int) -> None:
+        from torqueloop import bootproto as bp
+
+        self.bp = bp
+        self._tx = bytearray(b"TLBW\n")
+        self._buf = bytearray()
+        self._window_end = now + bp.ms_to_cycles(bp.WINDOW_MS, CLK_HZ)
+        self._last_rx = now
+        self._synced = False
+        self._saw_bytes = False
+        self._draining_since: int | None = None    # error sent: wait for a quiet line
+        self.result: str | int | None = None
+
+    def take_tx(self) -> bytes:
+        out, self._tx = bytes(self._tx), bytearray()
+        return out
+
+    def rx(self, data: bytes, now: int) -> None:
+        self._last_rx = now
+        self._saw_bytes = True
+        if self._draining_since is not None:
+            return
+        self._buf += data
+        bp = self.bp
+        if not self._synced:
+            i = self._buf.find(bp.SYNC)
+            if i < 0:
+                del self._buf[:max(0, len(self._buf) - len(bp.SYNC) + 1)]
+                return
+            del self._buf[:i]
+            self._synced = True
+        if len(self._buf) < bp.FRAME_OVERHEAD:
+            return
+        try:
+            _, _, length, icrc = bp.decode_header(bytes(self._buf[:bp.FRAME_OVERHEAD]))
+        except bp.FrameError:
+            return self._fail("H", now)
+        if not 1 <= length <= bp.MAX_IMAGE_BYTES:
+            return self._fail("L", now)
+        if len(self._buf) < bp.FRAME_OVERHEAD + length:
+            return
+        image = bytes(self._buf[bp.FRAME_OVERHEAD:bp.FRAME_OVERHEAD + length])
+        if bp.crc32(image) != icrc:
+            return self._fail("C", now)
+        self._tx += b"TLBK\n"
+        self.result = bp.crc32(image)
+
+    def _fail(self, code: str, now: int) -> None:
+        self._tx += b"TLB" + code.encode() + b"\n"
+        self._draining_since = now
+        self._buf.clear()
+
+    def poll(self, now: int) -> str | int | None:
+        bp = self.bp
+        gap = bp.ms_to_cycles(bp.GAP_MS, CLK_HZ)
+        if self.result is not None:
+            return self.result
+        if self._draining_since is not None:
+            if now - self._last_rx >= gap:
+                self._tx += b"TLBF\n"
+                return "factory"
+            return None
+        if self._synced and now - self._last_rx >= gap:
+            self._fail("T", now)
+            return None
+        if not self._synced and now >= self._window_end:
+            if self._saw_bytes:
+                self._fail("G", now)
+                return None
+            self._tx += b"TLBF\n"
+            return "factory"
+        return None

@@ -1,85 +1,105 @@
-"""Firmware images for ``torqueloop upload``: ELF or raw binary -> bytes + CRC-32.
+"""``torqueloop upload``: the servo firmware's BOOTLOADER command, then the
+boot ROM's upload protocol (docs/bootloader.md), then a check that the new
+firmware answers.
 
-The link side of the upload (the boot ROM's receive protocol with CRC-32,
-issue 4) does not exist yet: :data:`BOOTLOADER_AVAILABLE` is False and
-``upload`` stops after checking the image, before it sends anything that
-would leave the board waiting in the boot ROM.  What is here is the part
-that does not depend on it: reading the image the build produces
-(``build/firmware/servo/servo.elf`` or a flat ``.bin``), its loadable bytes
-as one contiguous block from the lowest load address, and the CRC-32 the
-bootloader will check.
+Images, frames, CRC-32 and the sending loop are ``torqueloop.bootproto``'s,
+the single definition of the upload protocol (issue 4); this module only
+chains the steps over the one open link (the RN-XV takes one TCP client, so
+the upload must use the connection the BOOTLOADER command went over):
+
+1. IDENTIFY: the running firmware's build id;
+2. BOOTLOADER (magic from the protocol definition): drives off, the firmware
+   jumps to the boot ROM, which answers ``TLBW`` and listens;
+3. the upload frame, paced to the baud rate, with progress;
+4. ``TLBK`` -> the image runs; anything else -> the bootloader names the
+   error and starts the factory firmware;
+5. reconnect (seq starts again) and IDENTIFY: which firmware answers now.
 """
 
 from __future__ import annotations
 
 import struct
-import zlib
+import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, Callable
 
-BOOTLOADER_AVAILABLE = False
-NOT_AVAILABLE = ("upload is not available yet: the boot ROM bootloader (issue 4) is not built and "
-                 "its upload protocol is not defined, so nothing was sent to the board. "
-                 "Meanwhile the firmware goes into the FPGA image: docs/hardware.md, 'Building the FPGA image'.")
-
-PT_LOAD = 1
-EM_RISCV = 243
+from .client import Client, ProtocolError
 
 
-class ImageError(ValueError):
-    pass
+def bootproto() -> Any | None:
+    """The upload protocol module, or None while it is not in the tree."""
+    try:
+        from torqueloop import bootproto as bp
+    except ImportError:
+        return None
+    return bp
+
+
+NOT_AVAILABLE = ("upload is not available: torqueloop/bootproto.py (the boot ROM upload protocol, "
+                 "issue 4) is not in this tree; nothing was sent to the board")
 
 
 @dataclass(frozen=True)
-class Image:
-    load_addr: int
-    data: bytes
-    entry: int
-
-    @property
-    def crc32(self) -> int:
-        return zlib.crc32(self.data) & 0xFFFFFFFF
-
-
-def read_elf(raw: bytes) -> Image:
-    """Loadable segments of a little-endian ELF32 RISC-V file, gaps filled with 0."""
-    if raw[:4] != b"\x7fELF":
-        raise ImageError("not an ELF file")
-    if len(raw) < 52:
-        raise ImageError(f"truncated ELF: {len(raw)} bytes, shorter than the 52-byte ELF32 header")
-    if raw[4] != 1 or raw[5] != 1:
-        raise ImageError("not a 32-bit little-endian ELF (the torqueloop CPU is RV32)")
-    (e_type, e_machine, _v, e_entry, e_phoff, _sh, _fl, _eh, e_phentsize, e_phnum) = \
-        struct.unpack_from("<HHIIIIIHHH", raw, 16)
-    if e_machine != EM_RISCV:
-        raise ImageError(f"ELF machine {e_machine}, not RISC-V ({EM_RISCV})")
-    if e_phoff + e_phnum * e_phentsize > len(raw) or (e_phnum and e_phentsize < 32):
-        raise ImageError("truncated ELF: the program headers run past the end of the file")
-    segs = []
-    for i in range(e_phnum):
-        p_type, p_offset, _va, p_paddr, p_filesz, _memsz, _f, _a = \
-            struct.unpack_from("<IIIIIIII", raw, e_phoff + i * e_phentsize)
-        if p_type == PT_LOAD and p_filesz:
-            if p_offset + p_filesz > len(raw):
-                raise ImageError("truncated ELF: a segment runs past the end of the file")
-            segs.append((p_paddr, raw[p_offset:p_offset + p_filesz]))
-    if not segs:
-        raise ImageError("ELF has no loadable segment")
-    segs.sort()
-    base = segs[0][0]
-    out = bytearray()
-    for addr, data in segs:
-        if addr - base < len(out):
-            raise ImageError(f"overlapping segments at 0x{addr:08x}")
-        out += bytes(addr - base - len(out)) + data
-    return Image(base, bytes(out), e_entry)
+class UploadReport:
+    ok: bool
+    message: str
+    bytes: int
+    crc32: int
+    old_build_id: int
+    new_build_id: int | None
+    replies: list[str]
+    seconds: float
 
 
-def read_image(path: str | Path, load_addr: int = 0) -> Image:
-    p = Path(path)
-    raw = p.read_bytes()
-    if raw[:4] == b"\x7fELF":
-        return read_elf(raw)
-    if not raw:
-        raise ImageError(f"{p}: empty file")
-    return Image(load_addr, raw, load_addr)
+def load_image(path: str | Path) -> bytes:
+    bp = bootproto()
+    if bp is None:
+        raise ProtocolError(NOT_AVAILABLE)
+    try:
+        image = bp.load_image(path)
+        bp.encode_frame(image)           # size limits, before anything is sent
+    except (bp.ImageError, bp.FrameError, OSError) as e:
+        raise ProtocolError(f"{path}: {e}") from None
+    except struct.error as e:   # bootproto.image_from_elf reads a truncated ELF header unchecked
+        raise ProtocolError(f"{path}: damaged ELF ({e})") from None
+    return image
+
+
+def run_upload(client: Client, image: bytes, progress: Callable[[int, int], None] | None = None,
+               window_s: float = 5.0, port: Any = None) -> UploadReport:
+    """Steps 1-5 above over ``client``'s link (``port`` overrides the link
+    the frame goes over, e.g. a test's corrupting wrapper)."""
+    bp = bootproto()
+    if bp is None:
+        raise ProtocolError(NOT_AVAILABLE)
+    t0 = time.monotonic()
+    old = client.connect()["build_id"]
+    client.raw_tap = bytearray()
+    try:
+        client.bootloader()
+        client.pump(0.02)
+    finally:
+        seen, client.raw_tap = bytes(client.raw_tap), None
+    # TLBW may arrive in the same read as the BOOTLOADER reply: then the window is already open
+    already_open = bp.ReplyParser().feed(seen).count(bp.Reply.WINDOW) > 0
+    res = bp.upload("", image, wait_window_s=0 if already_open else window_s, progress=progress,
+                    port=port or client.link)
+    if already_open:
+        res.replies.insert(0, bp.Reply.WINDOW)
+    replies = [r.value for r in res.replies]
+    if not res.replies:
+        raise ProtocolError("the board acknowledged BOOTLOADER but its boot ROM never opened a window "
+                            "(no TLBW): the bootloader is not in this FPGA image")
+    # Whatever runs now (the upload or the factory firmware) starts its seq afresh.
+    client.pump(0.05)
+    new = None
+    deadline = time.monotonic() + 5.0
+    while new is None:
+        try:
+            new = client.connect()["build_id"]
+        except ProtocolError:
+            if time.monotonic() > deadline:
+                raise ProtocolError(f"after the upload ({res.message}) no firmware answers") from None
+    return UploadReport(res.ok, res.message, len(image), bp.crc32(image), old, new, replies,
+                        time.monotonic() - t0)
