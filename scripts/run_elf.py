@@ -39,8 +39,21 @@ sys.path.insert(0, str(REPO / "tb" / "cpu"))
 
 from torqueloop.ref.rv32 import read_elf  # noqa: E402
 
-RAM_BASE = 0x8000_0000
-RAM_BYTES = 64 * 1024  # cpu_sim_top's RAM_BYTES default
+import re  # noqa: E402
+
+RAM_BASE = 0x8000_0000  # SoC memory map (rtl/soc/regmap.toml), as cpu_sim_top decodes it
+
+
+def _ram_bytes() -> int:
+    """cpu_sim_top's RAM_BYTES default: one source for the harness and --memory-map."""
+    src = (REPO / "rtl" / "cpu" / "cpu_sim_top.v").read_text()
+    m = re.search(r"parameter\s+RAM_BYTES\s*=\s*(\d+)", src)
+    if m is None:
+        raise RuntimeError("RAM_BYTES default not found in rtl/cpu/cpu_sim_top.v")
+    return int(m.group(1))
+
+
+RAM_BYTES = _ram_bytes()
 
 
 def main(argv: list[str] | None = None) -> int:
