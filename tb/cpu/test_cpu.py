@@ -20,7 +20,7 @@ import pytest
 from cocotb.triggers import ReadOnly, RisingEdge
 
 import randprog
-from cpu_progs import PROGS, build, run_iss
+from cpu_progs import BUILD, PROGS, build, run_iss
 from cpu_tb import CpuTb
 from torqueloop.ref.rv32 import read_elf
 from torqueloop.simrun import run, sims_for
@@ -54,7 +54,7 @@ async def random_streams_match_iss(dut):
         seed = random.getrandbits(32)
         dut._log.info("random program %d: seed %d (%d instructions), wait states %s",
                       k, seed, length, bool(k & 1))
-        src = PROGS.parent.parent.parent / "build" / "cpu_progs" / TAG / f"rand_{seed}.S"
+        src = BUILD / TAG / f"rand_{seed}.S"
         src.parent.mkdir(parents=True, exist_ok=True)
         src.write_text(randprog.generate(seed, length))
         elf = build(f"rand_{seed}", [src], tag=TAG, crt0=False)
