@@ -1,0 +1,228 @@
+/* torqueloop boot ROM bootloader (docs/bootloader.md).
+ *
+ * After reset (or a jump to the reset vector) it quiesces the peripherals,
+ * says "TLBW\n" and listens on the UART for BOOT_WINDOW_CYCLES for an upload
+ * frame: sync, header with its own CRC-32, image with a CRC-32.  A good image
+ * is written to RAM and started; anything else is answered with an error
+ * reply, and the factory image stored in this ROM is copied over RAM and
+ * started instead, so a failed or interrupted upload never runs.
+ *
+ * Runs from ROM with its stack in the top BOOT_STACK_BYTES of RAM, which an
+ * upload never reaches; no .data, no .bss (boot.ld checks).  The constants
+ * come from boot_proto.h, generated from torqueloop/bootproto.py. */
+#include <stdint.h>
+
+#include "boot_crc.h"
+#include "boot_proto.h"
+#include "torqueloop_regs.h"
+
+#define RX_NONE (-1)
+
+/* The window and gap constants are kept in the image (not only folded into
+ * instructions) so a test can read the real values from the ELF. */
+#define BOOT_PARAM __attribute__((section(".rodata.boot_param")))  /* GCC puts const volatile in .data */
+BOOT_PARAM const volatile uint32_t boot_window_cycles = BOOT_WINDOW_CYCLES;
+BOOT_PARAM const volatile uint32_t boot_gap_cycles = BOOT_GAP_CYCLES;
+
+static const uint8_t sync_bytes[4] = BOOT_SYNC_BYTES;
+
+struct factory_desc {
+    uint32_t magic;
+    uint32_t length;
+    uint32_t crc;
+    uint32_t load_addr;
+    uint32_t image[];
+};
+
+/* At TL_BOOT_ROM_BASE + BOOT_FACTORY_OFS, placed by the generated boot.ld
+ * (a symbol rather than a cast constant: GCC 12 rejects accesses through
+ * pointers it knows to be near address 0). */
+extern const volatile struct factory_desc boot_factory;
+
+static uint32_t now(void)
+{
+    /* mtime low word: intervals up to 85 s by unsigned subtraction. */
+    return TL_TIMER_MTIME_LO;
+}
+
+static void put(uint8_t c)
+{
+    while (!(TL_UART_STATUS & TL_UART_STATUS_TX_READY_MSK)) {
+    }
+    TL_UART_TX_DATA = c;
+}
+
+static void reply(char code)
+{
+    put('T');
+    put('L');
+    put('B');
+    put((uint8_t)code);
+    put('\n');
+}
+
+static void tx_wait_idle(void)
+{
+    while (!(TL_UART_STATUS & TL_UART_STATUS_TX_IDLE_MSK)) {
+    }
+}
+
+/* Next received byte, or RX_NONE after `limit` cycles without one. */
+static int get(uint32_t limit)
+{
+    uint32_t t0 = now();
+    for (;;) {
+        uint32_t r = TL_UART_RX_DATA;   /* each read pops one byte */
+        if (r & TL_UART_RX_DATA_VALID_MSK)
+            return (int)(r & 0xFFu);
+        if (now() - t0 >= limit)
+            return RX_NONE;
+    }
+}
+
+/* Whatever the code that jumped here left running: drives, interrupts,
+ * timer, watchdog, UART mode.  After a reset all of this is already so. */
+static void quiesce(void)
+{
+    TL_AXIS0_PWM_CTRL = 0u;
+    TL_AXIS0_PWM_CMD = 0u;
+    TL_AXIS1_PWM_CTRL = 0u;
+    TL_AXIS1_PWM_CMD = 0u;
+    TL_INTC_ENABLE = 0u;
+    TL_INTC_PENDING = 0xFFFFFFFFu;
+    TL_TIMER_MTIMECMP_HI = 0xFFFFFFFFu;
+    TL_TIMER_MTIMECMP_LO = 0xFFFFFFFFu;
+    TL_TIMER_MSIP = 0u;
+    TL_SYS_WDOG_LOAD = 0u;
+    /* Flow control off first: a peer holding CTS must not stall the drain. */
+    TL_UART_CTRL = 0u;
+    tx_wait_idle();
+    TL_UART_BAUD_DIV = BOOT_BAUD_DIV;
+}
+
+static uint32_t le32(const uint8_t *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* One upload attempt.  Returns BOOT_REPLY_OK with the image in RAM, an error
+ * reply code, or 0 if the window passed in silence.  forever: no window. */
+static char receive(int forever)
+{
+    uint32_t t0 = now();
+    uint32_t skipped = 0;
+    unsigned match = 0;
+
+    while (match < sizeof sync_bytes) {
+        uint32_t r = TL_UART_RX_DATA;
+        if (r & TL_UART_RX_DATA_VALID_MSK) {
+            uint8_t b = (uint8_t)r;
+            if (b == sync_bytes[match]) {
+                match++;
+            } else {
+                /* The sync has no prefix that is also a suffix of a partial
+                 * match, so a mismatch restarts at 0 or 1. */
+                skipped += match + 1u;
+                match = (b == sync_bytes[0]) ? 1u : 0u;
+            }
+        } else if (!forever && now() - t0 >= boot_window_cycles) {
+            return (skipped || match) ? BOOT_REPLY_GARBAGE : 0;
+        }
+    }
+
+    uint8_t hdr[BOOT_HEADER_BYTES + 4];
+    uint32_t crc = BOOT_CRC_INIT;
+    for (unsigned i = 0; i < sizeof hdr; i++) {
+        int b = get(boot_gap_cycles);
+        if (b == RX_NONE)
+            return BOOT_REPLY_TIMEOUT;
+        hdr[i] = (uint8_t)b;
+        if (i < BOOT_HEADER_BYTES)
+            crc = boot_crc_byte(crc, (uint8_t)b);
+    }
+    if (~crc != le32(&hdr[16]) || hdr[0] != BOOT_VERSION || hdr[1] || hdr[2] || hdr[3]
+        || le32(&hdr[4]) != BOOT_LOAD_ADDR)
+        return BOOT_REPLY_BAD_HEADER;
+    uint32_t length = le32(&hdr[8]);
+    if (length == 0u || length > BOOT_MAX_IMAGE_BYTES)
+        return BOOT_REPLY_BAD_LENGTH;
+
+    /* Straight into RAM: on any failure the factory copy overwrites it. */
+    volatile uint8_t *dst = (volatile uint8_t *)BOOT_LOAD_ADDR;
+    crc = BOOT_CRC_INIT;
+    for (uint32_t i = 0; i < length; i++) {
+        int b = get(boot_gap_cycles);
+        if (b == RX_NONE)
+            return BOOT_REPLY_TIMEOUT;
+        dst[i] = (uint8_t)b;
+        crc = boot_crc_byte(crc, (uint8_t)b);
+    }
+    return (~crc == le32(&hdr[12])) ? BOOT_REPLY_OK : BOOT_REPLY_BAD_CRC;
+}
+
+/* Let the rest of a rejected frame pass (until the line is quiet for a gap),
+ * so the factory firmware's link parser does not start on it; bounded by one
+ * largest frame so a babbling line cannot keep the board from booting. */
+static void drain(void)
+{
+    for (uint32_t n = 0; n < BOOT_MAX_IMAGE_BYTES + 64u; n++) {
+        if (get(boot_gap_cycles) == RX_NONE)
+            return;
+    }
+}
+
+/* Copy the factory image from ROM to RAM and check its CRC-32 in RAM.
+ * Returns 0 if the ROM holds no valid factory image. */
+static int load_factory(void)
+{
+    const volatile struct factory_desc *d = &boot_factory;
+    uint32_t length = d->length;
+    if (d->magic != BOOT_FACTORY_MAGIC || d->load_addr != BOOT_LOAD_ADDR || length == 0u
+        || length > BOOT_FACTORY_MAX_BYTES)
+        return 0;
+    const volatile uint32_t *src = d->image;
+    volatile uint32_t *dst = (volatile uint32_t *)BOOT_LOAD_ADDR;
+    for (uint32_t i = 0; i < (length + 3u) / 4u; i++)
+        dst[i] = src[i];
+    const volatile uint8_t *ram = (const volatile uint8_t *)BOOT_LOAD_ADDR;
+    uint32_t crc = BOOT_CRC_INIT;
+    for (uint32_t i = 0; i < length; i++)
+        crc = boot_crc_byte(crc, ram[i]);
+    return ~crc == d->crc;
+}
+
+static void __attribute__((noreturn)) start_image(void)
+{
+    tx_wait_idle();                  /* the image may change the baud rate */
+    TL_INTC_PENDING = 0xFFFFFFFFu;   /* our own UART traffic is no event for it */
+    void (*entry)(void) = (void (*)(void))BOOT_LOAD_ADDR;
+    entry();
+    for (;;) {
+    }
+}
+
+void __attribute__((noreturn)) boot_main(void);
+
+void boot_main(void)
+{
+    quiesce();
+    int forever = 0;
+    for (;;) {
+        reply(BOOT_REPLY_WINDOW);
+        char r = receive(forever);
+        if (r == BOOT_REPLY_OK) {
+            reply(BOOT_REPLY_OK);
+            start_image();
+        }
+        if (r) {
+            reply(r);
+            drain();
+        }
+        if (load_factory()) {
+            reply(BOOT_REPLY_FACTORY);
+            start_image();
+        }
+        reply(BOOT_REPLY_NO_FACTORY);
+        forever = 1;
+    }
+}

@@ -1,0 +1,215 @@
+"""torqueloop.bootproto: frame layout, CRC-32 (host and the bootloader's C
+code), reply parsing, ROM layout, ELF conversion, and upload() over a TCP
+socket to a fake bootloader (the RN-XV path: socket://host:port)."""
+
+from __future__ import annotations
+
+import random
+import socket
+import struct
+import subprocess
+import threading
+import time
+import zlib
+from pathlib import Path
+
+import pytest
+
+from torqueloop import bootproto as bp
+from torqueloop import regs
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def test_crc32_check_value():
+    assert bp.crc32(b"123456789") == 0xCBF43926
+
+
+def test_boot_crc_c_matches_zlib(tmp_path):
+    """firmware/boot/boot_crc.c compiled for the host against zlib on random data."""
+    drv = tmp_path / "drv.c"
+    drv.write_text('#include <stdio.h>\n#include "boot_crc.h"\n'
+                   "int main(void){uint32_t s=BOOT_CRC_INIT;int c;while((c=getchar())!=EOF)"
+                   "s=boot_crc_byte(s,(uint8_t)c);printf(\"%08x\\n\",~s);return 0;}\n")
+    exe = tmp_path / "drv"
+    subprocess.run(["gcc", "-std=c11", "-Wall", "-Werror", "-I", str(REPO / "firmware" / "boot"), "-o", str(exe),
+                    str(drv), str(REPO / "firmware" / "boot" / "boot_crc.c")], check=True)
+    seed = random.randrange(2**32)
+    print(f"seed {seed}")
+    rng = random.Random(seed)
+    for n in (0, 1, 9, 1000, 4093):
+        data = bytes(rng.getrandbits(8) for _ in range(n))
+        out = subprocess.run([str(exe)], input=data, capture_output=True, check=True).stdout
+        assert int(out, 16) == zlib.crc32(data), f"length {n}"
+
+
+def test_frame_layout():
+    image = bytes(range(256)) * 3 + b"\x01"
+    f = bp.encode_frame(image)
+    assert f[:4] == bytes([0xA5, 0x5A, 0xB0, 0x07])
+    version, z0, z1, z2, load, length, icrc, hcrc = struct.unpack_from("<BBBBIIII", f, 4)
+    assert (version, z0, z1, z2) == (1, 0, 0, 0)
+    assert load == regs.RAM_BASE == 0x8000_0000
+    assert length == len(image) and icrc == zlib.crc32(image)
+    assert hcrc == zlib.crc32(f[4:20])
+    assert f[24:] == image and bp.FRAME_OVERHEAD == 24
+    assert bp.decode_header(f)[1:] == (regs.RAM_BASE, len(image), zlib.crc32(image))
+
+
+def test_frame_limits_and_bad_headers():
+    assert bp.MAX_IMAGE_BYTES == regs.RAM_SIZE - bp.BOOT_STACK_BYTES
+    bp.encode_frame(bytes(bp.MAX_IMAGE_BYTES))
+    with pytest.raises(bp.FrameError):
+        bp.encode_frame(bytes(bp.MAX_IMAGE_BYTES + 1))
+    with pytest.raises(bp.FrameError):
+        bp.encode_frame(b"")
+    f = bytearray(bp.encode_frame(b"abcd"))
+    for bit in range(32, 24 * 8):   # every single-bit flip of the header or its CRC is caught
+        g = bytearray(f)
+        g[bit // 8] ^= 1 << (bit % 8)
+        with pytest.raises(bp.FrameError):
+            bp.decode_header(bytes(g))
+    with pytest.raises(bp.FrameError):
+        bp.decode_header(bp.encode_header(4, 0, load_addr=0x1000) + b"abcd")
+
+
+def test_sync_is_not_rn_xv_text_or_cobs_delimiter():
+    assert bp.SYNC[0] >= 0x80 and 0 not in bp.SYNC   # RN-XV text is ASCII: it cannot even start a sync
+    for text in (b"*HELLO*", b"*OPEN*", b"*CLOS*", b"CMD\r\n"):
+        assert bp.SYNC not in text
+
+
+def test_reply_parser_with_chatter_and_splits():
+    stream = b"*OPEN*TLBW\n\x00\x05xyTLBZ\nTLBC\nTL" + b"BF\nTLB"
+    p = bp.ReplyParser()
+    got = []
+    for i in range(0, len(stream), 3):
+        got += p.feed(stream[i:i + 3])
+    assert got == [bp.Reply.WINDOW, bp.Reply.BAD_CRC, bp.Reply.FACTORY]
+    assert p.feed(b"K\n") == [bp.Reply.OK]
+
+
+def test_rom_image_layout():
+    boot = bytes(range(200))
+    factory = bytes(random.getrandbits(8) for _ in range(1001))
+    rom = bp.rom_image(boot, factory)
+    assert len(rom) == regs.BOOT_ROM_SIZE
+    assert rom[:200] == boot and rom[200:0x800] == bytes(0x800 - 200)
+    magic, length, crc, load = struct.unpack_from("<IIII", rom, 0x800)
+    assert (magic, length, crc, load) == (0x57464C54, 1001, zlib.crc32(factory), regs.RAM_BASE)
+    assert rom[0x810:0x810 + 1001] == factory
+    assert bp.rom_image(boot, None)[0x800:0x810] == bytes(16)
+    with pytest.raises(bp.ImageError):
+        bp.rom_image(bytes(bp.BOOT_CODE_BYTES + 1), factory)
+    with pytest.raises(bp.ImageError):
+        bp.rom_image(boot, bytes(bp.FACTORY_MAX_BYTES + 1))
+    words = bp.hex_words(b"\x01\x02\x03\x04\x05").split()
+    assert words == ["04030201", "00000005"]
+
+
+def _elf(segments: list[tuple[int, bytes]], entry: int) -> bytes:
+    """A minimal ELF32 RISC-V file with PT_LOAD segments (written here
+    independently of bootproto's reader)."""
+    phoff, phent = 52, 32
+    data_off = phoff + phent * len(segments)
+    hdr = b"\x7fELF\x01\x01\x01" + bytes(9)
+    hdr += struct.pack("<HHIIIIIHHHHHH", 2, 243, 1, entry, phoff, 0, 0, 52, phent, len(segments), 40, 0, 0)
+    ph, body = b"", b""
+    for addr, d in segments:
+        ph += struct.pack("<8I", 1, data_off + len(body), addr, addr, len(d), len(d) + 16, 7, 4)
+        body += d
+    return hdr + ph + body
+
+
+def test_image_from_elf(tmp_path):
+    base = regs.RAM_BASE
+    raw = _elf([(base + 0x10, b"BBBB"), (base, b"AAAA")], base)
+    assert bp.image_from_elf(raw) == b"AAAA" + bytes(12) + b"BBBB"
+    with pytest.raises(bp.ImageError):
+        bp.image_from_elf(_elf([(0, b"AAAA")], 0))           # linked for the ROM
+    with pytest.raises(bp.ImageError):
+        bp.image_from_elf(_elf([(base, b"AAAA")], base + 4))  # entry elsewhere
+    p = tmp_path / "x.bin"
+    p.write_bytes(b"\x13\x00\x00\x00")
+    assert bp.load_image(p) == b"\x13\x00\x00\x00"
+
+
+def test_c_header_carries_the_protocol():
+    h = bp.c_header()
+    assert "#define BOOT_WINDOW_CYCLES 25000000u" in h
+    assert "#define BOOT_SYNC_BYTES {0xA5u, 0x5Au, 0xB0u, 0x07u}" in h
+    assert f"#define BOOT_MAX_IMAGE_BYTES {bp.MAX_IMAGE_BYTES}u" in h
+    assert "#define BOOT_REPLY_BAD_CRC 'C'" in h
+
+
+class FakeBoot(threading.Thread):
+    """A TCP peer that acts like the bootloader behind an RN-XV: says TLBW,
+    reads one frame with its own parser and answers K, or C + F if asked to
+    find the CRC bad."""
+
+    def __init__(self, corrupt: bool = False, silent: bool = False) -> None:
+        super().__init__(daemon=True)
+        self.srv = socket.create_server(("127.0.0.1", 0))
+        self.port = self.srv.getsockname()[1]
+        self.corrupt, self.silent = corrupt, silent
+        self.received = b""
+        self.entered = b""
+
+    def run(self) -> None:
+        conn, _ = self.srv.accept()
+        with conn:
+            # Like the servo firmware: nothing until the host's enter command
+            # (pyserial drops what arrives while it opens the socket).
+            buf = conn.recv(4096)
+            if self.silent:
+                time.sleep(1.0)
+                return
+            conn.sendall(b"*HELLO*TLBW\n")
+            while bp.SYNC not in buf or len(buf) < buf.index(bp.SYNC) + 24 + struct.unpack_from(
+                    "<I", buf, buf.index(bp.SYNC) + 12)[0]:
+                chunk = conn.recv(4096)
+                if not chunk:
+                    return
+                buf += chunk
+            self.entered = buf[:buf.index(bp.SYNC)]
+            buf = buf[buf.index(bp.SYNC):]
+            self.received = buf
+            length, crc = struct.unpack_from("<II", buf, 12)
+            ok = zlib.crc32(buf[24:24 + length]) == crc and not self.corrupt
+            conn.sendall(b"TLBK\n" if ok else b"TLBC\nTLBF\n")
+
+
+def test_upload_over_tcp_good_and_rejected():
+    image = bytes(random.getrandbits(8) for _ in range(3000))
+    fake = FakeBoot()
+    fake.start()
+    seen = []
+    res = bp.upload(f"socket://127.0.0.1:{fake.port}", image, baud=2_000_000, wait_window_s=5, enter=b"ENTER",
+                    progress=lambda n, t: seen.append((n, t)))
+    fake.join(5)
+    assert res.ok, res.message
+    assert fake.entered == b"ENTER"
+    assert fake.received == bp.encode_frame(image)
+    assert res.bytes_sent == len(image) + bp.FRAME_OVERHEAD
+    assert seen[-1] == (res.bytes_sent, res.bytes_sent) and [n for n, _ in seen] == sorted(n for n, _ in seen)
+    assert res.replies == [bp.Reply.WINDOW, bp.Reply.OK]
+
+    bad = FakeBoot(corrupt=True)
+    bad.start()
+    res = bp.upload(f"socket://127.0.0.1:{bad.port}", image, baud=2_000_000, wait_window_s=5, enter=b"E")
+    bad.join(5)
+    assert not res.ok and "CRC" in res.message and res.factory_running
+
+
+def test_upload_without_window_sends_nothing():
+    fake = FakeBoot(silent=True)
+    fake.start()
+    res = bp.upload(f"socket://127.0.0.1:{fake.port}", b"abcd", wait_window_s=0.3, enter=b"E")
+    assert not res.ok and "TLBW" in res.message and res.bytes_sent == 0
+
+
+def test_upload_reports_a_lost_link():
+    fake = FakeBoot(silent=True)
+    fake.start()
+    res = bp.upload(f"socket://127.0.0.1:{fake.port}", b"abcd", wait_window_s=3, enter=b"E")
+    assert not res.ok and "link" in res.message
