@@ -304,7 +304,6 @@ class FastAxis:
             remaining -= k
             tau = k * self.tick
             p = self._flow(s, k)
-            grid = True
             for _ in range(self.MAX_EVENTS_PER_CHUNK):
                 z1 = p @ self.z
                 ev = None if s.g is None else self._find_event(s, self.z, z1, tau)
@@ -322,14 +321,12 @@ class FastAxis:
                 self.mode = ax.next_mode(self.c, self.z[:ax.N_STATE], self.mode, s.guards[j],
                                          self.e_pos, self.e_neg)
                 s = self._system()
-                grid = False
                 if tau <= 1e-13:
                     break
                 p = s.expm(tau)
             else:
                 raise RuntimeError(f"axis {self.index}: more than {self.MAX_EVENTS_PER_CHUNK} "
                                    f"mode switches in one chunk (Zeno?) mode={self.mode}")
-            del grid
 
 
 def expm_balanced(mb: np.ndarray, bal: np.ndarray, tau: float) -> np.ndarray:
