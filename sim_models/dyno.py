@@ -117,10 +117,9 @@ class DynamometerBench:
             q2 += seg2
             if hs:
                 qhs += seg
-            i = inf + a * ex if t < t_left else inf + a * ex
             t_left -= t
-            if t_left > 0:
-                i = 0.0
+            # stopped at the zero crossing, or ran to the end of the segment
+            i = 0.0 if t_left > 0 else inf + a * ex
         return i, q, q2, qhs
 
     def measure(self, freq_hz: float, duty: float, direction: int = 1,
