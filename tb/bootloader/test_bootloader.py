@@ -1,0 +1,241 @@
+"""bootloader: the boot ROM bootloader (firmware/boot) on the whole SoC.
+
+The boot ROM holds the real bootloader (built with a short window and gap and
+the UART at 1 Mbaud, so the bench is fast) and a stand-in factory firmware
+(prog/factory.c, which shows on the LEDs whether it started from a pristine
+copy).  Frames come from torqueloop.bootproto, the code the host tool uses;
+an independent UART model (cocotbext-uart) drives RX and reads TX.
+
+Checked: no upload -> factory after the window; a good upload runs (LEDs,
+UART), hands back to the bootloader by the documented jump and loads again;
+bad image CRC, bad header, oversized length, truncated frame, bytes without a
+sync are each answered with their error reply and the factory firmware runs
+pristine (a half-written image never runs); RN-XV chatter in front of a frame
+does no harm; the window closes when configured.  The board's real window
+(500 ms = 25 000 000 cycles) is read from the board build's ELF.
+"""
+
+from __future__ import annotations
+
+import os
+import random
+import subprocess
+import sys
+from pathlib import Path
+
+import cocotb
+import pytest
+from cocotb.clock import Clock
+from cocotb.triggers import ClockCycles, FallingEdge, Timer, with_timeout
+from cocotb.utils import get_sim_time
+from cocotbext.uart import UartSink, UartSource
+
+from torqueloop import bootproto as bp
+from torqueloop.hdl import REPO_ROOT
+from torqueloop.simrun import BUILD_ROOT, run
+
+sys.path.insert(0, str(REPO_ROOT / "firmware" / "boot"))
+import build_boot  # noqa: E402
+
+PROG = Path(__file__).resolve().parent / "prog"
+CLK_NS = 20
+BAUD_DIV = 49                      # 50 clocks per bit: 1 Mbaud
+BAUD = 50_000_000 // (BAUD_DIV + 1)
+BYTE_CYCLES = 10 * (BAUD_DIV + 1)
+TB_CFG = build_boot.BootConfig(window_cycles=40_000, gap_cycles=20_000, baud_div=BAUD_DIV)
+FACTORY_LEDS, DIRTY_LEDS, APP_LEDS = 0x0F0, 0x3FF, 0x2A5
+
+
+def build_prog(name: str) -> bytes:
+    """Compile prog/<name>.c as a RAM-linked firmware image; the flat image
+    comes from bootproto.load_image (the host tool's ELF conversion)."""
+    out = BUILD_ROOT / "bootloader" / "prog"
+    out.mkdir(parents=True, exist_ok=True)
+    elf = out / f"{name}.{os.getpid()}.elf"
+    fw = REPO_ROOT / "firmware"
+    subprocess.run(
+        ["riscv64-unknown-elf-gcc", "-march=rv32im_zicsr", "-mabi=ilp32", "-Os", "-nostdlib", "-ffreestanding",
+         "-static", "-std=c11", "-Wall", "-Wextra", "-Werror", "-I", str(fw / "include"),
+         "-T", str(fw / "common" / "link.ld"), "-Wl,--no-warn-rwx-segments", "-o", str(elf),
+         str(fw / "common" / "crt0.S"), str(PROG / f"{name}.c")],
+        check=True, capture_output=True, text=True)
+    try:
+        return bp.load_image(elf)
+    finally:
+        elf.unlink()
+
+
+class TB:
+    def __init__(self, dut) -> None:
+        self.dut = dut
+        self.src = UartSource(dut.uart_rx, baud=BAUD, bits=8)
+        self.sink = UartSink(dut.uart_tx, baud=BAUD, bits=8)
+        dut.sw.value = 0
+        dut.key_n.value = 0xF
+        dut.estop.value = 0
+        dut.bridge_fault.value = 0
+        dut.enc_a.value = 0
+        dut.enc_b.value = 0
+        dut.enc_z.value = 0
+        dut.uart_cts_n.value = 0
+        cocotb.start_soon(Clock(dut.clk, CLK_NS, unit="ns").start())
+
+    @property
+    def cycle(self) -> int:
+        # From simulated time, not a per-edge Python counter (that would cost
+        # more than the whole SoC model).
+        return int(get_sim_time("ns")) // CLK_NS
+
+    async def reset(self) -> int:
+        """Reset the SoC (RAM keeps its contents, as on the board); returns
+        the cycle at which the first start bit of the bootloader's TLBW appears."""
+        self.dut.rst.value = 1
+        await ClockCycles(self.dut.clk, 10)
+        self.sink.clear()
+        self.dut.rst.value = 0
+        await with_timeout(FallingEdge(self.dut.uart_tx), 20_000 * 20, "ns")
+        t_tx = self.cycle
+        assert await self.line() == b"TLBW\n"
+        return t_tx
+
+    async def line(self, limit_cycles: int = 400_000) -> bytes:
+        got = bytearray()
+        while not got.endswith(b"\n"):
+            got += await with_timeout(self.sink.read(1), limit_cycles * 20, "ns")
+        return bytes(got)
+
+    async def expect(self, *lines: bytes, limit_cycles: int = 400_000) -> None:
+        for want in lines:
+            got = await self.line(limit_cycles)
+            assert got == want, f"expected {want!r}, got {got!r}"
+
+    async def leds_settle(self, want: int) -> None:
+        await ClockCycles(self.dut.clk, 200)
+        assert int(self.dut.ledr.value) == want, f"LEDR 0x{int(self.dut.ledr.value):03x}, want 0x{want:03x}"
+
+    async def factory_runs(self) -> None:
+        await self.expect(b"TLBF\n", b"FAC\n")
+        await self.leds_settle(FACTORY_LEDS)
+
+
+def _images() -> tuple[bytes, bytes]:
+    return (bytes.fromhex(os.environ["TB_APP_HEX"]), bytes.fromhex(os.environ["TB_FACTORY_HEX"]))
+
+
+def _app_variant(app: bytes) -> bytes:
+    """The app plus random trailing bytes (covered by the CRC, cleared as .bss
+    or never read), so each upload's content and length differ."""
+    return app + bytes(random.getrandbits(8) for _ in range(random.randrange(0, 64)))
+
+
+@cocotb.test()
+async def no_upload_runs_factory(dut):
+    tb = TB(dut)
+    await tb.reset()
+    await tb.factory_runs()
+    # A second reset with the factory's own dirty RAM: copied fresh again.
+    await tb.reset()
+    await tb.factory_runs()
+
+
+@cocotb.test()
+async def good_upload_runs_and_hands_back(dut):
+    tb = TB(dut)
+    app, _ = _images()
+    await tb.reset()
+    await tb.src.write(b"*OPEN*" + bp.encode_frame(_app_variant(app)))   # RN-XV chatter first: harmless
+    await tb.expect(b"TLBK\n", b"APP\n")
+    await tb.leds_settle(APP_LEDS)
+    # The app jumps to the boot ROM (the entry convention); a second upload loads.
+    await tb.src.write(b"B")
+    await tb.expect(b"TLBW\n")
+    await tb.src.write(bp.encode_frame(_app_variant(app)))
+    await tb.expect(b"TLBK\n", b"APP\n")
+    # After a reset without an upload the factory firmware runs, pristine.
+    await tb.reset()
+    await tb.factory_runs()
+
+
+async def _rejected(dut, data: bytes, code: bytes) -> None:
+    tb = TB(dut)
+    await tb.reset()
+    await tb.src.write(data)
+    await tb.expect(b"TLB" + code + b"\n")
+    await tb.factory_runs()
+
+
+@cocotb.test()
+async def bad_crc_rejected(dut):
+    app, _ = _images()
+    frame = bytearray(bp.encode_frame(_app_variant(app)))
+    bit = random.randrange(bp.FRAME_OVERHEAD * 8, len(frame) * 8)
+    frame[bit // 8] ^= 1 << (bit % 8)
+    await _rejected(dut, bytes(frame), b"C")
+
+
+@cocotb.test()
+async def bad_header_rejected(dut):
+    app, _ = _images()
+    frame = bytearray(bp.encode_frame(app))
+    bit = random.randrange(len(bp.SYNC) * 8, bp.FRAME_OVERHEAD * 8)
+    frame[bit // 8] ^= 1 << (bit % 8)
+    await _rejected(dut, bytes(frame), b"H")
+
+
+@cocotb.test()
+async def oversized_rejected(dut):
+    app, _ = _images()
+    # A well-formed header (its CRC is right) announcing one byte too many.
+    hdr = bp.encode_header(bp.MAX_IMAGE_BYTES + 1, bp.crc32(app))
+    await _rejected(dut, hdr + app, b"L")
+
+
+@cocotb.test()
+async def truncated_rejected_and_half_image_never_runs(dut):
+    app, _ = _images()
+    frame = bp.encode_frame(_app_variant(app))
+    cut = random.randrange(bp.FRAME_OVERHEAD + 16, len(frame) - 1)   # part of the app is already in RAM
+    await _rejected(dut, frame[:cut], b"T")
+
+
+@cocotb.test()
+async def garbage_without_sync_rejected(dut):
+    junk = b"*HELLO*" + bytes(random.choice(b"ABCDEFGHIJKLMNOPQRSTUVWXYZ*\r\n") for _ in range(20))
+    await _rejected(dut, junk, b"G")
+
+
+@cocotb.test()
+async def window_closes_when_configured(dut):
+    """The sync's first byte lands in the RX FIFO ~9.5 bit times after its
+    start bit; the window is counted from just before TLBW is sent."""
+    tb = TB(dut)
+    app, _ = _images()
+    margin = 2_000
+    for offset, accepted in ((-margin, True), (+margin, False)):
+        t0 = await tb.reset()
+        await Timer((t0 + TB_CFG.window_cycles + offset - BYTE_CYCLES - tb.cycle) * CLK_NS, unit="ns")
+        await tb.src.write(bp.encode_frame(app))
+        if accepted:
+            await tb.expect(b"TLBK\n", b"APP\n")
+        else:
+            await tb.factory_runs()
+            await tb.src.wait()
+            await ClockCycles(dut.clk, 4 * BYTE_CYCLES)
+            late = tb.sink.read_nowait(tb.sink.count()) if tb.sink.count() else b""
+            assert b"TLB" not in late, f"bootloader answered after its window: {late!r}"
+
+
+def test_board_window_is_500ms():
+    """The board build (defaults) keeps 500 ms at 50 MHz in its ROM image."""
+    b = build_boot.build_boot()
+    assert build_boot.symbol_word(b.elf, "boot_window_cycles") == 25_000_000 == bp.ms_to_cycles(500)
+    assert build_boot.symbol_word(b.elf, "boot_gap_cycles") == bp.ms_to_cycles(bp.GAP_MS)
+    assert b.code_bytes <= bp.BOOT_CODE_BYTES
+
+
+@pytest.mark.parametrize("sim", ["verilator"])
+def test_bootloader(sim):
+    app, factory = build_prog("app"), build_prog("factory")
+    rom = build_boot.build_rom(factory, TB_CFG, name="tb_rom")
+    run("soc", sim, "test_bootloader", parameters={"ROM_INIT": f'"{rom}"'}, build_tag="bootloader",
+        extra_env={"TB_APP_HEX": app.hex(), "TB_FACTORY_HEX": factory.hex()})
