@@ -59,7 +59,7 @@ def test_manifest_uses_brings_sources_once_in_dependency_order(tmp_path):
                  f'[core.b]\nuses = ["a"]\nverilog = ["{rel_a}", "{rel_b}"]\n')
     cores = load(m)
     assert [p.name for p in cores["b"].verilog] == ["a.v", "b.v"]
-    m.write_text('[core.a]\nuses = ["b"]\n[core.b]\nuses = ["a"]\n')
+    m.write_text('[core.a]\nuses = ["b"]\nverilog = []\n[core.b]\nuses = ["a"]\nverilog = []\n')
     with pytest.raises(ValueError, match="cycle"):
         load(m)
 

@@ -238,8 +238,11 @@ def synth_cyclonev(c: Core, params: Mapping[str, int] | None = None, tag: str = 
     }
 
 
-#: cells whose outputs start a new timing path (registers and memories)
-_SEQUENTIAL = ("MISTRAL_FF", "MISTRAL_M10K", "MISTRAL_MLAB", "MISTRAL_MUL")
+#: cells whose outputs start a new timing path (registers and block RAMs with
+#: registered reads).  Yosys maps multipliers to unregistered DSP cells, so
+#: MISTRAL_MUL* stays combinational here (one level, an under-estimate of
+#: its delay).
+_SEQUENTIAL = ("MISTRAL_FF", "MISTRAL_M10K", "MISTRAL_MLAB")
 
 
 def lut_levels(netlist_json: Path, top: str) -> int:

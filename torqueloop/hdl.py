@@ -80,8 +80,10 @@ def load_manifest(path: Path = MANIFEST) -> dict[str, Core]:
         cores[name] = Core(
             name=name,
             top=spec.get("top", name),
-            verilog=_paths(_with_uses(specs, name, "verilog"), name),
-            vhdl=_paths(_with_uses(specs, name, "vhdl"), name),
+            # A core has a language only if it declares sources in it itself;
+            # then the cores it uses contribute theirs in that language too.
+            verilog=_paths(_with_uses(specs, name, "verilog"), name) if "verilog" in spec else (),
+            vhdl=_paths(_with_uses(specs, name, "vhdl"), name) if "vhdl" in spec else (),
             synth=bool(spec.get("synth", False)),
             equiv=bool(spec.get("equiv", False)),
             synth_params=dict(spec.get("synth_params", {})),
