@@ -233,29 +233,42 @@ def cmd_clear_fault(ctx: Ctx) -> int:
 
 
 def capture(ctx: Ctx, duration: float, every: int = 1, on_record: Callable[[dict], None] | None = None,
-            label: str = "capture", start: Callable[[], None] | None = None) -> list[dict]:
-    """Stream telemetry for ``duration`` s (keeping the link watchdog fed); returns the records."""
+            label: str = "capture", trigger: tuple[float, Callable[[], None]] | None = None) -> list[dict]:
+    """Stream telemetry for ``duration`` seconds of *board* time (the records'
+    time_us, so a co-simulation slower than real time is captured just as
+    long), feeding the link watchdog; ``trigger`` = (t, fn) calls fn once the
+    capture spans t seconds.  Returns the records."""
     c = ctx.client
     c.take_telemetry()
     c.set_telemetry(every)
     records: list[dict] = []
+    show = not ctx.args.json and on_record is None
+    span = 0.0
     try:
-        if start:
-            start()
-        t0 = last_keep = time.monotonic()
-        while (now := time.monotonic()) - t0 < duration:
+        last_keep = last_new = time.monotonic()
+        while span < duration:
             c.pump(0.02)
             new = c.take_telemetry()
-            records += new
-            if on_record:
-                for r in new:
-                    on_record(r)
+            now = time.monotonic()
+            if new:
+                records += new
+                last_new = now
+                span = ((records[-1]["time_us"] - records[0]["time_us"]) % (1 << 32)) / 1e6
+                if on_record:
+                    for r in new:
+                        on_record(r)
+                if trigger and span >= trigger[0]:
+                    trigger[1]()
+                    trigger = None
+            elif now - last_new > max(5.0, 10 * ctx.args.timeout):
+                raise ProtocolError(f"no telemetry for {now - last_new:.0f} s (board streaming every {every} "
+                                    "periods was requested); check `torqueloop info` counters")
             if now - last_keep > KEEPALIVE_S:
                 c.status(ctx.args.axis)
                 last_keep = now
-            if not ctx.args.json and on_record is None:
-                progress(now - t0, duration, label)
-        if not ctx.args.json and on_record is None:
+            if show and math.isfinite(duration):
+                progress(span, duration, label)
+        if show and math.isfinite(duration):
             progress(duration, duration, label)
     finally:
         c.set_telemetry(0)
@@ -340,16 +353,12 @@ def cmd_step_test(ctx: Ctx) -> int:
     was_enabled = bool(s0["enabled"])
     if not was_enabled:
         c.enable(1 << a.axis, True)
-    t_move: list[float] = []
-
     def go() -> None:
-        # a few samples before the step show where it started from
-        c.pump(a.pre)
-        t_move.append(time.monotonic())
         c.move(a.axis, target, a.trapezoid)
 
     try:
-        records = capture(ctx, a.duration + a.pre, 1, label=f"step-test axis {a.axis}", start=go)
+        # a few samples before the step show where it started from
+        records = capture(ctx, a.duration + a.pre, 1, label=f"step-test axis {a.axis}", trigger=(a.pre, go))
     finally:
         if not was_enabled and not a.keep_enabled:
             c.enable(1 << a.axis, False)
@@ -457,10 +466,16 @@ def cmd_sim(ctx: Ctx) -> int:
     from torqueloop.host.simboard import SimBoard
 
     a = ctx.args
-    board = SimBoard(build_id=int(a.build_id, 0), seed=a.seed)
+    if a.rtl:
+        from torqueloop.host.rtlboard import RtlBoard
+
+        board: Any = RtlBoard(seed=a.seed)
+        what = "RTL board image (Verilator) + plant model, far below real time"
+    else:
+        board = SimBoard(build_id=int(a.build_id, 0), seed=a.seed)
+        what = f"servo firmware + plant model, build id 0x{board.build_id:08x}"
     srv = BoardServer(board, a.host, a.port, speed=a.speed, hello=a.hello)
-    print(f"simulated board (servo firmware + plant model) on socket://{a.host}:{srv.port} "
-          f"- build id 0x{board.build_id:08x}; Ctrl-C stops it", flush=True)
+    print(f"simulated board on socket://{a.host}:{srv.port} ({what}); Ctrl-C stops it", flush=True)
     try:
         srv.serve_forever()
     except KeyboardInterrupt:
@@ -547,8 +562,8 @@ def parser() -> argparse.ArgumentParser:
     unit_opt(sp)
     sp.add_argument("--relative", action="store_true", help="step relative to the present position")
     sp.add_argument("--trapezoid", action="store_true")
-    sp.add_argument("--duration", type=float, default=2.0, help="seconds captured after the step [2]")
-    sp.add_argument("--pre", type=float, default=0.1, help="seconds captured before the step [0.1]")
+    sp.add_argument("--duration", type=float, default=2.0, help="board seconds captured after the step [2]")
+    sp.add_argument("--pre", type=float, default=0.1, help="board seconds captured before the step [0.1]")
     sp.add_argument("--band", type=float, default=2.0, help="settling band, %% of the step [2]")
     sp.add_argument("--out", default="build/step", help="output folder [build/step]")
     sp.add_argument("--keep-enabled", action="store_true", help="leave the axis enabled afterwards")
@@ -570,6 +585,8 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("--hello", action="store_true", help="send *HELLO* on connect, like an RN-XV")
     sp.add_argument("--build-id", default="0x51b00001", help="build id the board reports")
     sp.add_argument("--seed", type=int, default=0, help="plant random seed")
+    sp.add_argument("--rtl", action="store_true",
+                    help="serve the RTL co-simulation (torqueloop/cosim) instead of the firmware-in-the-loop board")
     sp.set_defaults(fn=cmd_sim)
     return p
 
