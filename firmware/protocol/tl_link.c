@@ -1,13 +1,18 @@
 /* COBS framing, CRC and replay guard of the link (docs/protocol.md). */
 #include "tl_link.h"
 
+/* CRC-16/CCITT-FALSE a nibble at a time: a 32-byte table, about a quarter of
+ * the cycles of the bitwise loop (frame encoding runs beside the control loop). */
+static const uint16_t crc_nibble[16] = {
+    0x0000, 0x1021, 0x2042, 0x3063, 0x4084, 0x50A5, 0x60C6, 0x70E7,
+    0x8108, 0x9129, 0xA14A, 0xB16B, 0xC18C, 0xD1AD, 0xE1CE, 0xF1EF,
+};
+
 uint16_t tl_crc16(const uint8_t *data, size_t len, uint16_t crc)
 {
-    /* Bitwise CRC-16/CCITT-FALSE: 8 shifts per byte, no 512-byte table in RAM. */
     for (size_t i = 0; i < len; i++) {
-        crc ^= (uint16_t)(data[i] << 8);
-        for (int b = 0; b < 8; b++)
-            crc = (crc & 0x8000u) ? (uint16_t)((crc << 1) ^ 0x1021u) : (uint16_t)(crc << 1);
+        crc = (uint16_t)((crc << 4) ^ crc_nibble[((crc >> 12) ^ (data[i] >> 4)) & 0xFu]);
+        crc = (uint16_t)((crc << 4) ^ crc_nibble[((crc >> 12) ^ (data[i] & 0xFu)) & 0xFu]);
     }
     return crc;
 }

@@ -16,11 +16,16 @@
 
 #define WDOG_PERIODS 4u
 #define TX_RING 512u          /* bytes; a power of two */
+#define RX_RING 256u          /* bytes; a power of two */
 
 static tl_servo_t servo;
 static volatile uint64_t deadline;
 static uint8_t tx_ring[TX_RING];
 static volatile uint32_t tx_head, tx_tail;
+static uint8_t rx_ring[RX_RING];
+static volatile uint32_t rx_head, rx_tail;
+static volatile uint32_t rx_lost;
+static volatile uint32_t overruns;
 
 static uint32_t mcycle(void)
 {
@@ -58,12 +63,38 @@ __attribute__((interrupt("machine"))) static void trap_handler(void)
         uint32_t period = tl_servo_period_cycles(&servo);
         TL_SYS_WDOG_KICK = 1u;
         deadline += period;
+        uint64_t now = mtime();
+        if (deadline <= now) {
+            /* Overrun: the iteration (plus the link interrupts) took more than a period.
+             * Re-anchor instead of firing back-to-back to catch up, which would starve
+             * the main loop and the link for good. */
+            overruns++;
+            deadline = now + period;
+        }
         arm_timer(deadline);
         uint32_t used = mcycle() - c0;
         if (used > servo.loop_cycles_max)
             servo.loop_cycles_max = used;
         if (late > servo.jitter_cycles_max && late < period)
             servo.jitter_cycles_max = late;
+        return;
+    }
+    if (cause == 0x8000000Bu) {   /* machine external: UART RX through the INTC */
+        /* The 16-byte hardware FIFO lasts 16 byte times (139 us at 115200 baud); the main
+         * loop can be busier than that (reply and telemetry encoding plus a control
+         * iteration), so the bytes move to a software ring here.  Clear the pending bit
+         * first, then drain to empty: a byte arriving after the drain raises a new edge. */
+        TL_INTC_PENDING = TL_INTC_PENDING_UART_RX_MSK;
+        uint32_t rx;
+        while ((rx = TL_UART_RX_DATA) & TL_UART_RX_DATA_VALID_MSK) {
+            uint32_t head = rx_head;
+            if (head - rx_tail < RX_RING) {
+                rx_ring[head & (RX_RING - 1u)] = (uint8_t)(rx & TL_UART_RX_DATA_DATA_MSK);
+                rx_head = head + 1u;
+            } else {
+                rx_lost++;
+            }
+        }
         return;
     }
     /* Anything else is a firmware bug: drives off, stop here (the watchdog
@@ -74,16 +105,18 @@ __attribute__((interrupt("machine"))) static void trap_handler(void)
         TL_GPIO_HEX_HI = 0x7979u;   /* "EE" on HEX5/HEX4 */
 }
 
-static bool tx_push(const uint8_t *wire, uint32_t len)
+static bool tx_push_reserve(const uint8_t *wire, uint32_t len, uint32_t reserve)
 {
     uint32_t head = tx_head;
-    if (TX_RING - (head - tx_tail) < len)
+    if (TX_RING - (head - tx_tail) < len + reserve)
         return false;
     for (uint32_t i = 0; i < len; i++)
         tx_ring[(head + i) & (TX_RING - 1u)] = wire[i];
     tx_head = head + len;
     return true;
 }
+
+static bool tx_push(const uint8_t *wire, uint32_t len) { return tx_push_reserve(wire, len, 0u); }
 
 static void tx_pump(void)
 {
@@ -117,19 +150,22 @@ int main(void)
 {
     tl_servo_init(&servo);
     TL_GPIO_HEX_HI = 0u;
-    TL_INTC_ENABLE = 0u;
+    TL_INTC_PENDING = 0xFFFFFFFFu;
+    TL_INTC_ENABLE = TL_INTC_PENDING_UART_RX_MSK;
     TL_SYS_WDOG_LOAD = tl_servo_period_cycles(&servo) * WDOG_PERIODS;
     deadline = mtime() + tl_servo_period_cycles(&servo);
     arm_timer(deadline);
     __asm__ volatile("csrw mtvec, %0" : : "r"(&trap_handler));
-    __asm__ volatile("csrs mie, %0" : : "r"(1u << 7));   /* MTIE */
+    __asm__ volatile("csrs mie, %0" : : "r"((1u << 7) | (1u << 11)));   /* MTIE, MEIE */
     hal_irq_on();
 
     uint32_t wdog_period = tl_servo_period_cycles(&servo);
     for (;;) {
-        uint32_t rx;
-        while ((rx = TL_UART_RX_DATA) & TL_UART_RX_DATA_VALID_MSK)
-            tl_servo_rx_byte(&servo, (uint8_t)(rx & TL_UART_RX_DATA_DATA_MSK), tx_push);
+        while (rx_tail != rx_head) {
+            uint8_t b = rx_ring[rx_tail & (RX_RING - 1u)];
+            rx_tail = rx_tail + 1u;
+            tl_servo_rx_byte(&servo, b, tx_push);
+        }
         if (servo.telem_due) {
             uint8_t p[TLP_TELEM_LEN];
             uint8_t wire[TLP_MAX_WIRE];
@@ -139,7 +175,8 @@ int main(void)
             hal_irq_on();
             uint32_t n = (uint32_t)tl_frame_encode(servo.telem_seq++, TLP_TELEMETRY_CMD, p, TLP_TELEM_LEN,
                                                    wire, sizeof wire);
-            if (!tx_push(wire, n) && servo.cnt.tx_dropped != 0xFFFFu)
+            /* telemetry leaves room for a reply: a busy stream never starves the commands */
+            if (!tx_push_reserve(wire, n, TLP_MAX_WIRE) && servo.cnt.tx_dropped != 0xFFFFu)
                 servo.cnt.tx_dropped++;
         }
         tx_pump();

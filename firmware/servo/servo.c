@@ -15,12 +15,21 @@
 
 #define IDX_NONE (-1)
 
+/* id -> index into TLP_PARAM_INFO, built once: the control iteration reads
+ * parameters by id, and a search per read cost ~1000 cycles per iteration. */
+static int8_t param_idx[256];
+static bool param_idx_ready;
+
 int tl_param_index(uint8_t id)
 {
-    for (int i = 0; i < (int)TLP_PARAM_COUNT; i++)
-        if (TLP_PARAM_INFO[i].id == id)
-            return i;
-    return IDX_NONE;
+    if (!param_idx_ready) {
+        for (int i = 0; i < 256; i++)
+            param_idx[i] = IDX_NONE;
+        for (int i = 0; i < (int)TLP_PARAM_COUNT; i++)
+            param_idx[TLP_PARAM_INFO[i].id] = (int8_t)i;
+        param_idx_ready = true;
+    }
+    return param_idx[id];
 }
 
 static int32_t pv(const tl_axis_t *a, uint8_t id) { return a->p[tl_param_index(id)]; }
@@ -39,6 +48,10 @@ static void sync_axis(tl_servo_t *s, uint32_t i)
     a->ctl.vmax_cps = pv(a, TLP_P_VMAX);
     a->ctl.amax_cps2 = pv(a, TLP_P_AMAX);
     tl_ctl_derive(&a->c, &a->ctl, (uint32_t)gv(s, TLP_P_PERIOD_US), s->clk_hz);
+    s->period_cycles = (uint32_t)((uint64_t)(uint32_t)gv(s, TLP_P_PERIOD_US) * s->clk_hz / 1000000u);
+    s->link_timeout_ticks = (uint32_t)gv(s, TLP_P_LINK_TIMEOUT_MS) * 1000u / (uint32_t)gv(s, TLP_P_PERIOD_US);
+    if (s->link_timeout_ticks == 0u)
+        s->link_timeout_ticks = 1u;
     hal_pwm_config(i, (uint32_t)pv(a, TLP_P_FDIV), (uint32_t)pv(a, TLP_P_PW0), (uint32_t)pv(a, TLP_P_PWMAX));
 }
 
@@ -99,18 +112,13 @@ void tl_servo_init(tl_servo_t *s)
     hal_set_baud_div((uint32_t)gv(s, TLP_P_BAUD_DIV));
 }
 
-uint32_t tl_servo_period_cycles(const tl_servo_t *s)
-{
-    return (uint32_t)((uint64_t)(uint32_t)gv(s, TLP_P_PERIOD_US) * s->clk_hz / 1000000u);
-}
+uint32_t tl_servo_period_cycles(const tl_servo_t *s) { return s->period_cycles; }
 
 
 void tl_servo_tick(tl_servo_t *s)
 {
     uint32_t safety = hal_safety();
-    uint32_t timeout = (uint32_t)gv(s, TLP_P_LINK_TIMEOUT_MS) * 1000u / (uint32_t)gv(s, TLP_P_PERIOD_US);
-    if (timeout == 0u)
-        timeout = 1u;
+    uint32_t timeout = s->link_timeout_ticks;
     s->ticks++;
     if (s->link_idle_ticks != 0xFFFFFFFFu)
         s->link_idle_ticks++;

@@ -44,6 +44,8 @@ typedef struct {
     uint32_t loop_cycles_max;     /* worst control iteration (set by main.c) */
     uint32_t jitter_cycles_max;   /* worst lateness of the interrupt (set by main.c) */
     uint32_t clk_hz;
+    uint32_t period_cycles;       /* derived: PERIOD_US in clock cycles */
+    uint32_t link_timeout_ticks;  /* derived: LINK_TIMEOUT_MS in control periods */
 } tl_servo_t;
 
 /* Transmit hook: a complete wire frame (delimiter included).  Returns false if dropped. */
