@@ -49,6 +49,8 @@ class ExperimentConfig:
     record_s: float = 0.002             # grid of the plant trace (plots)
     heartbeat_s: float = 0.25           # STATUS poll, as the host tool keeps the link alive
     brake: bool = True                  # off-phase: brake (slow decay), as sim_models' default
+    baud_div: int | None = None         # UART clocks per bit - 1 after IDENTIFY (None: keep 115200,
+                                        # the RN-XV's rate); short control periods need a faster link
     progress: bool = True
 
     @property
@@ -91,6 +93,7 @@ class RtlRun:
     identify: dict = field(default_factory=dict)
     bridge: dict = field(default_factory=dict)
     faults: list[int] = field(default_factory=list)
+    config_faults: list[int] = field(default_factory=list)   # latched by the configuration, cleared
     link_errors: int = 0
     uart_errors: int = 0
 
@@ -145,7 +148,18 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
         link = Link(board.uart_send, board.uart_recv, lambda n: bridge.run_to(board.cycle + n),
                     lambda: board.cycle)
         ident = link.call("IDENTIFY")
+        if cfg.baud_div is not None:
+            link.set_param(tp.GLOBAL_AXIS, "BAUD_DIV", cfg.baud_div)   # replied at the old rate
+            board.set_uart_div(cfg.baud_div + 1)
         configure(link, cfg)
+        # A shorter PERIOD_US reloads the watchdog with 4 new periods while the
+        # next tick is still due at the old period's deadline: the SoC latch trips
+        # (HW_SAFE) - a firmware issue reported to issue 6.  Wait past the old
+        # deadline and clear what the configuration latched.
+        link.advance(30 * CLK_HZ // 1000)
+        config_faults = [link.call("STATUS", axis=ax)["faults"] for ax in (0, 1)]
+        if any(config_faults):
+            link.call("CLEAR_FAULT", mask=3)
         link.call("TELEMETRY", every=1)
         link.call("ENABLE", mask=3, enable=1)
         # step both axes in the same control period: send both MOVEs right after a sample
@@ -187,6 +201,7 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
         run = _assemble(cfg, link, trace, target, period_cycles)
         run.cycles = board.cycle
         run.identify = ident
+        run.config_faults = config_faults
         run.uart_errors = board.uart_errors() if hasattr(board, "uart_errors") else 0
         run.link_errors = len(link.errors)
         run.bridge = asdict(bridge.stats)

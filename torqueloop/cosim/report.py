@@ -131,7 +131,8 @@ def write(results: dict[str, tuple[RtlRun, ModelRun]], out: Path, meta: dict | N
                         "cycles_per_wall_s": rtl.cycles / rtl.wall_s if rtl.wall_s else None,
                         "cycles_per_cpu_s": rtl.cycles / rtl.cpu_s if rtl.cpu_s else None,
                         "sample_to_plant_clock_jitter_s": rtl.t0_jitter_s, "bridge": rtl.bridge,
-                        "fault_flags_seen": rtl.faults, "link_errors": rtl.link_errors,
+                        "fault_flags_seen": rtl.faults,
+                        "faults_after_configuration": rtl.config_faults, "link_errors": rtl.link_errors,
                         "uart_framing_errors": rtl.uart_errors, "identify": rtl.identify},
             "model_run": {"wall_s": model.wall_s},
         }
