@@ -89,7 +89,7 @@ def build_boot(cfg: BootConfig = BootConfig(), out: Path | None = None) -> BootB
     _write_if_changed(out / "boot.ld", linker_script())
     _write_if_changed(out / "boot_proto.h", bootproto.c_header(cfg.window_cycles, cfg.gap_cycles, cfg.baud_div))
     tmp_elf = out / f"boot.{os.getpid()}.elf"
-    cmd = [CC, *CFLAGS, f"-I{out}", f"-I{REPO / 'firmware' / 'include'}", "-T", str(out / "boot.ld"),
+    cmd = [CC, *CFLAGS, f"-I{out}", f"-I{HERE}", f"-I{REPO / 'firmware' / 'include'}", "-T", str(out / "boot.ld"),
            "-Wl,--gc-sections", "-Wl,--no-warn-rwx-segments", "-o", str(tmp_elf), *map(str, SOURCES)]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode:
@@ -125,6 +125,7 @@ def build_rom(factory: bytes | None, cfg: BootConfig = BootConfig(), out: Path |
 def _servo_image() -> bytes:
     spec = importlib.util.spec_from_file_location("build_firmware", REPO / "scripts" / "build_firmware.py")
     mod = importlib.util.module_from_spec(spec)
+    sys.modules["build_firmware"] = mod   # its dataclasses look their module up there
     assert spec.loader is not None
     spec.loader.exec_module(mod)
     return bootproto.load_image(mod.build("servo").elf)

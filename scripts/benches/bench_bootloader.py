@@ -1,0 +1,64 @@
+"""Bootloader: ROM budget (code, factory slot, servo image), boot and upload
+times at 50 MHz / 115 200 baud by calculation, and the real servo firmware as
+the factory image on the simulated SoC (Verilator): time from the window
+opening to the factory start and to the servo's first IDENTIFY reply, then
+its BOOTLOADER command followed by an upload."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from torqueloop import bootproto as bp
+from torqueloop import regs
+from torqueloop.hdl import REPO_ROOT
+from torqueloop.simrun import run
+
+sys.path.insert(0, str(REPO_ROOT / "firmware" / "boot"))
+sys.path.insert(0, str(REPO_ROOT / "tb" / "bootloader"))
+import build_boot  # noqa: E402
+
+
+def _build_firmware():
+    spec = importlib.util.spec_from_file_location("build_firmware", REPO_ROOT / "scripts" / "build_firmware.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["build_firmware"] = mod   # its dataclasses look their module up there
+    assert spec.loader is not None
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def main() -> int:
+    import test_bootloader as tbm
+
+    board = build_boot.build_boot()
+    servo = bp.load_image(_build_firmware().build("servo").elf)
+    w = build_boot.symbol_word(board.elf, "boot_window_cycles")
+    print(f"boot ROM {regs.BOOT_ROM_SIZE} B: bootloader {board.code_bytes} of {bp.BOOT_CODE_BYTES} B, "
+          f"factory slot {bp.FACTORY_MAX_BYTES} B, servo image {len(servo)} B "
+          f"({100 * len(servo) / bp.FACTORY_MAX_BYTES:.0f} % of the slot)")
+    print(f"window {w} cycles = {w / regs.CLK_HZ * 1e3:.0f} ms; max upload {bp.MAX_IMAGE_BYTES} B")
+    for n in (len(servo), bp.MAX_IMAGE_BYTES):
+        print(f"  upload of {n} B at {bp.BAUD} baud: {(n + bp.FRAME_OVERHEAD) * 10 / bp.BAUD:.2f} s on the wire")
+
+    # The servo firmware as factory image, at the bench's 1 Mbaud.
+    fw = _build_firmware().build("servo_boot_tb", {"TL_DEFAULT_BAUD_DIV": str(tbm.BAUD_DIV)})
+    factory = bp.load_image(fw.elf)
+    app = tbm.build_prog("app")
+    rom = build_boot.build_rom(factory, tbm.TB_CFG, name="servo_rom")
+    with tempfile.TemporaryDirectory() as d:
+        out = Path(d) / "times"
+        t0 = time.monotonic()
+        run("soc", "verilator", "test_bootloader", parameters={"ROM_INIT": f'"{rom}"'}, build_tag="bootloader",
+            testcase="servo_factory_answers_and_hands_over",
+            extra_env={"TB_APP_HEX": app.hex(), "TB_FACTORY_HEX": factory.hex(), "TB_SERVO": str(out)})
+        t_f, t_id = map(int, out.read_text().split())
+    copy = t_f - tbm.TB_CFG.window_cycles
+    print(f"servo as factory (sim, {len(factory)} B): TLBF {t_f} cycles after the window opened "
+          f"(window {tbm.TB_CFG.window_cycles} + copy/CRC ~{copy} = {copy / len(factory):.0f} cycles/B "
+          f"-> {(w + copy) / regs.CLK_HZ * 1e3:.0f} ms from reset to the servo firmware on the board); "
+          f"IDENTIFY answered at {t_id}; BOOTLOADER command + upload OK; sim {time.monotonic() - t0:.0f} s wall")
+    return 0
