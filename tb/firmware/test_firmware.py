@@ -256,7 +256,7 @@ async def each_law_drives_both_axes_as_the_reference(dut):
             assert st["setpoint"] == target and st["position"] == pos
             if law != 3:
                 assert st["pwm_cmd"] == ref.clamp(ref.round_q16(2 * 65536 * e), 1023), \
-                    f"{law_name} axis {ax}: cmd {st['pwm_cmd']} for error {e}"
+                    f"{law_name} axis {ax}: cmd {st['pwm_cmd']} for error {e}: {st}"
             else:
                 assert abs(st["pwm_cmd"]) > abs(2 * e), f"PID integrates: cmd {st['pwm_cmd']} error {e}"
             # the sign and magnitude reach the pins: the side named by the error's sign switches
