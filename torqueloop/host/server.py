@@ -4,7 +4,11 @@ One client at a time (the RN-XV takes one); the board keeps running between
 connections.  Simulated time follows the wall clock times ``speed`` (so the
 firmware's link watchdog and the host's timeouts mean what they mean on the
 real board); if the plant cannot keep up, the board runs as fast as it can
-and answers bytes between control iterations all the same.  ``hello``
+and answers bytes between control iterations all the same, and the time it
+lost is given up, not caught up later: a burst of simulated time faster
+than the wall clock would let the firmware's link watchdog or the boot
+ROM's 500 ms window expire between two messages of a host that keeps to
+the real-time rules.  ``hello``
 sends ``*HELLO*`` on connect, as an RN-XV does before ``set comm remote 0``.
 
 Any :class:`~torqueloop.host.simboard.BytePipe` can be served, so the RTL
@@ -22,6 +26,7 @@ from typing import Callable
 from .simboard import BytePipe
 
 MAX_STEP_S = 0.005   # simulated time between two looks at the socket
+MAX_LAG_S = 0.02     # a board further behind the wall clock slips instead of catching up
 
 
 class BoardServer:
@@ -92,6 +97,9 @@ class BoardServer:
                     self._drop()
             self._send(self.board.read())
             behind = (time.monotonic() - t0) * self.speed - (self.board.t - sim0)
+            if self.speed > 0 and behind > MAX_LAG_S:
+                t0 += (behind - MAX_LAG_S) / self.speed     # slip: never run faster than real time
+                behind = MAX_LAG_S
             if self.speed <= 0 or behind > 0:
                 self.board.advance(MAX_STEP_S if self.speed <= 0 else min(MAX_STEP_S, behind + 1e-6))
                 self._send(self.board.read())

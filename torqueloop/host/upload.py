@@ -75,22 +75,23 @@ def run_upload(client: Client, image: bytes, progress: Callable[[int, int], None
         raise ProtocolError(NOT_AVAILABLE)
     t0 = time.monotonic()
     old = client.connect()["build_id"]
+    # Wait for the window here, reading through the client: TLBW may come in
+    # the same read as the BOOTLOADER reply, or split across reads.
     client.raw_tap = bytearray()
     try:
         client.bootloader()
-        client.pump(0.02)
+        end = time.monotonic() + window_s
+        while bp.Reply.WINDOW not in bp.ReplyParser().feed(bytes(client.raw_tap)) and time.monotonic() < end:
+            client.pump(0.02)
     finally:
         seen, client.raw_tap = bytes(client.raw_tap), None
-    # TLBW may arrive in the same read as the BOOTLOADER reply: then the window is already open
-    already_open = bp.ReplyParser().feed(seen).count(bp.Reply.WINDOW) > 0
-    res = bp.upload("", image, wait_window_s=0 if already_open else window_s, progress=progress,
-                    port=port or client.link)
-    if already_open:
-        res.replies.insert(0, bp.Reply.WINDOW)
+    early = bp.ReplyParser().feed(seen)
+    if bp.Reply.WINDOW not in early:
+        raise ProtocolError(f"the board acknowledged BOOTLOADER but no boot ROM window (TLBW) came within "
+                            f"{window_s:g} s: the bootloader is not in this FPGA image")
+    res = bp.upload("", image, wait_window_s=0, progress=progress, port=port or client.link)
+    res.replies[:0] = early
     replies = [r.value for r in res.replies]
-    if not res.replies:
-        raise ProtocolError("the board acknowledged BOOTLOADER but its boot ROM never opened a window "
-                            "(no TLBW): the bootloader is not in this FPGA image")
     # Whatever runs now (the upload or the factory firmware) starts its seq afresh.
     client.pump(0.05)
     new = None
