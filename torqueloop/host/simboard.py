@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
+import os
 import subprocess
 from pathlib import Path
 from typing import Protocol
@@ -66,7 +67,7 @@ def build_library() -> Path:
     BUILD.mkdir(parents=True, exist_ok=True)
     lib = BUILD / f"simboard_{h.hexdigest()[:12]}.so"
     if not lib.exists():
-        tmp = lib.with_suffix(f".{id(h)}.tmp")
+        tmp = lib.with_suffix(f".{os.getpid()}.tmp")   # concurrent builders (pytest -n) do not collide
         # the decoder sample in hal.h is gaining an edge-interval field (firmware work in progress)
         has_interval = "interval;" in (FW / "servo" / "hal.h").read_text()
         subprocess.run(["gcc", "-std=c11", *(["-DSB_HAL_HAS_INTERVAL"] if has_interval else []),
