@@ -91,7 +91,7 @@ def test_reply_parser_with_chatter_and_splits():
 
 def test_rom_image_layout():
     boot = bytes(range(200))
-    factory = bytes(random.getrandbits(8) for _ in range(1001))
+    factory = random.Random(1001).randbytes(1001)   # fixed data: no seed to report
     rom = bp.rom_image(boot, factory)
     assert len(rom) == regs.BOOT_ROM_SIZE
     assert rom[:200] == boot and rom[200:0x800] == bytes(0x800 - 200)
@@ -184,7 +184,7 @@ class FakeBoot(threading.Thread):
 
 
 def test_upload_over_tcp_good_and_rejected():
-    image = bytes(random.getrandbits(8) for _ in range(3000))
+    image = random.Random(3000).randbytes(3000)
     fake = FakeBoot()
     fake.start()
     seen = []
@@ -230,7 +230,7 @@ def _upload_script():
 
 def test_upload_script_over_tcp(tmp_path, capsys):
     image = tmp_path / "app.bin"
-    image.write_bytes(bytes(random.getrandbits(8) for _ in range(500)))
+    image.write_bytes(random.Random(500).randbytes(500))
     fake = FakeBoot(wait_enter=False)
     fake.start()
     rc = _upload_script().main([str(image), "--port", f"socket://127.0.0.1:{fake.port}", "--baud", "1000000",
