@@ -73,10 +73,16 @@ class CocotbBoard:
         if t_ps > now:
             await Timer(t_ps - now, unit="ps")
 
+    @staticmethod
+    def _bit(sig) -> int:
+        v = sig.value
+        return int(v) & 1 if v.is_resolvable else 1      # an undriven line reads as idle
+
     def _pins_now(self) -> int:
         p = 0
         for k, s in enumerate(self._pin_sigs):
-            v = int(s.value)
+            raw = s.value
+            v = int(raw) if raw.is_resolvable else 0      # X before reset on four-state simulators
             for ax in (0, 1):
                 p |= ((v >> ax) & 1) << (4 * ax + k)
         return p
@@ -108,14 +114,16 @@ class CocotbBoard:
     async def _rx_loop(self) -> None:
         while True:
             await FallingEdge(self.dut.host_rx)
+            if not self.dut.host_rx.value.is_resolvable:
+                continue
             n = (self._now_ps() + 10_000) // PS_PER_CYCLE
             m = n + self.div + self.div // 2
             byte = 0
             for i in range(8):
                 await self._until(_t_after(m + i * self.div))
-                byte |= (int(self.dut.host_rx.value) & 1) << i
+                byte |= self._bit(self.dut.host_rx) << i
             await self._until(_t_after(m + 8 * self.div))
-            if int(self.dut.host_rx.value) & 1:
+            if self._bit(self.dut.host_rx):
                 self._rx.append((byte, n))
             else:
                 self._rx_errors += 1

@@ -11,7 +11,6 @@ import sys
 from dataclasses import asdict
 
 from torqueloop.cosim import experiment
-from torqueloop.cosim.native import WRAPPER
 from torqueloop.hdl import REPO_ROOT
 
 TB_DIR = REPO_ROOT / "tb" / "rtl_loop"
@@ -26,7 +25,7 @@ def run(cfg: experiment.ExperimentConfig, sim: str) -> experiment.RtlRun:
     if str(TB_DIR) not in sys.path:
         sys.path.insert(0, str(TB_DIR))
     os.environ["PYTHONPATH"] = os.pathsep.join([str(TB_DIR), os.environ.get("PYTHONPATH", "")])
-    simrun_run("de0_cv_top", sim, "cocotb_board", toplevel="rtl_loop_top", extra_verilog=[WRAPPER],
+    simrun_run("rtl_loop", sim, "cocotb_board",
                parameters={"ROM_INIT": f'"{img.rom_hex}"', "RAM_INIT": f'"{img.ram_hex}"'},
                extra_env={"TL_COSIM_CFG": json.dumps(asdict(cfg)), "TL_COSIM_OUT": str(out),
                           "PYTHONPATH": os.environ["PYTHONPATH"]})

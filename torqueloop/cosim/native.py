@@ -47,7 +47,7 @@ def _verilator_root() -> str:
 
 
 def sources() -> list[Path]:
-    return [REPO_ROOT / p for p in manifest_core("de0_cv_top").verilog] + [WRAPPER]
+    return [REPO_ROOT / p for p in manifest_core("rtl_loop").verilog]   # ends with WRAPPER
 
 
 def _stamp() -> str:

@@ -21,6 +21,7 @@ times up to the next 20 ns clock, as for a real input pin.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -78,6 +79,8 @@ class BridgeStats:
     rollbacks: int = 0          # speculative advances undone by an early pin change
     edges: int = 0              # encoder edges delivered
     pin_changes: int = 0
+    board_s: float = 0.0        # wall time inside the board's run (the RTL)
+    plant_s: float = 0.0        # wall time advancing the plant (incl. snapshots and rollbacks)
 
 
 @dataclass
@@ -140,11 +143,14 @@ class PlantOnPins:
             pred = self._predict(c0)
             if pred is not None and c0 < pred < end:
                 end = pred
+            t0 = time.perf_counter()
             snap = snapshot(self.plant)
             edges = self.plant.advance((end - c0) * TICK_S, pins)
             self._push(edges, c0, c0)
+            t1 = time.perf_counter()
             stopped = b.run(end, True)
             c1 = b.cycle
+            t2 = time.perf_counter()
             self.stats.segments += 1
             if stopped and c1 < end:
                 # a pin changed before the horizon: redo the plant up to the change
@@ -153,6 +159,8 @@ class PlantOnPins:
                 restore(self.plant, snap)
                 edges = self.plant.advance((c1 - c0) * TICK_S, pins)
                 self._push(edges, c0, c1)
+            self.stats.board_s += t2 - t1
+            self.stats.plant_s += t1 - t0 + time.perf_counter() - t2
 
 
 def counts_per_rad(plant: TwoAxisPlant) -> float:
