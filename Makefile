@@ -21,7 +21,7 @@ export TORQUELOOP_SIM := $(SIM)
 PYTEST_K := $(if $(TB),-k "$(TB)",)
 XDIST    := $(if $(filter 1,$(JOBS)),,-n $(JOBS))
 
-.PHONY: help setup sim lint test unit synth run bench characterize quartus clean
+.PHONY: help setup sim lint test unit synth run bench characterize quartus firmware clean
 
 help: ## this list
 	@grep -hE '^[a-z][a-zA-Z_-]*:.*## ' $(MAKEFILE_LIST) | \
@@ -61,6 +61,11 @@ bench: $(STAMP) ## benchmarks that print numbers
 
 characterize: $(STAMP) ## the characterisation method (steps 1-8) on the simulated bench: build/characterize/
 	$(PY) scripts/characterize.py sim --out-dir build/characterize
+
+firmware: $(STAMP) ## servo firmware: build/firmware/servo/{servo.elf,.bin,_ram.hex,_rom.hex}
+	$(PY) scripts/gen_linker.py --check
+	$(PY) scripts/gen_protocol.py --check
+	$(PY) scripts/build_firmware.py
 
 quartus: $(STAMP) ## Quartus project for the DE0-CV in build/quartus (compiled when quartus_sh is on PATH)
 	$(PY) scripts/gen_quartus.py --project --compile

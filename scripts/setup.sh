@@ -13,7 +13,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-APT_PACKAGES=(iverilog ghdl yosys gcc-riscv64-unknown-elf g++ make perl)
+# clang + libclang-rt: libFuzzer and the sanitizer runtimes for the firmware's host tests.
+APT_PACKAGES=(iverilog ghdl yosys gcc-riscv64-unknown-elf g++ make perl clang libclang-rt-14-dev)
 VENV=.venv
 PYTHON=${PYTHON:-python3}
 
