@@ -77,3 +77,16 @@ def test_replies_decode_by_name() -> None:
     f = P.Frame(5, c.cmd | P.REPLY_FLAG, struct.pack(c.rep_fmt, 0, -42))
     assert P.decode_reply(f) == {"status": 0, "value": -42}
     assert P.decode_reply(P.Frame(5, c.cmd | P.REPLY_FLAG, b"\x07")) == {"status": P.STATUS["RANGE"]}
+
+
+def test_decoder_stopping_early_never_repeats_or_merges_frames():
+    """A reader that takes the first frame and stops must get the second,
+    intact, from the next feed, not the first one again."""
+    a = P.request("IDENTIFY", 1)
+    b = P.request("IDENTIFY", 2)
+    dec = P.FrameDecoder()
+    first = next(iter(dec.feed(a + b)))
+    assert isinstance(first, P.Frame) and first.seq == 1
+    rest = [f for f in dec.feed(b"") if isinstance(f, P.Frame)]
+    again = [f for f in dec.feed(a) if isinstance(f, P.Frame)]
+    assert rest == [] and [f.seq for f in again] == [1]

@@ -185,19 +185,24 @@ class FrameDecoder:
         self._buf = bytearray()
         self._overflow = False
 
-    def feed(self, data: bytes) -> Iterator[Frame | FrameError]:
+    def feed(self, data: bytes) -> list[Frame | FrameError]:
+        """Every frame and error completed by ``data``, in order.  A list, not
+        a generator: a caller that stops reading early must not see a frame
+        twice or have the next one merged into the old buffer."""
+        out: list[Frame | FrameError] = []
         for b in data:
             if b == 0:
                 if self._overflow:
-                    yield FrameError(STATUS["OVERSIZE"], bytes(self._buf))
+                    out.append(FrameError(STATUS["OVERSIZE"], bytes(self._buf)))
                 elif self._buf:
-                    yield parse_packet(bytes(self._buf))
+                    out.append(parse_packet(bytes(self._buf)))
                 self._buf.clear()
                 self._overflow = False
             elif len(self._buf) < MAX_ENCODED:
                 self._buf.append(b)
             else:
                 self._overflow = True
+        return out
 
 
 # --- payloads ------------------------------------------------------------------
