@@ -16,7 +16,6 @@ import struct
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator
 
 PROTOCOL_TOML = Path(__file__).resolve().parent.parent / "firmware" / "protocol" / "protocol.toml"
 _FMT = {"u8": "B", "i8": "b", "u16": "H", "i16": "h", "u32": "I", "i32": "i"}
