@@ -21,7 +21,7 @@ export TORQUELOOP_SIM := $(SIM)
 PYTEST_K := $(if $(TB),-k "$(TB)",)
 XDIST    := $(if $(filter 1,$(JOBS)),,-n $(JOBS))
 
-.PHONY: help setup sim lint test unit synth run bench characterize quartus firmware clean
+.PHONY: help setup sim lint test unit synth run bench characterize quartus firmware board-sim board-sim-rtl clean
 
 help: ## this list
 	@grep -hE '^[a-z][a-zA-Z_-]*:.*## ' $(MAKEFILE_LIST) | \
@@ -66,6 +66,12 @@ firmware: $(STAMP) ## servo firmware: build/firmware/servo/{servo.elf,.bin,_ram.
 	$(PY) scripts/gen_linker.py --check
 	$(PY) scripts/gen_protocol.py --check
 	$(PY) scripts/build_firmware.py
+
+board-sim: $(STAMP) ## simulated board (firmware C + plant) on TCP for the torqueloop host tool
+	$(VENV)/bin/torqueloop sim
+
+board-sim-rtl: $(STAMP) ## the same with the co-simulated RTL board image (slow: ~0.01x real time)
+	$(VENV)/bin/torqueloop sim --rtl
 
 quartus: $(STAMP) ## Quartus project for the DE0-CV in build/quartus (compiled when quartus_sh is on PATH)
 	$(PY) scripts/gen_quartus.py --project --compile
