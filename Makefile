@@ -25,7 +25,7 @@ XDIST    := $(if $(filter 1,$(JOBS)),,-n $(JOBS))
 
 help: ## this list
 	@grep -hE '^[a-z][a-zA-Z_-]*:.*## ' $(MAKEFILE_LIST) | \
-	  awk -F':.*## ' '{printf "  make %-10s %s\n", $$1, $$2}'
+	  awk -F':.*## ' '{printf "  make %-14s %s\n", $$1, $$2}'
 	@echo "  options: SIM=icarus|verilator|ghdl  TB=<pytest -k expr>  JOBS=<n>  WAVES=1"
 
 setup: ## install tools (apt + .venv); idempotent
@@ -50,8 +50,9 @@ test: $(STAMP) ## lint + sim + unit: what CI runs
 	$(PY) scripts/check_constraints.py
 	$(PY) -m pytest tb tests $(PYTEST_K) $(XDIST)
 
-synth: $(STAMP) ## Yosys synth_intel_alm (Cyclone V) resource table in build/synth/
+synth: $(STAMP) ## Yosys synth_intel_alm (Cyclone V): per-core table in build/synth/, then the board top against the 5CEBA4
 	$(PY) scripts/synth.py
+	$(PY) scripts/bench.py bench_board
 
 run: $(STAMP) ## the main job (richest demo that exists so far)
 	$(PY) scripts/run.py
