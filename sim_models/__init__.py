@@ -9,6 +9,7 @@ Modules:
 - :mod:`sim_models.encoder` quadrature encoder (A/B/Z) from motor-shaft angle
 - :mod:`sim_models.dyno`    dynamometer bench of the characterisation method (sec. II)
 - :mod:`sim_models.control` pure-model P/PD/PID closed loop (eq 20-22, Table 1)
+- :mod:`sim_models.schedule` PWM pin schedules on the 50 MHz grid (tests, benchmarks)
 
 docs/plant.md documents equations, interpretations and validation numbers.
 """

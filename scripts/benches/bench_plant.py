@@ -14,19 +14,16 @@ from __future__ import annotations
 import random
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
-
-from plant_helpers import pwm_schedule, run_fast  # noqa: E402
-from sim_models import axis as ax  # noqa: E402
-from sim_models.bridge import Pins  # noqa: E402
-from sim_models.control import TABLE1, LoopConfig, run_loop, step_metrics  # noqa: E402
-from sim_models.params import load_params  # noqa: E402
-from sim_models.reference import simulate  # noqa: E402
-from sim_models.stepper import TwoAxisPlant  # noqa: E402
+from sim_models import axis as ax
+from sim_models.bridge import Pins
+from sim_models.control import TABLE1, LoopConfig, run_loop, step_metrics
+from sim_models.params import load_params
+from sim_models.reference import simulate
+from sim_models.schedule import pwm_schedule, run_fast
+from sim_models.stepper import TwoAxisPlant
 
 REF_SECONDS = (0.05, 0.25)   # axis x, axis z
 FWD, REV = Pins(1, 0, 1, 1), Pins(0, 1, 1, 1)

@@ -1,6 +1,10 @@
-"""Shared helpers of the plant tests (not collected: no test_ prefix)."""
+"""PWM pin schedules on the FPGA clock, and running the fast stepper through
+one (the same instants the reference solver reports), for comparisons in
+tests and benchmarks."""
 
 from __future__ import annotations
+
+from typing import Callable
 
 import numpy as np
 
@@ -8,13 +12,14 @@ from sim_models.bridge import Pins
 from sim_models.params import AxisParams, PlantParams
 from sim_models.stepper import FastAxis
 
-CLK_TICK = 20e-9   # schedules on the 50 MHz FPGA clock, as the co-simulation will be
+CLK_TICK = 20e-9   # 50 MHz: pin edges fall on this grid, as in the co-simulation
 
 
-def pwm_schedule(t_end: float, freq_hz: float, duty_of, on_pins_of, off_pins_of
+def pwm_schedule(t_end: float, freq_hz: float, duty_of: Callable[[int], float],
+                 on_pins_of: Callable[[int], Pins], off_pins_of: Callable[[int], Pins]
                  ) -> list[tuple[float, Pins]]:
     """(t_start, pins) list of a PWM waveform on the FPGA clock grid; the
-    duty, on-pins and off-pins may vary per period k."""
+    duty, on-pins and off-pins may vary with the period index k."""
     per = round(1.0 / freq_hz / CLK_TICK)
     out: list[tuple[float, Pins]] = []
     k = 0
@@ -29,8 +34,7 @@ def pwm_schedule(t_end: float, freq_hz: float, duty_of, on_pins_of, off_pins_of
 
 def run_fast(a: AxisParams, plant: PlantParams, schedule: list[tuple[float, Pins]],
              t_end: float, index: int = 0, **kw: float) -> tuple[np.ndarray, FastAxis]:
-    """States of the fast stepper at the schedule boundaries and t_end
-    (the same instants the reference returns)."""
+    """States of the fast stepper at the schedule boundaries and t_end."""
     fa = FastAxis(a, plant, index, **kw)
     out: list = []
     xs = [fa.x.copy()]
