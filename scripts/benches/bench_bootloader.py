@@ -2,7 +2,8 @@
 times at 50 MHz / 115 200 baud by calculation, and the real servo firmware as
 the factory image on the simulated SoC (Verilator): time from the window
 opening to the factory start and to the servo's first IDENTIFY reply, then
-its BOOTLOADER command followed by an upload."""
+its BOOTLOADER command followed by an upload; and the same SoC with a ROM
+that holds no factory image (TLBN, then an upload without a window)."""
 
 from __future__ import annotations
 
@@ -56,6 +57,15 @@ def main() -> int:
             testcase="servo_factory_answers_and_hands_over",
             extra_env={"TB_APP_HEX": app.hex(), "TB_FACTORY_HEX": factory.hex(), "TB_SERVO": str(out)})
         t_f, t_id = map(int, out.read_text().split())
+    # Same build, ROM without a factory image: the bootloader must wait for an upload.
+    rom.write_text(bp.hex_words(bp.rom_image(build_boot.build_boot(tbm.TB_CFG).bin.read_bytes(), None)))
+    try:
+        run("soc", "verilator", "test_bootloader", parameters={"ROM_INIT": f'"{rom}"'}, build_tag="bootloader",
+            testcase="no_factory_waits_for_an_upload",
+            extra_env={"TB_APP_HEX": app.hex(), "TB_FACTORY_HEX": factory.hex(), "TB_NO_FACTORY": "1"})
+    finally:
+        build_boot.build_rom(factory, tbm.TB_CFG, name="servo_rom")
+    print("ROM without factory image: TLBN, window without timeout, upload loaded and run")
     copy = t_f - tbm.TB_CFG.window_cycles
     print(f"servo as factory (sim, {len(factory)} B): TLBF {t_f} cycles after the window opened "
           f"(window {tbm.TB_CFG.window_cycles} + copy/CRC ~{copy} = {copy / len(factory):.0f} cycles/B "

@@ -264,6 +264,21 @@ async def servo_factory_answers_and_hands_over(dut):
     Path(os.environ["TB_SERVO"]).write_text(f"{t_f - t0} {t_id - t0}\n")
 
 
+@cocotb.test(skip="TB_NO_FACTORY" not in os.environ)
+async def no_factory_waits_for_an_upload(dut):
+    """A ROM without a factory image (bench_bootloader runs this): N, then
+    the window stays open without a timeout until an upload arrives."""
+    tb = TB(dut)
+    app, _ = _images()
+    await tb.reset()
+    await tb.expect(b"TLBN\n", b"TLBW\n")
+    await Timer(3 * TB_CFG.window_cycles * CLK_NS, unit="ns")
+    assert tb.sink.count() == 0, "the second window must not time out"
+    await tb.src.write(b"*OPEN*" + bp.encode_frame(_app_variant(app)))
+    await tb.expect(b"TLBK\n", b"APP\n")
+    await tb.leds_settle(APP_LEDS)
+
+
 def test_board_window_is_500ms():
     """The board build (defaults) keeps 500 ms at 50 MHz in its ROM image."""
     b = build_boot.build_boot()
