@@ -129,6 +129,9 @@ def test_image_from_elf(tmp_path):
         bp.image_from_elf(_elf([(0, b"AAAA")], 0))           # linked for the ROM
     with pytest.raises(bp.ImageError):
         bp.image_from_elf(_elf([(base, b"AAAA")], base + 4))  # entry elsewhere
+    for cut in (10, 40, 60, len(raw) - 2):                  # truncated anywhere: ImageError, never struct.error
+        with pytest.raises(bp.ImageError):
+            bp.image_from_elf(raw[:cut])
     p = tmp_path / "x.bin"
     p.write_bytes(b"\x13\x00\x00\x00")
     assert bp.load_image(p) == b"\x13\x00\x00\x00"

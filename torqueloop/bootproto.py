@@ -160,11 +160,13 @@ def image_from_elf(raw: bytes) -> bytes:
     the load address, gaps zero-filled (.bss has no file bytes and is left to
     the image's crt0).  Refuses an ELF that does not start and enter at the
     RAM base, since the bootloader jumps there."""
-    if raw[:4] != b"\x7fELF" or raw[4] != 1 or raw[5] != 1:
+    if len(raw) < 52 or raw[:4] != b"\x7fELF" or raw[4] != 1 or raw[5] != 1:
         raise ImageError("not a 32-bit little-endian ELF")
     (_t, machine, _v, entry, phoff, _sh, _fl, _eh, phentsize, phnum) = struct.unpack_from("<HHIIIIIHHH", raw, 16)
     if machine != 243:
         raise ImageError(f"ELF machine {machine} is not RISC-V")
+    if phentsize < 32 or phoff + phnum * phentsize > len(raw):
+        raise ImageError("truncated ELF: program headers run past the end of the file")
     segs = []
     for i in range(phnum):
         p_type, off, _va, paddr, filesz, _mem, _f, _a = struct.unpack_from("<8I", raw, phoff + i * phentsize)
