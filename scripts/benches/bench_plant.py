@@ -36,7 +36,7 @@ def _errors(xf: np.ndarray, xr: np.ndarray) -> str:
                           (ax.I_, "current", "A")):
         scale = np.abs(xr[:, k]).max()
         err = np.abs(xf[:, k] - xr[:, k]).max()
-        parts.append(f"{name} {err / scale:.1e}" if scale > 0 else f"{name} {err:.1e} {unit} (at rest)")
+        parts.append(f"{name} {err / scale:.1e}" if scale > 1e-12 else f"{name} {err:.1e} {unit} (at rest)")
     return "max relative error: " + ", ".join(parts)
 
 
