@@ -97,14 +97,15 @@ def memory_words() -> dict[str, int]:
 
 
 def build_firmware() -> None:
-    """scripts/build_firmware.py with its defaults (build/firmware/servo/)."""
+    """The servo firmware (scripts/build_firmware.py) and the boot ROM that
+    carries it as the factory image (firmware/boot/build_boot.py)."""
     import subprocess
     import sys
 
-    proc = subprocess.run([sys.executable, str(REPO_ROOT / "scripts" / "build_firmware.py")],
-                          capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise SystemExit(f"gen_quartus: the firmware build failed:\n{proc.stdout}{proc.stderr}")
+    for script in (REPO_ROOT / "scripts" / "build_firmware.py", REPO_ROOT / "firmware" / "boot" / "build_boot.py"):
+        proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise SystemExit(f"gen_quartus: {script.name} failed:\n{proc.stdout}{proc.stderr}")
 
 
 def write_project(project_dir: Path = board.QUARTUS_DIR) -> Path:

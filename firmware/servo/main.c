@@ -152,6 +152,11 @@ int main(void)
     TL_GPIO_HEX_HI = 0u;
     TL_INTC_PENDING = 0xFFFFFFFFu;
     TL_INTC_ENABLE = TL_INTC_PENDING_UART_RX_MSK;
+    /* A byte that arrived before the clear above (the host, or the RN-XV's
+     * *OPEN*, talking right after start-up) raises no new event: re-raise it,
+     * or the link would stay deaf with data waiting in the FIFO. */
+    if (TL_UART_STATUS & TL_UART_STATUS_RX_VALID_MSK)
+        TL_INTC_SET = TL_INTC_PENDING_UART_RX_MSK;
     TL_SYS_WDOG_LOAD = tl_servo_period_cycles(&servo) * WDOG_PERIODS;
     deadline = mtime() + tl_servo_period_cycles(&servo);
     arm_timer(deadline);
