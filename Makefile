@@ -54,8 +54,10 @@ synth: $(STAMP) ## Yosys synth_intel_alm (Cyclone V): per-core table in build/sy
 	$(PY) scripts/synth.py
 	$(PY) scripts/bench.py bench_board
 
-run: $(STAMP) ## the main job (richest demo that exists so far)
-	$(PY) scripts/run.py
+# make run T=40 runs the paper's full T (default 10 s: see docs/experiment.md).
+T ?=
+run: $(STAMP) ## the main job: paper's step experiment, RTL in the loop vs pure model, P/PD/PID -> build/report/
+	$(PY) scripts/run_experiment.py $(if $(T),--t-end $(T),)
 
 bench: $(STAMP) ## benchmarks that print numbers
 	$(PY) scripts/bench.py
