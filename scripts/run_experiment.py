@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import multiprocessing as mp
+import pickle
 import sys
 import time
 from pathlib import Path
@@ -31,8 +32,9 @@ def _one(args: tuple[str, float, int, float]) -> tuple:
     cfg = experiment.ExperimentConfig(law=law, t_end_s=t_end, period_us=period_us, record_s=record_s)
     rtl = experiment.run_rtl(cfg)
     model = experiment.run_model(cfg)
-    print(f"  [{law}] done: RTL {rtl.wall_s:.1f} s wall, model {model.wall_s:.1f} s", flush=True)
-    return law, rtl, model
+    fw = experiment.run_model_fw_law(cfg)
+    print(f"  [{law}] done: RTL {rtl.wall_s:.1f} s wall, models {model.wall_s:.1f} + {fw.wall_s:.1f} s", flush=True)
+    return law, rtl, model, fw
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -55,7 +57,10 @@ def main(argv: list[str] | None = None) -> int:
             res = pool.map(_one, jobs, chunksize=1)
     else:
         res = [_one(j) for j in jobs]
-    results = {law: (rtl, model) for law, rtl, model in res}
+    results = {law: (rtl, model, fw) for law, rtl, model, fw in res}
+    (a.out / "data").mkdir(parents=True, exist_ok=True)
+    with open(a.out / "data" / "runs.pkl", "wb") as f:      # for re-scoring without re-simulating
+        pickle.dump(results, f)
     rep = report.write(results, a.out, meta={"T_s": a.t_end, "control_period_us": a.period_us,
                                               "wall_s_total": round(time.monotonic() - t0, 1)})
     print((a.out / "report.md").read_text())

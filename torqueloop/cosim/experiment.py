@@ -267,3 +267,69 @@ def run_model(cfg: ExperimentConfig) -> ModelRun:
     cmd[:-1] = np.round(r.duty[1:] * 1023)
     traj = Trajectory(r.t, r.x_meas, r.v_est, cmd, target_rad - r.x_meas, r.x_true)
     return ModelRun(traj, r.wall_s, asdict(lc) | {"gains": [asdict(g) for g in lc.gains]})
+
+
+def run_model_fw_law(cfg: ExperimentConfig) -> ModelRun:
+    """A second pure model: the same plant with the *firmware's* law in Python
+    (torqueloop/ref/servo.py, the oracle of firmware/servo/control.c: fixed
+    point, anti-windup, deadband) and the hardware's PWM (period FDIV x 1023
+    clocks, duty |cmd| x FDIV clocks, loaded at the next period start).  No
+    RTL, CPU or pins: the difference between this and sim_models.control is
+    the law's implementation; between this and the RTL, the rest."""
+    from sim_models.bridge import Pins
+    from torqueloop.ref.servo import Axis, AxisParams
+    params = load_params()
+    plant = TwoAxisPlant(params, seed=0)
+    period = cfg.period_us * CLK_HZ // 1_000_000
+    pwm_period = [d * 1023 for d in cfg.fdiv]
+    axes = []
+    for ax in (0, 1):
+        g = TABLE1[cfg.law][ax]
+        raw = [tp.gain_raw_from_phys(round(k * 1e6), TAU_MAX_MNM[ax], COUNTS_PER_REV) if k else 0
+               for k in (g.kp, g.kd, g.ki)]
+        a = Axis(AxisParams(law=LAWS[cfg.law], kp_q16=raw[0], kd_q16=raw[1], ki_q16=raw[2], vel_mode=0),
+                 cfg.period_us)
+        a.reset(0, 0)
+        axes.append(a)
+    brake = Pins(0, 0, 1, 1) if cfg.brake else Pins(0, 0, 0, 0)
+    n = int(round(cfg.t_end_s * 1e6 / cfg.period_us)) + 1
+    out = {k: np.zeros((n, 2)) for k in ("pos", "vel", "cmd", "err", "true")}
+    pending, active = [0, 0], [0, 0]
+    next_start, next_off = [0, 0], [None, None]
+    pins = [brake, brake]
+    now = 0
+    w0 = time.monotonic()
+    for k in range(n):
+        ts = k * period
+        while True:
+            evs = [t for t in next_start + next_off if t is not None and t <= ts]
+            nxt = min(evs) if evs else ts
+            if nxt > now:
+                plant.advance((nxt - now) / CLK_HZ, pins)
+                now = nxt
+            if not evs:
+                break
+            for a in (0, 1):
+                if next_off[a] == now:
+                    next_off[a], pins[a] = None, brake
+                if next_start[a] == now:
+                    active[a] = pending[a]
+                    on = abs(active[a]) * cfg.fdiv[a]
+                    pins[a] = brake if on == 0 else (Pins(1, 0, 1, 1) if active[a] > 0 else Pins(0, 1, 1, 1))
+                    next_off[a] = now + on if 0 < on < pwm_period[a] else None
+                    next_start[a] = now + pwm_period[a]
+        for a in (0, 1):
+            if k == 0:
+                axes[a].move(cfg.target_counts, False)
+            pos = plant.count(a)
+            cmd = axes[a].step(pos, 0, ts)
+            pending[a] = cmd
+            out["pos"][k, a] = pos
+            out["vel"][k, a] = axes[a].vel_q8 / 256
+            out["cmd"][k, a] = cmd
+            out["err"][k, a] = cfg.target_counts - pos
+            out["true"][k, a] = plant.screw_angle(a)
+    rad = 2 * math.pi / COUNTS_PER_REV
+    t = np.arange(n) * cfg.period_us * 1e-6
+    traj = Trajectory(t, out["pos"] * rad, out["vel"] * rad, out["cmd"], out["err"] * rad, out["true"])
+    return ModelRun(traj, time.monotonic() - w0, {"law": "torqueloop.ref.servo (firmware law)"})

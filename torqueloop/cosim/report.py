@@ -48,7 +48,7 @@ def step_metrics(t: np.ndarray, x: np.ndarray, target: float) -> dict[str, float
     }
 
 
-def compare(rtl: RtlRun, model: ModelRun) -> dict:
+def compare(rtl: RtlRun, model: ModelRun, fw_model: ModelRun | None = None) -> dict:
     a, b = rtl.traj, model.traj
     n = min(len(a.t), len(b.t))
     t = a.t[:n]
@@ -60,6 +60,12 @@ def compare(rtl: RtlRun, model: ModelRun) -> dict:
         "rmse_pct_of_step": 100 * rmse(t, a.pos[:n] - b.pos[:n]) / target,
         "per_axis": {},
     }
+    if fw_model is not None:
+        c = fw_model.traj
+        m = min(n, len(c.t))
+        out["rmse_rad_fw_law"] = rmse(t[:m], a.pos[:m] - c.pos[:m])
+        out["rmse_rad_s_fw_law"] = rmse(t[:m], a.vel[:m] - c.vel[:m])
+        out["rmse_rad_model_vs_fw_law"] = rmse(t[:m], b.pos[:m] - c.pos[:m])
     for i, ax in enumerate(AXES):
         d = a.pos[:n, i] - b.pos[:n, i]
         out["per_axis"][ax] = {
@@ -72,7 +78,7 @@ def compare(rtl: RtlRun, model: ModelRun) -> dict:
     return out
 
 
-def _plot(law: str, rtl: RtlRun, model: ModelRun, path: Path) -> None:
+def _plot(law: str, rtl: RtlRun, model: ModelRun, fw: ModelRun | None, path: Path) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -83,6 +89,8 @@ def _plot(law: str, rtl: RtlRun, model: ModelRun, path: Path) -> None:
         p.plot(b.t, b.pos[:, i], "C1-", lw=1.5, label="pure model (encoder)")
         p.plot(a.t, a.pos[:, i], "C0--", lw=1.2, label="RTL in the loop (telemetry)")
         p.plot(rtl.trace_t, rtl.trace_pos[:, i], "C2:", lw=0.8, label="RTL plant, screw angle")
+        if fw is not None:
+            p.plot(fw.traj.t, fw.traj.pos[:, i], "C3-", lw=0.6, label="model, firmware's law")
         p.set_ylabel("position (rad)")
         p.set_title(f"{law}: axis {ax}")
         p.legend(fontsize=8)
@@ -95,6 +103,8 @@ def _plot(law: str, rtl: RtlRun, model: ModelRun, path: Path) -> None:
         p = axs[2, i]
         p.step(b.t, b.cmd[:, i], "C1-", where="post", lw=1.5, label="pure model")
         p.step(a.t, a.cmd[:, i], "C0--", where="post", lw=1.2, label="RTL")
+        if fw is not None:
+            p.step(fw.traj.t, fw.traj.cmd[:, i], "C3-", where="post", lw=0.6, label="model, firmware's law")
         p.set_ylabel("PWM command (of 1023)")
         p.legend(fontsize=8)
         p = axs[3, i]
@@ -112,14 +122,16 @@ def _traj_json(tr: Trajectory) -> dict:
     return {k: np.asarray(v).tolist() for k, v in asdict(tr).items()}
 
 
-def write(results: dict[str, tuple[RtlRun, ModelRun]], out: Path, meta: dict | None = None) -> dict:
+def write(results: dict[str, tuple], out: Path, meta: dict | None = None) -> dict:
     """Plots, report.json (every number, trajectories in data/) and report.md."""
     out.mkdir(parents=True, exist_ok=True)
     (out / "data").mkdir(exist_ok=True)
     rep: dict = {"meta": meta or {}, "laws": {}}
-    for law, (rtl, model) in results.items():
-        cmp = compare(rtl, model)
-        _plot(law, rtl, model, out / f"step_{law}.png")
+    for law, runs in results.items():
+        rtl, model = runs[0], runs[1]
+        fw = runs[2] if len(runs) > 2 else None
+        cmp = compare(rtl, model, fw)
+        _plot(law, rtl, model, fw, out / f"step_{law}.png")
         (out / "data" / f"{law}.json").write_text(json.dumps(
             {"rtl": _traj_json(rtl.traj), "model": _traj_json(model.traj)}))
         c = rtl.config
@@ -159,6 +171,15 @@ def markdown(rep: dict) -> str:
         pa = v["per_axis"]
         lines.append(f"| {law} | {v['rmse_rad']:.4f} | {v['rmse_pct_of_step']:.2f} % | {v['rmse_rad_s']:.4f} | "
                      f"{v['rmse_true_rad']:.4f} | {pa['x']['max_abs_diff_counts']} / {pa['z']['max_abs_diff_counts']} |")
+    if any("rmse_rad_fw_law" in v for v in rep["laws"].values()):
+        lines += ["", "Against the second pure model (same plant, the firmware's law from torqueloop/ref/servo.py, "
+                  "the hardware's PWM):", "",
+                  "| law | RTL vs firmware-law model: position RMSE (rad) | % of step | velocity RMSE (rad/s) |"
+                  " sim_models.control vs firmware-law model (rad) |", "|---|---|---|---|---|"]
+        for law, v in rep["laws"].items():
+            step = v["config"]["step_rad"]
+            lines.append(f"| {law} | {v['rmse_rad_fw_law']:.4f} | {100 * v['rmse_rad_fw_law'] / step:.2f} % | "
+                         f"{v['rmse_rad_s_fw_law']:.4f} | {v['rmse_rad_model_vs_fw_law']:.4f} |")
     lines += ["", "## Step response (settling: last entry into the 2 % band; steady-state error: final sample)", "",
               "| law | axis | run | settling (s) | overshoot (%) | steady-state error (counts) |",
               "|---|---|---|---|---|---|"]
