@@ -44,10 +44,15 @@ def test_counts_follow_shaft_angle_under_random_drive():
     rng = random.Random(seed)
     plant = TwoAxisPlant(seed=seed)
     counts = [plant.count(0), plant.count(1)]
-    for _ in range(300):
-        pins = tuple(Pins(*rng.choice([(1, 0, 1, 1), (0, 1, 1, 1), (0, 0, 1, 1), (0, 0, 0, 0)]))
-                     for _ in range(2))
-        dt = rng.choice([20e-9 * rng.randrange(1, 5000), rng.uniform(1e-4, 3e-3)])
+    # A forward run first, so that the check below does not depend on the
+    # random walk happening to get anywhere (seed 1493980952 went nowhere).
+    forward = [(Pins(1, 0, 1, 1), Pins(1, 0, 1, 1), 2e-3)] * 25
+    randomised = [(*(Pins(*rng.choice([(1, 0, 1, 1), (0, 1, 1, 1), (0, 0, 1, 1), (0, 0, 0, 0)]))
+                     for _ in range(2)),
+                   rng.choice([20e-9 * rng.randrange(1, 5000), rng.uniform(1e-4, 3e-3)]))
+                  for _ in range(300)]
+    for pin0, pin1, dt in forward + randomised:
+        pins = (pin0, pin1)
         edges = plant.advance(dt, pins)
         assert all(0.0 <= e.t <= dt * (1 + 1e-12) for e in edges)
         assert [e.t for e in edges] == sorted(e.t for e in edges)
