@@ -14,7 +14,11 @@ position x_k from the encoder count (8400 counts per screw turn),
 speed v_k = a (x_k - x_{k-1}) / T_s + (1 - a) v_{k-1} (filtered Euler),
 tau = K_p e + K_d (-v) + K_i sum(e T_s), saturation eq (19), dead-zone
 compensation eq (1) (PW0, default 0) and 10-bit quantisation; the PWM block
-loads the new duty at its next period start (double buffering).
+loads the new duty at its next period start (double buffering) and a
+command c is c/1023 of its period, as pwm_torque's.  The integral has the
+firmware's anti-windup (held while the output saturates in the error's
+direction, its term kept within full scale; ``anti_windup=False`` for the
+plain eq. (22) sum), so that RTL-in-the-loop and this loop run one law.
 """
 
 from __future__ import annotations
@@ -57,6 +61,10 @@ class LoopConfig:
     drive: str = "brake"                # off-phase: "brake" (slow decay) or "coast"
     pwm_hz: tuple[float, float] = (450.0, 200.0)
     gains: tuple[Gains, Gains] = field(default_factory=lambda: TABLE1["P"])
+    # Integrator held while the output is saturated in the direction the error
+    # pushes, and its term kept within full scale: what the firmware does
+    # (docs/firmware.md).  False gives the plain eq. (22) integral.
+    anti_windup: bool = True
 
 
 @dataclass
@@ -95,7 +103,9 @@ def run_loop(cfg: LoopConfig, params: PlantParams | None = None,
     params = params or load_params()
     plant = plant or TwoAxisPlant(params, seed=0)
     tick = 1.0 / cfg.clk_hz
-    full = 1 << cfg.pwm_bits
+    # pwm_torque's period is 2^N - 1 ticks and a command c is c ticks of it
+    # (docs/pwm_torque.md), so the duty is c / 1023, not c / 1024.
+    full = (1 << cfg.pwm_bits) - 1
     period_ticks = [round(cfg.clk_hz / f) for f in cfg.pwm_hz]
     counts_per_rad = params.encoder.counts_per_motor_rev * params.axes[0].gear_ratio / (2 * math.pi)
     tau_max = [a.tau_max_paper_N_m for a in params.axes]
@@ -110,6 +120,7 @@ def run_loop(cfg: LoopConfig, params: PlantParams | None = None,
     x_prev = [0.0, 0.0]
     v = [0.0, 0.0]
     integ = [0.0, 0.0]
+    sat_sign = [0, 0]        # sign of the last output's saturation (0: none)
     now = 0
     t0 = time.monotonic()
     calls = 0
@@ -147,16 +158,22 @@ def run_loop(cfg: LoopConfig, params: PlantParams | None = None,
                 v[a] = cfg.vel_filter * (x - x_prev[a]) / cfg.sample_s + (1 - cfg.vel_filter) * v[a]
             x_prev[a] = x
             e = cfg.setpoint_rad - x
-            integ[a] += e * cfg.sample_s
             g = cfg.gains[a]
+            e_sign = (e > 0) - (e < 0)
+            if not (cfg.anti_windup and sat_sign[a] != 0 and sat_sign[a] == e_sign):
+                integ[a] += e * cfg.sample_s
+            if cfg.anti_windup and g.ki > 0:
+                lim = tau_max[a] / g.ki
+                integ[a] = max(-lim, min(lim, integ[a]))
             tau = g.kp * e - g.kd * v[a] + g.ki * integ[a]
+            sat_sign[a] = 1 if tau > tau_max[a] else (-1 if tau < -tau_max[a] else 0)
             pending[a] = duty_from_torque(tau, tau_max[a], cfg)
             res.t[k] = k * cfg.sample_s
             res.x_meas[k, a] = x
             res.x_true[k, a] = plant.screw_angle(a)
             res.table_mm[k, a] = plant.table_mm(a)
             res.v_est[k, a] = v[a]
-            res.duty[k, a] = active[a] / (full - 1)
+            res.duty[k, a] = active[a] / full
             res.current[k, a] = plant.current(a)
         if progress and k % max(1, n_samples // 20) == 0:
             print(f"  t = {k * cfg.sample_s:5.1f} s  x = {res.x_meas[k, 0]:.3f} / "

@@ -27,3 +27,17 @@ def test_p_control_settles_axis_x_on_one_screw_turn():
     assert 0.2 < m["rise_s"] < 1.0
     assert abs(r.x_meas[-1, 0] - r.x_true[-1, 0]) < 2 * 2 * 3.141592653589793 / 8400
     assert r.table_mm[-1, 0] == pytest.approx(4.0, abs=0.05)
+
+
+def test_pid_anti_windup_matches_the_firmware_law():
+    """Axis z saturates for over a second after the step: with the firmware's
+    anti-windup its overshoot stays near the RTL-in-the-loop 56 %; the plain
+    eq. (22) integral winds up and doubles it."""
+    from sim_models.control import TABLE1, LoopConfig, run_loop, step_metrics
+
+    over = {}
+    for aw in (True, False):
+        r = run_loop(LoopConfig(t_end_s=6.0, gains=TABLE1["PID"], anti_windup=aw))
+        over[aw] = step_metrics(r.t, r.x_meas[:, 1], 6.28)["overshoot_pct"]
+    assert 50.0 < over[True] < 62.0
+    assert over[False] > over[True] + 30.0
