@@ -187,8 +187,17 @@ int main(void)
         tx_pump();
         uint32_t period = tl_servo_period_cycles(&servo);
         if (period != wdog_period) {
-            wdog_period = period;
+            /* The new period starts now: the next tick is one new period away,
+             * not at the deadline computed with the old one.  Otherwise a
+             * shorter period (25 ms -> 5 ms) reloads the watchdog with 4 new
+             * periods while the next tick is still up to one old period off,
+             * and the hardware latches the drives safe. */
+            hal_irq_off();
+            deadline = mtime() + period;
+            arm_timer(deadline);
             TL_SYS_WDOG_LOAD = period * WDOG_PERIODS;
+            hal_irq_on();
+            wdog_period = period;
         }
         if (servo.baud_div_pending) {
             tx_drain();

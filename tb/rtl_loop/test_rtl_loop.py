@@ -43,6 +43,7 @@ def test_rtl_loop_verilator_native() -> None:
           f"velocity {cmp['rmse_rad_s']:.4f} rad/s; {rtl.cycles:,} clocks in {rtl.wall_s:.1f} s wall / "
           f"{rtl.cpu_s:.1f} s CPU; bridge {rtl.bridge}")
     assert rtl.faults == [0], f"fault flags {rtl.faults}"
+    assert rtl.config_faults == [0, 0], f"configuring the period latched faults {rtl.config_faults}"
     assert rtl.link_errors == 0 and rtl.uart_errors == 0
     assert cmp["rmse_rad"] <= 0.01 * step, cmp
     # velocity: both are the same filtered Euler estimate of whole counts

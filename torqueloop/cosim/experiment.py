@@ -152,10 +152,10 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
             link.set_param(tp.GLOBAL_AXIS, "BAUD_DIV", cfg.baud_div)   # replied at the old rate
             board.set_uart_div(cfg.baud_div + 1)
         configure(link, cfg)
-        # A shorter PERIOD_US reloads the watchdog with 4 new periods while the
-        # next tick is still due at the old period's deadline: the SoC latch trips
-        # (HW_SAFE) - a firmware issue reported to issue 6.  Wait past the old
-        # deadline and clear what the configuration latched.
+        # Changing PERIOD_US used to trip the SoC watchdog (the next tick stayed
+        # at the old period's deadline); the firmware now restarts its tick.
+        # Still wait past an old deadline and record anything latched, so a
+        # regression shows in report.json and fails the rtl_loop test.
         link.advance(30 * CLK_HZ // 1000)
         config_faults = [link.call("STATUS", axis=ax)["faults"] for ax in (0, 1)]
         if any(config_faults):
