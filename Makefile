@@ -66,9 +66,8 @@ characterize: $(STAMP) ## the characterisation method (steps 1-8) on the simulat
 	$(PY) scripts/characterize.py sim --out-dir build/characterize
 
 firmware: $(STAMP) ## servo firmware: build/firmware/servo/{servo.elf,.bin,_ram.hex,_rom.hex}
-	$(PY) scripts/gen_linker.py --check
-	$(PY) scripts/gen_protocol.py --check
-	$(PY) scripts/build_firmware.py
+	$(PY) -m torqueloop.flow.generate --check
+	$(PY) -m torqueloop.flow.firmware
 
 board-sim: $(STAMP) ## simulated board (firmware C + plant) on TCP for the torqueloop host tool
 	$(VENV)/bin/torqueloop sim

@@ -10,7 +10,7 @@
 # scripts/gen_quartus.py, which first checks that the committed .qsf is in
 # step with constraints/pins.toml and rtl/manifest.toml.
 # The firmware images named in constraints/pins.toml [firmware] must exist
-# first: python3 scripts/build_firmware.py (needs riscv64-unknown-elf-gcc).
+# first: python3 -m torqueloop.flow.boot_image (needs riscv64-unknown-elf-gcc).
 
 set repo [file normalize [file join [file dirname [info script]] ..]]
 set proj_dir [file join $repo build quartus]

@@ -5,12 +5,24 @@ a main() that prints its numbers) in name order, or only those named."""
 from __future__ import annotations
 
 import argparse
+import importlib
 import importlib.util
 import sys
 import time
 from pathlib import Path
 
 BENCH_DIR = Path(__file__).resolve().parent / "benches"
+TB_DIR = Path(__file__).resolve().parent.parent / "tb"
+
+
+def tb_module(folder: str, name: str):
+    """A test bench module (tb/<folder>/<name>.py) whose cocotb tests a
+    benchmark runs: its folder goes on sys.path, where the simulator's Python
+    (which gets this process's path) finds the module by name too."""
+    d = str(TB_DIR / folder)
+    if d not in sys.path:
+        sys.path.insert(0, d)
+    return importlib.import_module(name)
 
 
 def main() -> int:

@@ -4,7 +4,7 @@
 Every top-level port has a pin and an I/O standard, no pin is used twice,
 every pin matches the board table, every source file of the SoC is in the
 project, the .sdc names ports that exist, and the generated files are in
-step with constraints/pins.toml.  Details: torqueloop/board_check.py.
+step with constraints/pins.toml.  Details: torqueloop/flow/constraints_check.py.
 Exit status 1 if anything fails; every problem is listed.
 """
 
@@ -13,7 +13,7 @@ from __future__ import annotations
 import sys
 import time
 
-from torqueloop.board_check import run_all
+from torqueloop.flow.constraints_check import run_all
 
 
 def main() -> int:

@@ -22,9 +22,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-from torqueloop.board import load_pin_table
-from torqueloop.hdl import REPO_ROOT
-from torqueloop.quartus import PROJECT, products, stale, write_project
+from torqueloop.flow.board_files import load_pin_table
+from torqueloop.flow.manifest import REPO_ROOT
+from torqueloop.flow.quartus import PROJECT, products, stale, write_project
 
 
 def compile_project(qpf: Path) -> int:

@@ -10,8 +10,8 @@ import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 
-from torqueloop import eda
-from torqueloop.hdl import load_manifest
+from torqueloop.flow import eda
+from torqueloop.flow.manifest import load_manifest
 
 
 def main() -> int:

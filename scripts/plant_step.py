@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Pure-model P, PD and PID step responses (paper Figs 14-16, "simulation").
 
-Runs sim_models.control.run_loop for each law with the Table 1 gains: both
+Runs torqueloop.sim.model_loop.run_loop for each law with the Table 1 gains: both
 axes step to 6.28 rad (one screw turn, 4 mm) from rest, the controller
 sampled every 25 ms, PWM at 450 Hz (x) / 200 Hz (z) through the BTS7960 model
 into the plant's fast stepper.  Writes, per law, ``step_<law>.csv`` (every
@@ -23,7 +23,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from sim_models.control import TABLE1, LoopConfig, LoopResult, run_loop, step_metrics  # noqa: E402
+from torqueloop.sim.model_loop import TABLE1, LoopConfig, LoopResult, run_loop, step_metrics  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 AXES = ("x", "z")

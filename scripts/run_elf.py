@@ -37,11 +37,11 @@ os.environ["PATH"] = os.pathsep.join([str(VENV / "tools" / "bin"), str(VENV / "b
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "tb" / "cpu"))
 
-from torqueloop.ref.rv32 import read_elf  # noqa: E402
+from torqueloop.models.rv32 import read_elf  # noqa: E402
 
 import re  # noqa: E402
 
-RAM_BASE = 0x8000_0000  # SoC memory map (rtl/soc/regmap.toml), as cpu_sim_top decodes it
+RAM_BASE = 0x8000_0000  # SoC memory map (torqueloop/spec/regmap.toml), as cpu_sim_top decodes it
 
 
 def _ram_bytes() -> int:
@@ -87,7 +87,7 @@ def main(argv: list[str] | None = None) -> int:
                   f"(0x{RAM_BASE:08x}+0x{RAM_BYTES:x})", file=sys.stderr)
             return 3
 
-    from torqueloop.simrun import run
+    from torqueloop.flow.simrun import run
 
     with tempfile.TemporaryDirectory() as tmp:
         result = Path(tmp) / "result.json"

@@ -24,7 +24,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from torqueloop.cosim import experiment, native, report  # noqa: E402
+from torqueloop.sim import experiment, native, report  # noqa: E402
 
 
 def _one(args: tuple[str, float, int, float]) -> tuple:

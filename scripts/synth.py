@@ -9,8 +9,8 @@ import argparse
 import sys
 from concurrent.futures import ThreadPoolExecutor
 
-from torqueloop import eda
-from torqueloop.hdl import load_manifest
+from torqueloop.flow import eda
+from torqueloop.flow.manifest import load_manifest
 
 
 def main() -> int:

@@ -8,8 +8,8 @@ Modules:
 - :mod:`sim_models.reference` stiff scipy (Radau) reference integration
 - :mod:`sim_models.encoder` quadrature encoder (A/B/Z) from motor-shaft angle
 - :mod:`sim_models.dyno`    dynamometer bench of the characterisation method (sec. II)
-- :mod:`sim_models.control` pure-model P/PD/PID closed loop (eq 20-22, Table 1)
-- :mod:`sim_models.schedule` PWM pin schedules on the 50 MHz grid (tests, benchmarks)
+- :mod:`torqueloop.sim.model_loop` pure-model P/PD/PID closed loop (eq 20-22, Table 1)
+- :mod:`sim_models.waveforms` input waveforms on the 50 MHz grid for the plant's tests and benchmarks
 
 docs/plant.md documents equations, interpretations and validation numbers.
 """

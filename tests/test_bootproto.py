@@ -1,4 +1,4 @@
-"""torqueloop.bootproto: frame layout, CRC-32 (host and the bootloader's C
+"""torqueloop.spec.bootproto: frame layout, CRC-32 (host and the bootloader's C
 code), reply parsing, ROM layout, ELF conversion, and upload() over a TCP
 socket to a fake bootloader (the RN-XV path: socket://host:port)."""
 
@@ -15,8 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from torqueloop import bootproto as bp
-from torqueloop import regs
+from torqueloop.host import upload
+from torqueloop.spec import bootproto as bp
+from torqueloop.spec import regs
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -191,7 +192,7 @@ def test_upload_over_tcp_good_and_rejected():
     fake = FakeBoot()
     fake.start()
     seen = []
-    res = bp.upload(f"socket://127.0.0.1:{fake.port}", image, baud=2_000_000, wait_window_s=5, enter=b"ENTER",
+    res = upload.upload(f"socket://127.0.0.1:{fake.port}", image, baud=2_000_000, wait_window_s=5, enter=b"ENTER",
                     progress=lambda n, t: seen.append((n, t)))
     fake.join(5)
     assert res.ok, res.message
@@ -203,7 +204,7 @@ def test_upload_over_tcp_good_and_rejected():
 
     bad = FakeBoot(corrupt=True)
     bad.start()
-    res = bp.upload(f"socket://127.0.0.1:{bad.port}", image, baud=2_000_000, wait_window_s=5, enter=b"E")
+    res = upload.upload(f"socket://127.0.0.1:{bad.port}", image, baud=2_000_000, wait_window_s=5, enter=b"E")
     bad.join(5)
     assert not res.ok and "CRC" in res.message and res.factory_running
 
@@ -211,24 +212,17 @@ def test_upload_over_tcp_good_and_rejected():
 def test_upload_without_window_sends_nothing():
     fake = FakeBoot(silent=True)
     fake.start()
-    res = bp.upload(f"socket://127.0.0.1:{fake.port}", b"abcd", wait_window_s=0.3, enter=b"E")
+    res = upload.upload(f"socket://127.0.0.1:{fake.port}", b"abcd", wait_window_s=0.3, enter=b"E")
     assert not res.ok and "TLBW" in res.message and res.bytes_sent == 0
 
 
 def test_upload_reports_a_lost_link():
     fake = FakeBoot(silent=True)
     fake.start()
-    res = bp.upload(f"socket://127.0.0.1:{fake.port}", b"abcd", wait_window_s=3, enter=b"E")
+    res = upload.upload(f"socket://127.0.0.1:{fake.port}", b"abcd", wait_window_s=3, enter=b"E")
     assert not res.ok and "link" in res.message
 
 
-def _upload_script():
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("upload_script", REPO / "scripts" / "upload.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def test_upload_script_over_tcp(tmp_path, capsys):
@@ -236,7 +230,7 @@ def test_upload_script_over_tcp(tmp_path, capsys):
     image.write_bytes(random.Random(500).randbytes(500))
     fake = FakeBoot(wait_enter=False)
     fake.start()
-    rc = _upload_script().main([str(image), "--port", f"socket://127.0.0.1:{fake.port}", "--baud", "1000000",
+    rc = upload.main([str(image), "--port", f"socket://127.0.0.1:{fake.port}", "--baud", "1000000",
                                 "--wait", "5"])
     out = capsys.readouterr()
     assert rc == 0, out
@@ -247,7 +241,7 @@ def test_upload_script_over_tcp(tmp_path, capsys):
 def test_upload_script_enter_asks_the_servo_firmware():
     """--enter: IDENTIFY, then BOOTLOADER with the magic and the next seq,
     checked with the servo protocol's own decoder."""
-    from torqueloop import protocol as P
+    from torqueloop.spec import protocol as P
 
     ident = P.COMMANDS["IDENTIFY"]
     payload = struct.pack(ident.rep_fmt, *[{"status": 0, "last_seq": 41}.get(n, 1) for n, _ in ident.rep])
@@ -267,7 +261,7 @@ def test_upload_script_enter_asks_the_servo_firmware():
             return out
 
     port = Port()
-    enter = _upload_script().servo_enter(port)
+    enter = upload.servo_enter(port)
     frames = [f for f in P.FrameDecoder().feed(enter) if isinstance(f, P.Frame)]
     assert len(frames) == 1 and frames[0].cmd == P.COMMANDS["BOOTLOADER"].cmd and frames[0].seq == 42
     assert struct.unpack("<I", frames[0].payload) == (P.BOOTLOADER_MAGIC,)

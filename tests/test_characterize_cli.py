@@ -88,7 +88,7 @@ def test_exported_headers_compile(tmp_path):
 
     import pytest
 
-    from torqueloop.hdl import REPO_ROOT
+    from torqueloop.flow.manifest import REPO_ROOT
 
     data = tmp_path / "data"
     write_freq(data / "x" / "freq_sweep.csv", 2.4, 450.0)

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from torqueloop import board, board_check, quartus
-from torqueloop.hdl import REPO_ROOT, Core, load_manifest
+from torqueloop.flow import board_files as board, constraints_check as board_check, quartus
+from torqueloop.flow.manifest import REPO_ROOT, Core, load_manifest
 
 
 @pytest.fixture(scope="module")

@@ -1,5 +1,5 @@
 """Unit tests of the co-simulation pieces that do not need the RTL
-(torqueloop.cosim): plant snapshot/rollback, the speculative plant-on-pins
+(torqueloop.sim): plant snapshot/rollback, the speculative plant-on-pins
 scheme against a direct plant run, the eq. (26)-(27) RMSE."""
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ import pytest
 
 from sim_models.bridge import Pins
 from sim_models.stepper import TwoAxisPlant
-from torqueloop.cosim import pins as cp
-from torqueloop.cosim.report import rmse, step_metrics
+from torqueloop.sim import pins as cp
+from torqueloop.sim.report import rmse, step_metrics
 
 
 def _pins_code(p0: Pins, p1: Pins) -> int:

@@ -16,7 +16,7 @@ import struct
 
 import pytest
 
-from torqueloop import protocol as P
+from torqueloop.spec import protocol as P
 from torqueloop.host.client import Client, CommandRejected, NoAnswer, ReplyLost
 from torqueloop.host.transport import LinkInfo
 
@@ -327,7 +327,7 @@ class LossyLink:
 
 
 def test_random_lossy_link_never_runs_a_command_twice() -> None:
-    from torqueloop.host.simboard import SimBoard
+    from torqueloop.sim.simboard import SimBoard
 
     seed = int(os.environ.get("TL_SEED", random.randrange(1, 2**32)))
     print(f"seed {seed} (rerun with TL_SEED={seed})")

@@ -168,7 +168,7 @@ def test_config_load_takes_the_characterisation_file(url, capsys, tmp_path: Path
 
 
 def test_upload_changes_the_build_id(url, capsys, tmp_path: Path) -> None:
-    bp = pytest.importorskip("torqueloop.bootproto")
+    bp = pytest.importorskip("torqueloop.spec.bootproto")
     image = os.urandom(3000)
     (tmp_path / "fw.bin").write_bytes(image)
     res, _ = run(url, capsys, "upload", str(tmp_path / "fw.bin"))
@@ -197,7 +197,7 @@ class FlipOneImageByte:
 
 
 def test_corrupted_upload_is_refused_and_the_board_keeps_working(url, capsys, tmp_path: Path) -> None:
-    bp = pytest.importorskip("torqueloop.bootproto")
+    bp = pytest.importorskip("torqueloop.spec.bootproto")
     from torqueloop.host.client import Client
     from torqueloop.host.transport import open_link
     from torqueloop.host.upload import run_upload

@@ -1,16 +1,16 @@
 """The simulated board's boot ROM (docs/bootloader.md state machine) on every
 path a host can meet: accepted, header, length, CRC, gap and garbage errors,
 silence, and that the firmware answers afterwards with the right build id.
-Frames come from torqueloop.bootproto (the protocol's single definition)."""
+Frames come from torqueloop.spec.bootproto (the protocol's single definition)."""
 
 from __future__ import annotations
 
 import pytest
 
-from torqueloop import protocol as P
-from torqueloop.host.simboard import SimBoard
+from torqueloop.spec import protocol as P
+from torqueloop.sim.simboard import SimBoard
 
-bp = pytest.importorskip("torqueloop.bootproto")
+bp = pytest.importorskip("torqueloop.spec.bootproto")
 FACTORY = 0x51B0_0001
 
 

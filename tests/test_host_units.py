@@ -10,10 +10,11 @@ import math
 import numpy as np
 import pytest
 
-from torqueloop import protocol as P
-from torqueloop.host import analysis, units
+from torqueloop.spec import protocol as P
+from torqueloop.host import analysis
+from torqueloop.spec import units
 from torqueloop.host import config as hc
-from torqueloop.ref import freq_div
+from torqueloop.models import freq_div
 
 MECH = units.Mechanics(8400, 4000)
 

@@ -1,10 +1,10 @@
-"""Pure-model closed loop (sim_models.control)."""
+"""Pure-model closed loop (torqueloop.sim.model_loop)."""
 
 from __future__ import annotations
 
 import pytest
 
-from sim_models.control import TABLE1, LoopConfig, duty_from_torque, run_loop, step_metrics
+from torqueloop.sim.model_loop import TABLE1, LoopConfig, duty_from_torque, run_loop, step_metrics
 
 
 def test_duty_mapping_saturates_and_skips_the_dead_zone():
@@ -33,7 +33,7 @@ def test_pid_anti_windup_matches_the_firmware_law():
     """Axis z saturates for over a second after the step: with the firmware's
     anti-windup its overshoot stays near the RTL-in-the-loop 56 %; the plain
     eq. (22) integral winds up and doubles it."""
-    from sim_models.control import TABLE1, LoopConfig, run_loop, step_metrics
+    from torqueloop.sim.model_loop import TABLE1, LoopConfig, run_loop, step_metrics
 
     over = {}
     for aw in (True, False):

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from sim_models.schedule import pwm_schedule, run_fast
+from sim_models.waveforms import pwm_schedule, run_fast
 from sim_models import axis as ax
 from sim_models.bridge import Pins
 from sim_models.params import load_params

@@ -1,4 +1,4 @@
-"""The Python side of the link protocol (torqueloop/protocol.py) against the
+"""The Python side of the link protocol (torqueloop/spec/protocol.py) against the
 protocol's own rules: CRC check value, COBS properties, frame round trips,
 resynchronisation after noise and the RN-XV's *HELLO*, every single-bit error
 rejected, and the definition's internal consistency."""
@@ -8,7 +8,7 @@ from __future__ import annotations
 import random
 import struct
 
-from torqueloop import protocol as P
+from torqueloop.spec import protocol as P
 
 
 def test_crc_check_value() -> None:

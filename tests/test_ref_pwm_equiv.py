@@ -6,8 +6,8 @@ from dataclasses import replace
 
 import pytest
 
-from torqueloop import eda
-from torqueloop.hdl import core
+from torqueloop.flow import eda
+from torqueloop.flow.manifest import core
 
 
 def _mutate(text: str, old: str, new: str) -> str:

@@ -7,7 +7,7 @@ import random
 import numpy as np
 import pytest
 
-from torqueloop.ref.pwm_torque import (PwmInputs, PwmTorqueModel, full_scale, map_direction,
+from torqueloop.models.pwm_torque import (PwmInputs, PwmTorqueModel, full_scale, map_direction,
                                        map_duty)
 
 

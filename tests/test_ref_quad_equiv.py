@@ -2,8 +2,8 @@
 
 import pytest
 
-from torqueloop import eda
-from torqueloop.hdl import core
+from torqueloop.flow import eda
+from torqueloop.flow.manifest import core
 
 
 @pytest.mark.parametrize("good,bad", [

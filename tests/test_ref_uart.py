@@ -6,7 +6,7 @@ import random
 
 import pytest
 
-from torqueloop.ref.uart import (
+from torqueloop.models.uart import (
     LineDecoder,
     RxFifoModel,
     UartParams,

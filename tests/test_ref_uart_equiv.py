@@ -4,8 +4,8 @@ that only shows once the FIFO is full."""
 
 import pytest
 
-from torqueloop import eda
-from torqueloop.hdl import core
+from torqueloop.flow import eda
+from torqueloop.flow.manifest import core
 
 MUTANTS = [
     # (core, file name, good text, broken text)

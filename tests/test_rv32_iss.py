@@ -1,4 +1,4 @@
-"""The RV32IM ISS (torqueloop/ref/rv32.py), the CPU's oracle, checked on its own:
+"""The RV32IM ISS (torqueloop/models/rv32.py), the CPU's oracle, checked on its own:
 spec tables for the M extension, numpy as an independent integer model,
 trap and interrupt rules of the privileged spec, and a C program whose
 results the host compiler computes natively."""
@@ -13,9 +13,9 @@ import sys
 import numpy as np
 import pytest
 
-from torqueloop.hdl import REPO_ROOT
-from torqueloop.ref import rv32
-from torqueloop.ref.rv32 import MASK32, Memory, Rv32
+from torqueloop.flow.manifest import REPO_ROOT
+from torqueloop.models import rv32
+from torqueloop.models.rv32 import MASK32, Memory, Rv32
 
 BASE = 0x8000_0000
 

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from torqueloop import eda
-from torqueloop.hdl import REPO_ROOT, core, load_manifest
+from torqueloop.flow import eda
+from torqueloop.flow.manifest import REPO_ROOT, core, load_manifest
 
 
 def _verilator() -> str:
@@ -49,7 +49,7 @@ def test_equivalence_proof_catches_a_broken_vhdl_twin(tmp_path):
 
 
 def test_manifest_uses_brings_sources_once_in_dependency_order(tmp_path):
-    from torqueloop.hdl import load_manifest as load
+    from torqueloop.flow.manifest import load_manifest as load
     (tmp_path / "a.v").write_text("")
     (tmp_path / "b.v").write_text("")
     m = tmp_path / "m.toml"

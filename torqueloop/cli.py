@@ -21,8 +21,9 @@ import time
 from pathlib import Path
 from typing import Any, Callable
 
-from torqueloop import protocol as P
-from torqueloop.host import analysis, units
+from torqueloop.spec import protocol as P
+from torqueloop.host import analysis
+from torqueloop.spec import units
 from torqueloop.host import config as hconfig
 from torqueloop.host.client import Client, NoAnswer, ProtocolError, decode_faults, describe_faults
 from torqueloop.host.transport import DEFAULT_BAUD, LinkOpenError, open_link
@@ -462,12 +463,12 @@ def cmd_upload(ctx: Ctx) -> int:
 
 
 def cmd_sim(ctx: Ctx) -> int:
-    from torqueloop.host.server import BoardServer
-    from torqueloop.host.simboard import SimBoard
+    from torqueloop.sim.server import BoardServer
+    from torqueloop.sim.simboard import SimBoard
 
     a = ctx.args
     if a.rtl:
-        from torqueloop.host.rtlboard import RtlBoard
+        from torqueloop.sim.rtlboard import RtlBoard
 
         board: Any = RtlBoard(seed=a.seed)
         what = "RTL board image (Verilator) + plant model, far below real time"

@@ -9,7 +9,7 @@
  *
  * Runs from ROM with its stack in the top BOOT_STACK_BYTES of RAM, which an
  * upload never reaches; no .data, no .bss (boot.ld checks).  The constants
- * come from boot_proto.h, generated from torqueloop/bootproto.py. */
+ * come from boot_proto.h, generated from torqueloop/spec/bootproto.py. */
 #include <stdint.h>
 
 #include "boot_crc.h"

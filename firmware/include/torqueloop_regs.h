@@ -1,4 +1,4 @@
-/* Generated from rtl/soc/regmap.toml by scripts/gen_regmap.py - do not edit. */
+/* Generated from torqueloop/spec/regmap.toml by torqueloop.flow.generate - do not edit. */
 #ifndef TORQUELOOP_REGS_H
 #define TORQUELOOP_REGS_H
 

@@ -1,4 +1,4 @@
-/* Generated from firmware/protocol/protocol.toml by scripts/gen_protocol.py - do not edit. */
+/* Generated from torqueloop/spec/protocol.toml by torqueloop.flow.generate - do not edit. */
 #ifndef TL_PROTOCOL_H
 #define TL_PROTOCOL_H
 

@@ -128,7 +128,7 @@ static void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_
                      uint32_t interval)
 {
     if (p->vel_mode == 0u) {
-        /* The paper: Euler difference over T_s, low-pass weight 1/2 (sim_models/control.py). */
+        /* The paper: Euler difference over T_s, low-pass weight 1/2 (torqueloop/sim/model_loop.py). */
         int64_t euler = (int64_t)(pos - c->pos_prev) * 256 * 1000000 / (int64_t)c->period_us;
         c->vel_q8 = (int32_t)clamp64((euler + c->vel_q8) / 2, -0x7FFFFFFF, 0x7FFFFFFF);
     } else if (pos != c->pos_ref) {
@@ -203,7 +203,7 @@ int32_t tl_ctl_step(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t
     return c->cmd;
 }
 
-/* 2 pi ~ 710 / 113 (error 2.7e-7); the Python side (torqueloop/protocol.py) uses the same. */
+/* 2 pi ~ 710 / 113 (error 2.7e-7); the Python side (torqueloop/spec/protocol.py) uses the same. */
 int32_t tl_gain_raw_from_phys(int32_t micro, int32_t tau_max_mnm, int32_t counts_per_rev)
 {
     if (micro <= 0 || tau_max_mnm <= 0 || counts_per_rev <= 0)

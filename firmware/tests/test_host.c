@@ -4,7 +4,7 @@
  *
  *   host_tests unit [seed]   run every test; prints the seed and the counts
  *   host_tests ctl           line-driven control.c, compared with
- *                            torqueloop/ref/servo.py by the Python test */
+ *                            torqueloop/models/servo.py by the Python test */
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -5,7 +5,7 @@
 // its period counter on each tick, so with div = Count_max the tick runs at
 // f_pwm = f_motor * 2^PWM_BITS (eq. 2) and the PWM carrier at f_motor.
 // Count_max = round(T_pwm / T_clk) (eq. 3-4) is worked out by firmware or by
-// torqueloop/ref/freq_div.py: count_max(); the reset value comes from
+// torqueloop/models/freq_div.py: count_max(); the reset value comes from
 // DEFAULT_MOTOR_HZ, so the bridge gets the paper's 450 Hz without firmware.
 //
 // The divisor is a run-time register because the characterisation flow

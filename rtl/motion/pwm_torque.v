@@ -7,7 +7,7 @@
 // constant low and duty M a constant high: neither shows a glitch pulse, and
 // eq. (24)'s 2^N - 1 steps span 0 .. 100 %.
 //
-// Mapping (docs/pwm_torque.md; torqueloop/ref/pwm_torque.py: map_duty):
+// Mapping (docs/pwm_torque.md; torqueloop/models/pwm_torque.py: map_duty):
 //   cmd == 0 -> duty 0, else
 //   duty = min(pw0, pw_max) + round(min(|cmd|, M) * max(pw_max - pw0, 0) / M)
 // i.e. any non-zero command skips the dead zone (-PW0, PW0) and lands

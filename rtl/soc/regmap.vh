@@ -1,4 +1,4 @@
-// Generated from rtl/soc/regmap.toml by scripts/gen_regmap.py - do not edit.
+// Generated from torqueloop/spec/regmap.toml by torqueloop.flow.generate - do not edit.
 // Listed first in every SoC core's source list (macros are global).
 `ifndef TL_REGMAP_VH
 `define TL_REGMAP_VH

@@ -7,7 +7,7 @@
 // memory-mapped peripherals: firmware (C, compiled to the hex images named
 // by ROM_INIT / RAM_INIT) runs the P/PD/PID laws of eq. (20)-(22) and writes
 // the PWM command of eq. (1).  The memory and register map is
-// rtl/soc/regmap.toml; docs/soc.md describes the blocks.
+// torqueloop/spec/regmap.toml; docs/soc.md describes the blocks.
 //
 // The board top (rtl/board/de0_cv_top.v) supplies clk and a synchronous
 // reset (reset_sync) and wires the pins; every asynchronous input is

@@ -3,7 +3,7 @@
 // CPU's bus and interrupt signals as ports, so bus-master test benches can
 // drive it exactly as the CPU does (tb/soc_fabric).  soc.v adds the CPU.
 //
-// Memory map (rtl/soc/regmap.toml, via the `TL_* macros of regmap.vh):
+// Memory map (torqueloop/spec/regmap.toml, via the `TL_* macros of regmap.vh):
 //   0x0000_0000 boot ROM   ibus + dbus (dbus write -> err)
 //   0x4000_0000 peripherals, 4 KiB pages, dbus only
 //   0x8000_0000 RAM        ibus on port B, dbus on port A (true dual port)

@@ -1,5 +1,5 @@
 // soc_gpio: the DE0-CV's LEDs, slide switches, push buttons and six
-// 7-segment digits as registers (GPIO block of rtl/soc/regmap.toml).
+// 7-segment digits as registers (GPIO block of torqueloop/spec/regmap.toml).
 //
 // SW and KEY are asynchronous to the clock and enter through sync_2ff.  The
 // board's KEY and HEX signals are active low (see /work/shared/board); the

@@ -5,7 +5,7 @@
 // the CPU is busy.  PENDING is write-1-to-clear; an event in the same cycle
 // as the clear wins, so clearing cannot swallow a new event.  irq_external
 // is the level |(PENDING & ENABLE).  Bit layout: INTC block of
-// rtl/soc/regmap.toml.  Slave contract as in soc_ram.v.
+// torqueloop/spec/regmap.toml.  Slave contract as in soc_ram.v.
 `default_nettype none
 
 module soc_intc #(

@@ -6,7 +6,7 @@
 // hardware, and `safe` (latch set, or a cause present right now) forces the
 // bridge outputs low in soc_safety_gate.  Firmware can only clear a cause
 // bit (W1C) once its cause has gone; it cannot clear a latch while the
-// e-stop is still pressed.  Layout: SYS block of rtl/soc/regmap.toml.
+// e-stop is still pressed.  Layout: SYS block of torqueloop/spec/regmap.toml.
 // Slave contract as in soc_ram.v.
 `default_nettype none
 

@@ -4,7 +4,7 @@
 // encoder timestamps share one time base.  irq_timer is the level
 // mtime >= mtimecmp, as the privileged spec defines it; mtimecmp resets to
 // all ones so no interrupt fires before firmware arms it.  Register layout:
-// TIMER block of rtl/soc/regmap.toml.  Slave contract as in soc_ram.v.
+// TIMER block of torqueloop/spec/regmap.toml.  Slave contract as in soc_ram.v.
 `default_nettype none
 
 module soc_timer (

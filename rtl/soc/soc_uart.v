@@ -1,5 +1,5 @@
 // soc_uart: the RN-XV WiFi link (paper section V.A) as a register page
-// (UART layout of rtl/soc/regmap.toml) around rtl/uart/uart.
+// (UART layout of torqueloop/spec/regmap.toml) around rtl/uart/uart.
 //
 // The core does the line work; this block moves bytes between the bus and
 // its FIFOs, holds the baud divisor and flow-control switch, turns the

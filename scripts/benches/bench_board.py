@@ -16,9 +16,9 @@ from __future__ import annotations
 import math
 import time
 
-from torqueloop import eda
-from torqueloop.board import load_pin_table
-from torqueloop.hdl import load_manifest
+from torqueloop.flow import eda
+from torqueloop.flow.board_files import load_pin_table
+from torqueloop.flow.manifest import load_manifest
 
 #: 5CEBA4F23C7 (Cyclone V E A4)
 DEVICE_ALMS = 18_480

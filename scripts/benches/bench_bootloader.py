@@ -7,36 +7,23 @@ that holds no factory image (TLBN, then an upload without a window)."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-from torqueloop import bootproto as bp
-from torqueloop import regs
-from torqueloop.hdl import REPO_ROOT
-from torqueloop.simrun import run
-
-sys.path.insert(0, str(REPO_ROOT / "firmware" / "boot"))
-sys.path.insert(0, str(REPO_ROOT / "tb" / "bootloader"))
-import build_boot  # noqa: E402
-
-
-def _build_firmware():
-    spec = importlib.util.spec_from_file_location("build_firmware", REPO_ROOT / "scripts" / "build_firmware.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["build_firmware"] = mod   # its dataclasses look their module up there
-    assert spec.loader is not None
-    spec.loader.exec_module(mod)
-    return mod
+from torqueloop.flow import boot_image as build_boot
+from torqueloop.flow import firmware
+from torqueloop.flow.simrun import run
+from torqueloop.spec import bootproto as bp
+from torqueloop.spec import regs
 
 
 def main() -> int:
-    import test_bootloader as tbm
+    from bench import tb_module
+    tbm = tb_module("bootloader", "test_bootloader")
 
     board = build_boot.build_boot()
-    servo = bp.load_image(_build_firmware().build("servo").elf)
+    servo = bp.load_image(firmware.build("servo").elf)
     w = build_boot.symbol_word(board.elf, "boot_window_cycles")
     print(f"boot ROM {regs.BOOT_ROM_SIZE} B: bootloader {board.code_bytes} of {bp.BOOT_CODE_BYTES} B, "
           f"factory slot {bp.FACTORY_MAX_BYTES} B, servo image {len(servo)} B "
@@ -46,7 +33,7 @@ def main() -> int:
         print(f"  upload of {n} B at {bp.BAUD} baud: {(n + bp.FRAME_OVERHEAD) * 10 / bp.BAUD:.2f} s on the wire")
 
     # The servo firmware as factory image, at the bench's 1 Mbaud.
-    fw = _build_firmware().build("servo_boot_tb", {"TL_DEFAULT_BAUD_DIV": str(tbm.BAUD_DIV)})
+    fw = firmware.build("servo_boot_tb", {"TL_DEFAULT_BAUD_DIV": str(tbm.BAUD_DIV)})
     factory = bp.load_image(fw.elf)
     app = tbm.build_prog("app")
     rom = build_boot.build_rom(factory, tbm.TB_CFG, name="servo_rom")

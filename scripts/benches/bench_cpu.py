@@ -10,11 +10,13 @@ import sys
 import tempfile
 from pathlib import Path
 
-from torqueloop import eda
-from torqueloop.hdl import REPO_ROOT, core
+from torqueloop.flow import eda
+from torqueloop.flow.manifest import REPO_ROOT, core
 
-sys.path.insert(0, str(REPO_ROOT / "tb" / "cpu"))
-from cpu_progs import PROGS, build  # noqa: E402
+from bench import tb_module  # noqa: E402
+
+cpu_progs = tb_module("cpu", "cpu_progs")
+PROGS, build = cpu_progs.PROGS, cpu_progs.build
 
 REPS = 64
 #: instruction class -> one instance (repeated REPS times between two mcycle reads)

@@ -8,36 +8,28 @@ import json
 import os
 import sys
 import time
-from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]
-CLK_HZ = 50_000_000
+from torqueloop.flow.firmware import build
+from torqueloop.flow.simrun import run
+from torqueloop.spec.regs import CLK_HZ
+from torqueloop.spec.repo import REPO_ROOT as REPO
+
 FUZZ_SECONDS = int(os.environ.get("TL_FUZZ_BENCH_SECONDS", "120"))
 
 
 def _measure(period_us: int) -> dict:
-    sys.path.insert(0, str(REPO / "scripts"))
-    sys.path.insert(0, str(REPO / "tb" / "soc"))
-    sys.path.insert(0, str(REPO / "tb" / "firmware"))
-    from build_firmware import build
-    from test_soc import _verilator_pch_fix
-
-    import test_firmware as T
-    from torqueloop.simrun import run
+    from bench import tb_module
+    T = tb_module("firmware", "test_firmware")
     img = build("servo_tb", {k: str(v) for k, v in T.DEFINES.items()})
     out = REPO / "build" / "firmware" / f"measure_{period_us}.json"
-    with _verilator_pch_fix("verilator"):
-        run("soc", "verilator", "test_firmware",
-            parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'},
-            testcase="measure_control_iteration",
-            extra_env={"TL_FW_MEASURE": "1", "TL_FW_PERIOD_US": str(period_us), "TL_FW_MEASURE_OUT": str(out)})
+    run("soc", "verilator", "test_firmware",
+        parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'},
+        testcase="measure_control_iteration",
+        extra_env={"TL_FW_MEASURE": "1", "TL_FW_PERIOD_US": str(period_us), "TL_FW_MEASURE_OUT": str(out)})
     return json.loads(out.read_text())
 
 
 def main() -> int:
-    sys.path.insert(0, str(REPO / "scripts"))
-    sys.path.insert(0, str(REPO / "tests"))
-    from build_firmware import build
     img = build("servo")
     print(f"image: text+rodata {img.text_bytes} B, data {img.data_bytes} B, bss {img.bss_bytes} B "
           f"(RAM 65536 B, 4096 B stack)")
@@ -51,7 +43,7 @@ def main() -> int:
           f"{m['commands_answered']} commands answered in 3 ms, telemetry {m['telemetry_frames']} frames "
           f"sent / {m['telemetry_dropped']} dropped (1 Mbaud link), faults {m['faults']}")
     print(f"  at the paper's 25 ms: control load {cyc / (25e-3 * CLK_HZ) * 100:.2f} %")
-    from test_firmware_host import run_fuzz
+    from torqueloop.flow.firmware import run_fuzz
     runs, _ = run_fuzz(FUZZ_SECONDS)
     print(f"fuzz: {runs} inputs in {FUZZ_SECONDS} s, no crash, no sanitizer report, no state change from noise")
     return 0

@@ -19,10 +19,10 @@ import numpy as np
 
 from sim_models import axis as ax
 from sim_models.bridge import Pins
-from sim_models.control import TABLE1, LoopConfig, run_loop, step_metrics
+from torqueloop.sim.model_loop import TABLE1, LoopConfig, run_loop, step_metrics
 from sim_models.params import load_params
 from sim_models.reference import simulate
-from sim_models.schedule import pwm_schedule, run_fast
+from sim_models.waveforms import pwm_schedule, run_fast
 from sim_models.stepper import TwoAxisPlant
 
 REF_SECONDS = (0.05, 0.25)   # axis x, axis z

@@ -4,9 +4,9 @@ depth of both cores at the DE0-CV defaults (PWM_BITS = 10, DIV_BITS = 16)."""
 
 from __future__ import annotations
 
-from torqueloop import eda
-from torqueloop.hdl import core
-from torqueloop.ref.freq_div import frequency_error
+from torqueloop.flow import eda
+from torqueloop.flow.manifest import core
+from torqueloop.models.freq_div import frequency_error
 
 FREQS_HZ = [50, 100, 150, 200, 250, 300, 350, 400, 450, 500, 20_000]
 

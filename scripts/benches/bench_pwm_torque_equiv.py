@@ -10,8 +10,8 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-from torqueloop import eda
-from torqueloop.hdl import core
+from torqueloop.flow import eda
+from torqueloop.flow.manifest import core
 
 
 def main() -> int:

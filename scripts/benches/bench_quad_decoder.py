@@ -5,9 +5,9 @@ paper's motor, and Cyclone V resources."""
 
 from __future__ import annotations
 
-from torqueloop import eda
-from torqueloop.hdl import core
-from torqueloop.ref.quad_decoder import (
+from torqueloop.flow import eda
+from torqueloop.flow.manifest import core
+from torqueloop.models.quad_decoder import (
     COUNTS_PER_MOTOR_REV,
     COUNTS_PER_SCREW_REV,
     QuadSettings,

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from torqueloop.cosim import cocotb_run, experiment, native
+from torqueloop.sim import cocotb_run, experiment, native
 
 CLK = 50_000_000
 

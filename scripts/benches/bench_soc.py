@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import time
 
-from torqueloop import eda
-from torqueloop.hdl import load_manifest
-from torqueloop.regmap import load
+from torqueloop.flow import eda
+from torqueloop.flow.manifest import load_manifest
+from torqueloop.flow.gen_regmap import load
 
 # 5CEBA4F23C7 (Cyclone V E A4): Intel's device table.
 DEVICE_ALMS = 18_480

@@ -1,7 +1,7 @@
 """Cyclone V resources of every synthesisable core (Yosys synth_intel_alm)."""
 
-from torqueloop import eda
-from torqueloop.hdl import load_manifest
+from torqueloop.flow import eda
+from torqueloop.flow.manifest import load_manifest
 
 
 def main() -> int:

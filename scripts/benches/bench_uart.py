@@ -8,9 +8,9 @@ import dataclasses
 import random
 import time
 
-from torqueloop import eda
-from torqueloop.hdl import core
-from torqueloop.ref.uart import LineDecoder, UartParams, baud_of, div_for, frame_segments
+from torqueloop.flow import eda
+from torqueloop.flow.manifest import core
+from torqueloop.models.uart import LineDecoder, UartParams, baud_of, div_for, frame_segments
 
 
 def tolerance(div: int, sign: int, rng: random.Random) -> float:

@@ -3,7 +3,7 @@
 The boot ROM holds the real bootloader (built with a short window and gap and
 the UART at 1 Mbaud, so the bench is fast) and a stand-in factory firmware
 (prog/factory.c, which shows on the LEDs whether it started from a pristine
-copy).  Frames come from torqueloop.bootproto, the code the host tool uses;
+copy).  Frames come from torqueloop.spec.bootproto, the code the host tool uses;
 an independent UART model (cocotbext-uart) drives RX and reads TX.
 
 Checked: no upload -> factory after the window; a good upload runs (LEDs,
@@ -30,12 +30,10 @@ from cocotb.triggers import ClockCycles, FallingEdge, Timer, with_timeout
 from cocotb.utils import get_sim_time
 from cocotbext.uart import UartSink, UartSource
 
-from torqueloop import bootproto as bp
-from torqueloop.hdl import REPO_ROOT
-from torqueloop.simrun import BUILD_ROOT, run
-
-sys.path.insert(0, str(REPO_ROOT / "firmware" / "boot"))
-import build_boot  # noqa: E402
+from torqueloop.spec import bootproto as bp
+from torqueloop.flow.manifest import REPO_ROOT
+from torqueloop.flow.simrun import BUILD_ROOT, run
+from torqueloop.flow import boot_image as build_boot
 
 PROG = Path(__file__).resolve().parent / "prog"
 CLK_NS = 20
@@ -231,7 +229,7 @@ async def servo_factory_answers_and_hands_over(dut):
     runs this; it costs a 17 KiB copy and CRC in simulation): it boots after
     the window, answers IDENTIFY, and its BOOTLOADER command brings back the
     bootloader, which then loads an upload."""
-    from torqueloop import protocol as P
+    from torqueloop.spec import protocol as P
 
     tb = TB(dut)
     app, _ = _images()

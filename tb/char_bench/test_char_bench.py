@@ -1,97 +1,15 @@
-"""The simulated characterisation bench, RTL side: freq_div + pwm_torque
-(char_bench_top) driven with Count_max and duty settings; the IBT-2 pins are
-watched and each setting's pin waveform over one whole PWM period is
-returned (times of every pin change).  torqueloop.characterize.simbench
-feeds those waveforms to the plant's dynamometer model.
-
-cocotb side: the ``capture`` test reads a job (JSON list of settings) from
-$CHAR_BENCH_JOB and writes the waveforms to $CHAR_BENCH_RESULT.
-pytest side: ``test_char_bench`` is the end-to-end check that a written
+"""The simulated characterisation bench end to end (pytest): a written
 characterisation configuration reproduces the chosen frequency and the dead
-zone on the PWM pins.
+zone on the PWM pins of freq_div + pwm_torque (torqueloop/characterize/
+char_bench_top.v, captured by torqueloop/characterize/rtl_capture.py), and
+the simulated lab runs the method through the RTL pin source.
 """
 
 from __future__ import annotations
 
-import json
-import os
 from pathlib import Path
 
-import cocotb
 import pytest
-from cocotb.clock import Clock
-from cocotb.simtime import get_sim_time
-from cocotb.triggers import ClockCycles, FallingEdge, First, ReadOnly, RisingEdge
-
-CLK_NS = 20  # CLOCK_50
-PINS = ("rpwm", "lpwm", "r_en", "l_en")
-
-
-def _pins(dut) -> tuple[int, ...]:
-    return tuple(int(getattr(dut, p).value) for p in PINS)
-
-
-def _now_ps() -> int:
-    return int(round(get_sim_time(unit="ps")))
-
-
-async def _one_period(dut) -> dict:
-    """Pin waveform from one period start to the next."""
-    await RisingEdge(dut.period_start)
-    await ReadOnly()
-    t0 = _now_ps()
-    segs: list[list[int]] = [[0, *_pins(dut)]]
-    while True:
-        await First(RisingEdge(dut.period_start), *(getattr(dut, p).value_change for p in PINS))
-        await ReadOnly()
-        t = _now_ps()
-        if t > t0 and int(dut.period_start.value) == 1:
-            break
-        p = _pins(dut)
-        if list(p) != segs[-1][1:]:
-            segs.append([t - t0, *p])
-    return {"period_ps": t - t0, "segments_ps": segs}
-
-
-@cocotb.test()
-async def capture(dut):
-    job = json.loads(Path(os.environ["CHAR_BENCH_JOB"]).read_text())
-    cocotb.start_soon(Clock(dut.clk, CLK_NS, unit="ns").start())
-    dut.rst.value = 1
-    dut.div_we.value = 0
-    dut.div_in.value = 0
-    dut.cmd.value = 0
-    dut.pw0.value = 0
-    dut.pw_max.value = 0
-    dut.enable.value = 0
-    await ClockCycles(dut.clk, 4)
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
-    dut.enable.value = 1
-    out = []
-    for k, s in enumerate(job):
-        # The divisor applies at once (the running period finishes at the new
-        # tick rate); the duty is double-buffered and taken at a period start
-        # from inputs at least PIPE_CLOCKS = 3 clocks old.  So: write, wait 4
-        # clocks, and record from the next period start to the one after.
-        await FallingEdge(dut.clk)
-        dut.div_in.value = s["count_max"]
-        dut.div_we.value = 1
-        dut.cmd.value = s["cmd"]
-        dut.pw0.value = s.get("pw0", 0)
-        dut.pw_max.value = s.get("pw_max", 1023)
-        await FallingEdge(dut.clk)
-        dut.div_we.value = 0
-        await ClockCycles(dut.clk, 4)
-        rec = await _one_period(dut)
-        assert int(dut.div.value) == s["count_max"], f"setting {k}: divisor register reads {int(dut.div.value)}"
-        out.append({**s, **rec})
-        dut._log.info(
-            "setting %d/%d: count_max %d cmd %d -> period %.1f us, %d pin changes",
-            k + 1, len(job), s["count_max"], s["cmd"], rec["period_ps"] / 1e6, len(rec["segments_ps"]),
-        )
-    Path(os.environ["CHAR_BENCH_RESULT"]).write_text(json.dumps(out))
-
 
 # ---------------------------------------------------------------- pytest entry
 

@@ -12,8 +12,8 @@ import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 
-from torqueloop.hdl import REPO_ROOT
-from torqueloop.ref.rv32 import Memory, Rv32, load_elf, read_elf, run_to_tohost
+from torqueloop.flow.manifest import REPO_ROOT
+from torqueloop.models.rv32 import Memory, Rv32, load_elf, read_elf, run_to_tohost
 
 PROGS = Path(__file__).resolve().parent / "progs"
 BUILD = REPO_ROOT / "build" / "cpu_progs"

@@ -14,7 +14,7 @@ import cocotb
 from cocotb.clock import Clock
 from cocotb.triggers import First, ReadOnly, RisingEdge, Timer
 
-from torqueloop.ref.rv32 import Elf
+from torqueloop.models.rv32 import Elf
 
 CLK_NS = 20  # CLOCK_50
 RAM_BASE = 0x8000_0000

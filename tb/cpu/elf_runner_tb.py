@@ -16,7 +16,7 @@ from pathlib import Path
 import cocotb
 
 from cpu_tb import CpuTb
-from torqueloop.ref.rv32 import read_elf
+from torqueloop.models.rv32 import read_elf
 
 
 @cocotb.test()

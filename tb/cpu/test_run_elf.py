@@ -9,8 +9,8 @@ import sys
 import pytest
 
 from cpu_progs import PROGS, build, run_iss
-from torqueloop.hdl import REPO_ROOT
-from torqueloop.simrun import sims_for
+from torqueloop.flow.manifest import REPO_ROOT
+from torqueloop.flow.simrun import sims_for
 
 RUN_ELF = REPO_ROOT / "scripts" / "run_elf.py"
 SIMS = sims_for("cpu_sim_top", langs=("verilog",))

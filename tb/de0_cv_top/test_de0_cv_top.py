@@ -22,7 +22,7 @@ whatever the firmware does:
     counts up), shown by the firmware on LEDR[7:0];
   - no spare header pin is driven (four-state simulators only).
 A second test runs the real servo firmware (firmware/servo, built by
-scripts/build_firmware.py with a 1 Mbaud link for simulation speed): it
+torqueloop.flow.firmware with a 1 Mbaud link for simulation speed): it
 answers the link protocol's IDENTIFY through the header UART, refuses
 ENABLE while KEY[0] is held, and no bridge input moves meanwhile.
 """
@@ -40,10 +40,10 @@ from cocotb.clock import Clock
 from cocotb.simtime import get_sim_time
 from cocotb.triggers import ClockCycles, FallingEdge, First, Timer
 
-from torqueloop import regs
-from torqueloop.board import load_pin_table
-from torqueloop.hdl import REPO_ROOT
-from torqueloop.simrun import BUILD_ROOT, run, sims_for
+from torqueloop.spec import regs
+from torqueloop.flow.board_files import load_pin_table
+from torqueloop.flow.manifest import REPO_ROOT
+from torqueloop.flow.simrun import BUILD_ROOT, run, sims_for
 
 HERE = Path(__file__).resolve().parent
 SOC_PROG = REPO_ROOT / "tb" / "soc" / "prog"   # the SoC bench's crt0 and linker script (4 KiB RAM)
@@ -265,7 +265,7 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
 async def _exchange(dut, source, sink, decoder, frame: bytes, cycles: int):
     """Send one request frame over the header UART; return the first reply
     frame (telemetry and other traffic skipped) within ``cycles`` clocks."""
-    from torqueloop import protocol
+    from torqueloop.spec import protocol
 
     await source.write(frame)
     for _ in range(cycles // 100):
@@ -290,7 +290,7 @@ async def servo_firmware_answers_the_protocol_on_the_header(dut):
     refused while KEY[0] is pressed; no bridge input moves meanwhile."""
     from cocotbext.uart import UartSink, UartSource
 
-    from torqueloop import protocol
+    from torqueloop.spec import protocol
 
     cocotb.start_soon(Clock(dut.clk, 20, unit="ns").start())
     dut.reset_n.value = 0
@@ -334,11 +334,11 @@ def _publish(src: Path, dst: Path) -> Path:
 
 
 def build_servo_images() -> tuple[Path, Path]:
-    """The servo firmware built by scripts/build_firmware.py for simulation
+    """The servo firmware built by torqueloop.flow.firmware for simulation
     (1 Mbaud link, 1 ms control period): (boot-ROM stub, RAM image)."""
     out = BUILD_ROOT / "de0_cv_top" / "servo"
     tmp = out / f"tmp{os.getpid()}"
-    subprocess.run([sys.executable, str(REPO_ROOT / "scripts" / "build_firmware.py"), "--name", "servo_sim",
+    subprocess.run([sys.executable, "-m", "torqueloop.flow.firmware", "--name", "servo_sim",
                     "-D", f"TL_DEFAULT_BAUD_DIV={SERVO_BAUD_DIV}", "-D", "TL_DEFAULT_PERIOD_US=1000",
                     "--out", str(tmp)], check=True, capture_output=True, text=True)
     images = tuple(_publish(tmp / f"servo_sim_{m}.hex", out / f"servo_sim_{m}.hex") for m in ("rom", "ram"))

@@ -7,8 +7,8 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge
 
-from torqueloop.ref.drive_interlock import DriveInterlockModel, InterlockInputs
-from torqueloop.simrun import run, sims_for
+from torqueloop.models.drive_interlock import DriveInterlockModel, InterlockInputs
+from torqueloop.flow.simrun import run, sims_for
 
 
 def _apply(dut, i: InterlockInputs) -> None:

@@ -1,13 +1,13 @@
 """firmware: the servo firmware (firmware/servo) on the whole simulated SoC.
 
-The image is built by scripts/build_firmware.py with test defaults (1 Mbaud
+The image is built by torqueloop.flow.firmware with test defaults (1 Mbaud
 link so frames take microseconds, not milliseconds; 500 us control period)
 and loaded through RAM_INIT; the boot ROM stub jumps to it.  The bench talks
 to it only through the pins: the link protocol on uart_rx/uart_tx
-(cocotbext-uart + torqueloop.protocol, the host tool's own codec), encoder
+(cocotbext-uart + torqueloop.spec.protocol, the host tool's own codec), encoder
 quadrature on enc_a/enc_b, e-stop and bridge-fault inputs, and it watches the
 bridge pins rpwm/lpwm/r_en/l_en.  Expected PWM commands come from
-torqueloop/ref/servo.py (the control law in Python integers).
+torqueloop/models/servo.py (the control law in Python integers).
 
 Verilator only: the firmware needs a few hundred thousand clocks per test,
 which Icarus runs ~30x slower (minutes per test).
@@ -28,8 +28,8 @@ from cocotb.queue import Queue
 from cocotb.triggers import ClockCycles, Edge, First, Timer, with_timeout
 from cocotb.utils import get_sim_time
 
-from torqueloop import protocol as P
-from torqueloop.ref import servo as ref
+from torqueloop.spec import protocol as P
+from torqueloop.models import servo as ref
 
 CLK_NS = 20
 BAUD = 1_000_000
@@ -492,11 +492,8 @@ async def telemetry_trapezoid_and_bootloader_jump(dut):
 
 @pytest.mark.parametrize("sim", ["verilator"])
 def test_firmware(sim):
-    import sys
-    from torqueloop.hdl import REPO_ROOT
-    from torqueloop.simrun import run, sims_for
-    sys.path.insert(0, str(REPO_ROOT / "scripts"))
-    from build_firmware import build
+    from torqueloop.flow.firmware import build
+    from torqueloop.flow.simrun import run, sims_for
     if sim not in sims_for("soc"):
         pytest.skip(f"{sim} not selected")
     img = build("servo_tb", {k: str(v) for k, v in DEFINES.items()})

@@ -9,8 +9,8 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge
 
-from torqueloop.ref.freq_div import FreqDivModel, FreqDivParams, effective_div
-from torqueloop.simrun import run, sims_for
+from torqueloop.models.freq_div import FreqDivModel, FreqDivParams, effective_div
+from torqueloop.flow.simrun import run, sims_for
 
 
 class TB:

@@ -16,11 +16,11 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, ReadOnly, RisingEdge, Timer
 
-from torqueloop.hdl import REPO_ROOT
-from torqueloop.ref.freq_div import FreqDivParams, carrier_hz, count_max
-from torqueloop.ref.pwm_torque import (PIPE_CLOCKS, PwmInputs, PwmOutputs, PwmTorqueModel,
+from torqueloop.flow.manifest import REPO_ROOT
+from torqueloop.models.freq_div import FreqDivParams, carrier_hz, count_max
+from torqueloop.models.pwm_torque import (PIPE_CLOCKS, PwmInputs, PwmOutputs, PwmTorqueModel,
                                        full_scale, map_duty, safe_pins)
-from torqueloop.simrun import run, sims_for
+from torqueloop.flow.simrun import run, sims_for
 
 PINS = PwmOutputs.PINS
 STATUS = ("period_start", "duty_applied", "dir_applied", "active")
@@ -313,7 +313,7 @@ async def full_width_duty_table(dut):
 @cocotb.test()
 async def chain_carrier_matches_ref(dut):
     """freq_div driving pwm_torque (pwm_chain_top): the carrier period and pulse
-    width on RPWM, timed in ns, equal torqueloop.ref.freq_div.carrier_hz() and
+    width on RPWM, timed in ns, equal torqueloop.models.freq_div.carrier_hz() and
     map_duty() for the reset default (eq. 4 Count_max) and written divisors."""
     p = FreqDivParams(clk_hz=int(dut.CLK_HZ.value), pwm_bits=int(dut.PWM_BITS.value),
                       div_bits=int(dut.DIV_BITS.value), default_motor_hz=int(dut.DEFAULT_MOTOR_HZ.value))

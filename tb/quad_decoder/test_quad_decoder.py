@@ -1,6 +1,6 @@
 """quad_decoder: every output compared with the clock-level reference model
 on every clock, plus the end-to-end count of the encoder waveform generator
-(torqueloop/ref/quad_decoder.py).  Directed cases first, then seeded random
+(torqueloop/models/quad_decoder.py).  Directed cases first, then seeded random
 streams with glitches shorter and longer than the filter, illegal
 transitions and index pulses, up to the stated maximum count rate."""
 
@@ -13,7 +13,7 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge
 
-from torqueloop.ref.quad_decoder import (
+from torqueloop.models.quad_decoder import (
     GRAY_UP,
     QuadDecoderModel,
     QuadInputs,
@@ -24,7 +24,7 @@ from torqueloop.ref.quad_decoder import (
     min_state_clocks,
     to_signed32,
 )
-from torqueloop.simrun import run, sims_for
+from torqueloop.flow.simrun import run, sims_for
 
 OUTPUTS = ("position", "dir", "illegal_count", "illegal_flag", "index_pos", "index_seen",
            "index_armed", "timestamp", "last_edge_time", "edge_interval", "enc_filtered")

@@ -21,7 +21,7 @@ import os
 
 import pytest
 
-from torqueloop.cosim import experiment, report
+from torqueloop.sim import experiment, report
 
 T_END_S = 2.0
 PERIOD_US = 5_000

@@ -22,9 +22,9 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge
 
-from torqueloop import regs
-from torqueloop.hdl import REPO_ROOT
-from torqueloop.simrun import BUILD_ROOT, run, sims_for
+from torqueloop.spec import regs
+from torqueloop.flow.manifest import REPO_ROOT
+from torqueloop.flow.simrun import BUILD_ROOT, run, sims_for
 
 PROG = Path(__file__).resolve().parent / "prog"
 HALF_PERIOD = 400          # blink.c

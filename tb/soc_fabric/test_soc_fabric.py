@@ -2,9 +2,9 @@
 ports by bus-master models that follow the CPU's contract (req held until
 the one-cycle ack; rdata/err with ack).
 
-Oracles: the generated register table (torqueloop/regs.py, from
-rtl/soc/regmap.toml) for every register's reset value and access type, and
-torqueloop/ref/soc_bus.py for address decode and memory contents.  The ROM
+Oracles: the generated register table (torqueloop/spec/regs.py, from
+torqueloop/spec/regmap.toml) for every register's reset value and access type, and
+torqueloop/models/soc_bus.py for address decode and memory contents.  The ROM
 and RAM images are hex files written here; the test reads them back as the
 expected contents.
 """
@@ -20,9 +20,9 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
 
-from torqueloop import regs
-from torqueloop.ref.soc_bus import BusModel
-from torqueloop.simrun import BUILD_ROOT, run, sims_for
+from torqueloop.spec import regs
+from torqueloop.models.soc_bus import BusModel
+from torqueloop.flow.simrun import BUILD_ROOT, run, sims_for
 
 RAM_BYTES_TB = 4096  # small RAM keeps the simulators fast; decode is the same
 MAX_WAIT = 8         # cycles a bus access may take before the test calls it a hang

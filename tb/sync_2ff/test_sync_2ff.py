@@ -8,8 +8,8 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Timer
 
-from torqueloop.ref.sync import Sync2ffModel
-from torqueloop.simrun import run, sims_for
+from torqueloop.models.sync import Sync2ffModel
+from torqueloop.flow.simrun import run, sims_for
 
 
 @cocotb.test()

@@ -1,5 +1,5 @@
 """uart (top: rx, tx, FIFOs, flow control) against cocotbext-uart, an
-independent bus model, and the reference model in torqueloop/ref/uart.py.
+independent bus model, and the reference model in torqueloop/models/uart.py.
 
 Fast links (16-100 clocks per bit) keep simulated time short; one case runs
 the real setting (50 MHz, baud_div = 0 -> 115200).  Random bytes and the
@@ -17,7 +17,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, Timer, ValueChange, with_t
 from cocotb.utils import get_sim_time
 from cocotbext.uart import UartSink, UartSource
 
-from torqueloop.ref.uart import (
+from torqueloop.models.uart import (
     LineDecoder,
     RxFifoModel,
     UartParams,
@@ -25,7 +25,7 @@ from torqueloop.ref.uart import (
     effective_div,
     frame_segments,
 )
-from torqueloop.simrun import run, sims_for
+from torqueloop.flow.simrun import run, sims_for
 
 CLK_NS = 20
 

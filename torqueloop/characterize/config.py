@@ -11,7 +11,7 @@ or a :class:`ConfigError` naming the field and the reason.
 
 The divider arithmetic (eq. 4 and the frequency it really produces) is a
 dependency, :class:`DividerModel`; the default is the frequency-divider
-core's own reference model (torqueloop.ref.freq_div), so the numbers
+core's own reference model (torqueloop.models.freq_div), so the numbers
 written here are the ones the RTL produces.
 """
 
@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping, Protocol
 
-from torqueloop.ref import freq_div
+from torqueloop.models import freq_div
 
 from .method import MotorResult, Thresholds
 
@@ -54,7 +54,7 @@ class DividerModel(Protocol):
 
 @dataclass(frozen=True)
 class FunctionDivider:
-    """A :class:`DividerModel` made of two functions (e.g. from torqueloop.ref.freq_div)."""
+    """A :class:`DividerModel` made of two functions (e.g. from torqueloop.models.freq_div)."""
 
     name: str
     count_max_fn: Callable[[float, int, int], int]
@@ -68,10 +68,10 @@ class FunctionDivider:
 
 
 def default_divider() -> DividerModel:
-    """The frequency-divider core's reference model (torqueloop.ref.freq_div):
+    """The frequency-divider core's reference model (torqueloop.models.freq_div):
     its eq. (4) Count_max and the carrier frequency pwm_torque then produces."""
     return FunctionDivider(
-        "torqueloop.ref.freq_div: count_max (eq. 4), carrier_hz",
+        "torqueloop.models.freq_div: count_max (eq. 4), carrier_hz",
         lambda f, clk, bits: freq_div.count_max(f, clk, bits, DIV_BITS),
         lambda n, clk, bits: freq_div.carrier_hz(n, clk, bits),
     )
@@ -388,11 +388,11 @@ DEFAULT_AXIS_PAGES: dict[str, int] = {"x": 0, "z": 1}
 
 
 def register_writes(cfg: Config, pages: Mapping[str, int] | None = None) -> list[tuple[str, int, int]]:
-    """The SoC register writes that apply a configuration (rtl/soc/regmap.toml,
+    """The SoC register writes that apply a configuration (torqueloop/spec/regmap.toml,
     AXIS page): (register name, address, value) for FDIV (Count_max),
     PWM_PW0 and PWM_PWMAX of each configured axis.  PW0/PW_max take effect
     at the next PWM period start (double-buffered in pwm_torque)."""
-    from torqueloop import regs
+    from torqueloop.spec import regs
 
     pages = DEFAULT_AXIS_PAGES if pages is None else pages
     out = []

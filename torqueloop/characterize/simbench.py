@@ -4,7 +4,7 @@ Two pin sources feed the same measurement:
 
 * ``"rtl"`` - the project's own frequency divider and PWM block
   (rtl/motion/freq_div, rtl/motion/pwm_torque, wrapped in
-  tb/char_bench/char_bench_top.v) run in a cocotb simulation; the IBT-2 pin
+  char_bench_top.v beside this module, captured by :mod:`.rtl_capture`) run in a cocotb simulation; the IBT-2 pin
   waveform of one whole period per setting is captured;
 * ``"model"`` - the same waveform computed from the cores' documented
   behaviour (a period of Count_max x (2^N - 1) clocks, RPWM high for
@@ -17,20 +17,19 @@ current out) comes from the plant (sim_models).
 from __future__ import annotations
 
 import json
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Literal, Sequence
 
 import numpy as np
 
-from torqueloop.hdl import REPO_ROOT
+from torqueloop.flow.manifest import REPO_ROOT, core
 
 from .config import CLK_HZ, PWM_BITS, Config, pwm_full_scale
 from .data import BenchConstants, Sweep, read_sweep, write_sweep
 from .method import MotorResult, Thresholds, characterize_motor
 
-TB_DIR = REPO_ROOT / "tb" / "char_bench"
+CHAR_BENCH_TOP = Path(__file__).resolve().with_name("char_bench_top.v")
 CLK_PS = 20_000  # CLOCK_50
 PinSource = Literal["rtl", "model"]
 Drive = Literal["brake", "coast"]
@@ -102,18 +101,16 @@ def drive_and_duty(w: PinWaveform) -> tuple[Drive, float]:
 
 
 def _rtl_waveforms(settings: Sequence[dict], sim: str, work: Path) -> list[dict]:
-    from torqueloop.simrun import run
+    from torqueloop.flow.simrun import run
 
     work.mkdir(parents=True, exist_ok=True)
     job, result = work / "job.json", work / "result.json"
     job.write_text(json.dumps(list(settings)))
     result.unlink(missing_ok=True)
-    if str(TB_DIR) not in sys.path:
-        sys.path.insert(0, str(TB_DIR))  # the cocotb module is found through sys.path
     run(
-        "pwm_torque", sim, "test_char_bench",
+        "pwm_torque", sim, "torqueloop.characterize.rtl_capture",
         toplevel="char_bench_top",
-        extra_verilog=[REPO_ROOT / "rtl" / "motion" / "freq_div.v", TB_DIR / "char_bench_top.v"],
+        extra_verilog=[*core("freq_div").verilog, CHAR_BENCH_TOP],
         testcase="capture",
         extra_env={"CHAR_BENCH_JOB": str(job.resolve()), "CHAR_BENCH_RESULT": str(result.resolve())},
     )
@@ -204,7 +201,7 @@ def record_frequency_sweep(measure: Measure, plan: SweepPlan, motor: str, source
     """Steps 2-4 on the simulated bench: the stall reading (duty M, constantly
     on) and the 50 % sweep.  50 % of the 1023-count period is not a whole
     count: 512 counts (50.05 %) is used and written as the sweep's duty."""
-    from torqueloop.ref import freq_div
+    from torqueloop.models import freq_div
 
     m = pwm_full_scale(PWM_BITS)
     half = (m + 1) // 2
@@ -231,7 +228,7 @@ def record_duty_sweep(measure: Measure, plan: SweepPlan, motor: str, freq_hz: fl
                       source: PinSource = "model", sim: str = "verilator", work: Path | None = None,
                       drive: Drive = "brake") -> Sweep:
     """Step 6 on the simulated bench at the board frequency nearest ``freq_hz``."""
-    from torqueloop.ref import freq_div
+    from torqueloop.models import freq_div
 
     m = pwm_full_scale(PWM_BITS)
     n = freq_div.count_max(freq_hz, CLK_HZ, PWM_BITS)

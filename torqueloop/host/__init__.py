@@ -2,7 +2,7 @@
 
 - :mod:`.transport`: open a link by URL (serial port, RN-XV ``socket://``).
 - :mod:`.client`: the protocol client (retries, timeouts, seq, counters),
-  built on the generated :mod:`torqueloop.protocol`.
+  built on the generated :mod:`torqueloop.spec.protocol`.
 - :mod:`.units`: positions in rad / mm / counts, gains in physical units.
 - :mod:`.config`: ``config save`` / ``config load`` (JSON, validated).
 - :mod:`.analysis`: step-test figures, CSV and plots from telemetry records.

@@ -1,6 +1,6 @@
 """Telemetry records -> arrays, step-response figures, CSV and plots.
 
-A record is what :func:`torqueloop.protocol.decode_telemetry` returns:
+A record is what :func:`torqueloop.spec.protocol.decode_telemetry` returns:
 ``{"time_us": .., "axes": [{"setpoint", "position", "velocity_q8", "error",
 "pwm_cmd", "faults", "enabled"}, ...]}``.
 
@@ -26,7 +26,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .units import Mechanics
+from torqueloop.spec.units import Mechanics
 
 FIELDS = ("setpoint", "position", "error", "velocity_q8", "pwm_cmd", "faults", "enabled")
 

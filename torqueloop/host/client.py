@@ -1,7 +1,7 @@
 """The protocol client: one command, one reply, over any :class:`Link`.
 
 All framing, CRC, payload layouts and codes come from the generated
-:mod:`torqueloop.protocol` (single definition firmware/protocol/protocol.toml);
+:mod:`torqueloop.spec.protocol` (single definition torqueloop/spec/protocol.toml);
 this module adds what a host needs on a real link:
 
 - **seq**: on connect, IDENTIFY (accepted at any seq) tells the last seq the
@@ -26,7 +26,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Callable, Iterator
 
-from torqueloop import protocol as P
+from torqueloop.spec import protocol as P
 
 from .transport import Link, LinkInfo
 

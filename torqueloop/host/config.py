@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from torqueloop import protocol as P
+from torqueloop.spec import protocol as P
 
 SCHEMA = "torqueloop-host-config"
 SCHEMA_VERSION = 1

@@ -1,0 +1,160 @@
+"""Build the servo firmware: ELF, raw binary, RAM initialisation file for
+$readmemh (one 32-bit word per line, word 0 = RAM base) and a boot-ROM image
+whose stub jumps to the RAM base (until the bootloader issue lands).
+
+    python -m torqueloop.flow.firmware [--name servo] [-D NAME=VALUE ...] [--out DIR]
+
+Outputs go to build/firmware/<name>/.  -D sets build-time defaults, e.g. the
+test image: -D TL_DEFAULT_PERIOD_US=1000 -D TL_DEFAULT_BAUD_DIV=49.
+The C sources are listed once here (SOURCES).
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+from torqueloop.spec import protocol as P
+from torqueloop.spec import regs
+from torqueloop.spec.repo import REPO_ROOT as REPO
+
+FW = REPO / "firmware"
+SOURCES = [FW / "common" / "crt0.S", FW / "common" / "mem.c", FW / "protocol" / "tl_link.c",
+           FW / "servo" / "control.c", FW / "servo" / "servo.c", FW / "servo" / "hal_soc.c",
+           FW / "servo" / "main.c"]
+INCLUDES = [FW / "include", FW / "protocol", FW / "servo"]
+CFLAGS = ["-march=rv32im_zicsr", "-mabi=ilp32", "-O2", "-ffreestanding", "-nostdlib", "-static",
+          "-std=c11", "-Wall", "-Wextra", "-Werror", "-ffunction-sections", "-fdata-sections"]
+CC = "riscv64-unknown-elf-gcc"
+
+
+def libgcc() -> str:
+    """The rv32im/ilp32 multilib's libgcc (64-bit division): GCC 12 picks the
+    default rv64 one when -march names an extension (_zicsr) it has no multilib for."""
+    return subprocess.run([CC, "-march=rv32im", "-mabi=ilp32", "-print-libgcc-file-name"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+
+
+@dataclass(frozen=True)
+class Image:
+    elf: Path
+    bin: Path
+    ram_hex: Path
+    rom_hex: Path
+    text_bytes: int
+    data_bytes: int
+    bss_bytes: int
+
+
+def boot_stub_words(entry: int) -> list[int]:
+    """lui t0, entry[31:12]; jalr x0, 0(t0): the boot ROM's jump to the image."""
+    if entry & 0xFFF:
+        raise ValueError("entry must be 4 KiB aligned for the two-instruction stub")
+    return [(entry & 0xFFFFF000) | (5 << 7) | 0x37, (5 << 15) | 0x67]
+
+
+def build(name: str = "servo", defines: dict[str, str] | None = None, out: Path | None = None,
+          ram_bytes: int = regs.RAM_SIZE) -> Image:
+    out = out or REPO / "build" / "firmware" / name
+    out.mkdir(parents=True, exist_ok=True)
+    elf, binf = out / f"{name}.elf", out / f"{name}.bin"
+    ram_hex, rom_hex = out / f"{name}_ram.hex", out / f"{name}_rom.hex"
+    dflags = [f"-D{k}={v}" for k, v in (defines or {}).items()]
+    cmd = [CC, *CFLAGS, *dflags, *(f"-I{i}" for i in INCLUDES), "-T", str(FW / "common" / "link.ld"),
+           "-Wl,--gc-sections", "-Wl,--no-warn-rwx-segments", "-o", str(elf), *map(str, SOURCES), libgcc()]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode:
+        raise RuntimeError(f"firmware build failed:\n{' '.join(cmd)}\n{r.stderr}")
+    subprocess.run(["riscv64-unknown-elf-objcopy", "-O", "binary", "--remove-section=.bss", str(elf), str(binf)],
+                   check=True)
+    data = binf.read_bytes()
+    size = subprocess.run(["riscv64-unknown-elf-size", "-A", str(elf)], capture_output=True, text=True,
+                          check=True).stdout
+    sec = {ln.split()[0]: int(ln.split()[1]) for ln in size.splitlines() if ln.startswith(".")}
+    bss = sec.get(".bss", 0)
+    if len(data) + bss + 4096 > ram_bytes:
+        raise RuntimeError(f"{name}: {len(data)} + {bss} bytes (+ stack) do not fit {ram_bytes} bytes of RAM")
+    data += bytes(ram_bytes - len(data))
+    words = [int.from_bytes(data[i:i + 4], "little") for i in range(0, len(data), 4)]
+    ram_hex.write_text("".join(f"{w:08x}\n" for w in words))
+    rom = boot_stub_words(regs.RAM_BASE)
+    rom += [0] * (regs.BOOT_ROM_SIZE // 4 - len(rom))
+    rom_hex.write_text("".join(f"{w:08x}\n" for w in rom))
+    return Image(elf, binf, ram_hex, rom_hex, sec.get(".text", 0) + sec.get(".rodata", 0),
+                 sec.get(".data", 0) + sec.get(".sdata", 0), bss)
+
+
+# --- the link parser under libFuzzer (host build, clang + sanitizers) ------------
+
+#: the firmware C that runs on the host (tests, fuzzing) with the fake HAL
+HOST_SOURCES = [FW / "tests" / "hal_fake.c", FW / "protocol" / "tl_link.c", FW / "servo" / "control.c",
+                FW / "servo" / "servo.c"]
+HOST_INCLUDES = [f"-I{FW / d}" for d in ("protocol", "servo", "tests")]
+
+
+class FuzzerMissing(RuntimeError):
+    """clang with libFuzzer is not installed."""
+
+
+class FuzzFailure(RuntimeError):
+    """The fuzzer found a crash or a sanitizer report."""
+
+
+def fuzz_binary() -> Path:
+    if shutil.which("clang") is None:
+        raise FuzzerMissing("clang with libFuzzer not found: apt-get install clang libclang-rt-14-dev")
+    exe = REPO / "build" / "firmware" / "fuzz" / "fuzz_link"
+    exe.parent.mkdir(parents=True, exist_ok=True)
+    r = subprocess.run(["clang", "-std=c11", "-g", "-O1", "-fsanitize=fuzzer,address,undefined",
+                        "-fno-sanitize-recover=all", *HOST_INCLUDES, str(FW / "tests" / "fuzz_link.c"),
+                        *map(str, HOST_SOURCES), "-o", str(exe)], capture_output=True, text=True)
+    if r.returncode:
+        raise FuzzerMissing(f"clang could not build the fuzz target (libclang-rt-14-dev missing?):\n{r.stderr[-2000:]}")
+    return exe
+
+
+def fuzz_seed_corpus(d: Path) -> None:
+    """Valid frames of every command (and noise) as a starting corpus."""
+    d.mkdir(parents=True, exist_ok=True)
+    for c in P.COMMANDS.values():
+        fields = {n: 0 for n, _ in c.req}
+        (d / f"{c.name}").write_bytes(P.request(c.name, 1, **fields))
+    (d / "hello").write_bytes(b"*HELLO*\x00")
+
+
+def run_fuzz(seconds: int) -> tuple[int, str]:
+    """(inputs run, fuzzer log) of a bounded run; FuzzFailure on a finding."""
+    exe = fuzz_binary()
+    corpus = REPO / "build" / "firmware" / "fuzz" / "corpus"
+    fuzz_seed_corpus(corpus)
+    r = subprocess.run([str(exe), f"-max_total_time={seconds}", "-max_len=512", "-print_final_stats=1",
+                        str(corpus)], capture_output=True, text=True, cwd=exe.parent)
+    runs = 0
+    for ln in r.stderr.splitlines():
+        if ln.startswith("stat::number_of_executed_units:"):
+            runs = int(ln.split(":")[-1])
+    if r.returncode:
+        raise FuzzFailure(r.stderr[-4000:])
+    return runs, r.stderr
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--name", default="servo")
+    ap.add_argument("-D", dest="defines", action="append", default=[], metavar="NAME=VALUE")
+    ap.add_argument("--out", type=Path)
+    args = ap.parse_args(argv)
+    defines = dict(d.split("=", 1) if "=" in d else (d, "1") for d in args.defines)
+    img = build(args.name, defines, args.out)
+    for p in (img.elf, img.bin, img.ram_hex, img.rom_hex):
+        print(p.relative_to(REPO) if p.is_relative_to(REPO) else p)
+    print(f"text+rodata {img.text_bytes} B, data {img.data_bytes} B, bss {img.bss_bytes} B")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,128 @@
+"""Generated views of the link protocol (torqueloop/spec/protocol.toml): the
+firmware's C header and docs/protocol.md.  torqueloop.spec.protocol reads
+the TOML itself (no generated Python to go stale)."""
+
+from __future__ import annotations
+
+import struct
+
+from torqueloop.spec import protocol as P
+
+
+def _ctype(t: str) -> str:
+    return {"u8": "uint8_t", "i8": "int8_t", "u16": "uint16_t", "i16": "int16_t",
+            "u32": "uint32_t", "i32": "int32_t"}[t]
+
+
+def _size(fields: tuple[tuple[str, str], ...]) -> int:
+    return struct.calcsize("<" + "".join(P._FMT[t] for _, t in fields))
+
+
+def c_header() -> str:
+    L = ["/* Generated from torqueloop/spec/protocol.toml by torqueloop.flow.generate - do not edit. */",
+         "#ifndef TL_PROTOCOL_H", "#define TL_PROTOCOL_H", "", "#include <stdint.h>", ""]
+    for k in ("version", "max_payload", "header_bytes", "crc_bytes", "reply_flag", "telemetry_cmd",
+              "error_cmd", "seq_window", "bootloader_magic", "firmware_version"):
+        L.append(f"#define TLP_{k.upper()} 0x{P.META[k]:X}u")
+    L += [f"#define TLP_MAX_PACKET {P.MAX_PACKET}u", f"#define TLP_MAX_ENCODED {P.MAX_ENCODED}u",
+          f"#define TLP_MAX_WIRE {P.MAX_ENCODED + 2}u  /* 0x00 COBS 0x00 */", ""]
+    for n, v in P.STATUS.items():
+        L.append(f"#define TLP_ST_{n} {v}u")
+    L.append("")
+    for n, v in P.FAULT.items():
+        L.append(f"#define TLP_FAULT_{n} 0x{v:02X}u")
+    L.append("")
+    for c in P.COMMANDS.values():
+        L.append(f"#define TLP_CMD_{c.name} 0x{c.cmd:02X}u")
+        L.append(f"#define TLP_CMD_{c.name}_REQ_LEN {_size(c.req)}u")
+        L.append(f"#define TLP_CMD_{c.name}_REP_LEN {_size(c.rep)}u")
+    L.append("")
+    L.append("/* Field offsets in the payloads (little-endian). */")
+    for c in P.COMMANDS.values():
+        for which, fields in (("REQ", c.req), ("REP", c.rep)):
+            off = 0
+            for n, t in fields:
+                L.append(f"#define TLP_{c.name}_{which}_{n.upper()} {off}u")
+                off += struct.calcsize(P._FMT[t])
+    off = 0
+    for n, t in P.TELEMETRY_HEAD:
+        L.append(f"#define TLP_TELEM_{n.upper()} {off}u")
+        off += struct.calcsize(P._FMT[t])
+    L.append(f"#define TLP_TELEM_HEAD_LEN {off}u")
+    off = 0
+    for n, t in P.TELEMETRY_AXIS:
+        L.append(f"#define TLP_TELEM_AX_{n.upper()} {off}u")
+        off += struct.calcsize(P._FMT[t])
+    L += [f"#define TLP_TELEM_AX_LEN {off}u", f"#define TLP_TELEM_LEN {P.telemetry_payload_bytes()}u", ""]
+    L.append("#define TLP_GLOBAL_AXIS 0xFFu")
+    for p in P.PARAMS.values():
+        L.append(f"#define TLP_P_{p.name} {p.id}u")
+    L += ["", "typedef struct { uint8_t id; uint8_t global; int32_t min; int32_t max; int32_t dflt; } tlp_param_info_t;",
+          f"#define TLP_PARAM_COUNT {len(P.PARAMS)}u",
+          "static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {"]
+    for p in P.PARAMS.values():
+        mn = f"(-{-p.min}L)" if p.min < 0 else f"{p.min}L"
+        L.append(f"    {{{p.id}u, {1 if p.scope == 'global' else 0}u, {mn}, {p.max}L, "
+                 f"{'(-%dL)' % -p.default if p.default < 0 else '%dL' % p.default}}},  /* {p.name} */")
+    L += ["};", "", "#endif", ""]
+    return "\n".join(L)
+
+
+def markdown() -> str:
+    L = ["<!-- Generated from torqueloop/spec/protocol.toml by torqueloop.flow.generate - do not edit. -->",
+         "# torqueloop link protocol", "",
+         "The WiFi link of the paper (section V.A): desired positions and controller gains go down, "
+         "position error, positions and velocities come up.  Defined once in "
+         "`torqueloop/spec/protocol.toml`; this page, `firmware/protocol/tl_protocol.h` and "
+         "`torqueloop/spec/protocol.py` come from it.", "",
+         "## Framing", "",
+         "```", "wire:   0x00  COBS( seq:u16  cmd:u8  len:u8  payload[len]  crc:u16 )  0x00", "```", "",
+         "Both sides send a 0x00 before and after every frame: text the RN-XV inserts between frames "
+         "(`*HELLO*`) then ends as a chunk of its own instead of corrupting the next frame.", "",
+         "* **COBS** removes every zero byte from the packet, so `0x00` only ever ends a frame. "
+         "After noise, a lost byte or text injected by the RN-XV TCP bridge (`*HELLO*`, `*OPEN*`, `*CLOS*`), "
+         "the receiver is back in step at the next `0x00`; the damaged chunk is counted and answered "
+         "with an error, never executed.",
+         "* **CRC-16/CCITT-FALSE** (poly 0x1021, init 0xFFFF) over seq..payload, little-endian. "
+         "A 16-bit CRC misses a random corruption with probability 2^-16 *and* the length, COBS structure "
+         "and per-command payload length must also agree.",
+         f"* **len** must equal the payload bytes received; the payload is at most {P.MAX_PAYLOAD} bytes "
+         f"(packet {P.MAX_PACKET}, encoded at most {P.MAX_ENCODED} + delimiter). A longer chunk is OVERSIZE.",
+         f"* **seq** (u16): a command is executed only if its seq is newer than the last accepted one "
+         f"(within {P.SEQ_WINDOW:#x} ahead, modulo 2^16); the same seq again is a retransmission and is answered "
+         "with REPLAY without being executed, so a replayed or duplicated frame never moves a motor twice. "
+         "After reset any first seq is accepted. IDENTIFY is accepted at any seq and reports the last "
+         "accepted seq, so a reconnecting host continues from there.",
+         f"* **Replies** carry the command's seq and cmd | 0x{P.REPLY_FLAG:02X}; the first payload byte is the status. "
+         f"A chunk too damaged to trust its seq is answered with seq 0, cmd 0x{P.ERROR_CMD:02X} and the status.",
+         f"* **Telemetry** frames (cmd 0x{P.TELEMETRY_CMD:02X}) carry a running count as seq.", "",
+         f"Protocol version {P.PROTO_VERSION}.  Default link 115200 baud 8N1 (parameter BAUD_DIV).", "",
+         "## Status codes", "", "| code | name | meaning |", "|---|---|---|"]
+    for s in P.SPEC["status"]:
+        L.append(f"| {s['code']} | {s['name']} | {s['desc']} |")
+    L += ["", "## Fault flags (per axis, latched)", "", "| bit | name | cause |", "|---|---|---|"]
+    for f in P.SPEC["fault"]:
+        L.append(f"| {f['bit']} | {f['name']} | {f['desc']} |")
+    L += ["", "## Commands", ""]
+    for c in P.COMMANDS.values():
+        L.append(f"### 0x{c.cmd:02X} {c.name}")
+        L += ["", c.desc, ""]
+        L.append("request: " + (", ".join(f"`{n}:{t}`" for n, t in c.req) or "(empty)"))
+        L.append("")
+        L.append(f"reply (0x{c.cmd | P.REPLY_FLAG:02X}): " + ", ".join(f"`{n}:{t}`" for n, t in c.rep))
+        L.append("")
+    L += ["## Telemetry (0x%02X)" % P.TELEMETRY_CMD, "",
+          "head: " + ", ".join(f"`{n}:{t}`" for n, t in P.TELEMETRY_HEAD) + "; then for axis 0 and 1: "
+          + ", ".join(f"`{n}:{t}`" for n, t in P.TELEMETRY_AXIS) + f" ({P.telemetry_payload_bytes()} bytes).",
+          "velocity_q8 is counts/s x 256.", "",
+          "## Parameters", "", "| id | name | scope | min | max | default | meaning |", "|---|---|---|---|---|---|---|"]
+    for p in P.PARAMS.values():
+        L.append(f"| {p.id} | {p.name} | {p.scope} | {p.min} | {p.max} | {p.default} | {p.desc} |")
+    L += ["", "Global parameters are addressed with axis 0xFF.", ""]
+    return "\n".join(L)
+
+
+OUTPUTS = {
+    "firmware/protocol/tl_protocol.h": c_header,
+    "docs/protocol.md": markdown,
+}

@@ -1,0 +1,135 @@
+"""Build and run one core's cocotb test bench on one simulator.
+
+The pytest entry of every test bench calls :func:`run`.  Verilog cores run
+on Icarus and Verilator, their VHDL twins on GHDL, all from the same cocotb
+test module.  Each (core, simulator, parameter set) builds into its own
+folder under build/sim/, so runs can go in parallel (pytest-xdist).
+
+Environment:
+  TORQUELOOP_SIM   comma-separated simulators to keep (make sim SIM=...)
+  WAVES=1          dump waveforms into the build folder
+  COCOTB_RANDOM_SEED  rerun a randomised test with the seed it printed
+"""
+
+from __future__ import annotations
+
+import fcntl
+import hashlib
+import os
+from pathlib import Path
+from typing import Iterable, Mapping
+
+from cocotb_tools.check_results import get_results
+from cocotb_tools.runner import get_runner
+
+from torqueloop.flow.manifest import REPO_ROOT, Core, core as manifest_core
+
+#: simulator -> HDL language it simulates here
+SIMULATORS: dict[str, str] = {"icarus": "verilog", "verilator": "verilog", "ghdl": "vhdl"}
+
+BUILD_ROOT = REPO_ROOT / "build" / "sim"
+
+
+def selected_sims() -> list[str]:
+    """Simulators allowed by TORQUELOOP_SIM (all when unset)."""
+    env = os.environ.get("TORQUELOOP_SIM", "").strip()
+    if not env:
+        return list(SIMULATORS)
+    wanted = [s.strip() for s in env.split(",") if s.strip()]
+    bad = [s for s in wanted if s not in SIMULATORS]
+    if bad:
+        raise ValueError(f"TORQUELOOP_SIM names unknown simulator(s) {bad}; known: {list(SIMULATORS)}")
+    return wanted
+
+
+def sims_for(c: Core | str, langs: Iterable[str] = ("verilog", "vhdl")) -> list[str]:
+    """Simulators that apply to a core (VHDL only if it has a VHDL twin)."""
+    if isinstance(c, str):
+        c = manifest_core(c)
+    out = []
+    for sim in selected_sims():
+        lang = SIMULATORS[sim]
+        if lang not in langs:
+            continue
+        if lang == "vhdl" and not c.has_vhdl:
+            continue
+        if lang == "verilog" and not c.verilog:
+            continue
+        out.append(sim)
+    return out
+
+
+def _tag(parameters: Mapping[str, object], extra: str) -> str:
+    if not parameters and not extra:
+        return "default"
+    text = ",".join(f"{k}={v}" for k, v in sorted(parameters.items())) + extra
+    return hashlib.sha1(text.encode()).hexdigest()[:10]
+
+
+def run(
+    core_name: str,
+    sim: str,
+    test_module: str,
+    parameters: Mapping[str, object] | None = None,
+    toplevel: str | None = None,
+    extra_verilog: Iterable[Path] = (),
+    extra_vhdl: Iterable[Path] = (),
+    testcase: str | None = None,
+    extra_env: Mapping[str, str] | None = None,
+    build_tag: str = "",
+) -> None:
+    """Build ``core_name`` for ``sim`` and run the cocotb tests of ``test_module``.
+
+    Raises AssertionError if a cocotb test fails or if no test ran at all.
+    """
+    c = manifest_core(core_name)
+    parameters = dict(parameters or {})
+    lang = SIMULATORS[sim]
+    top = toplevel or c.top
+    build_dir = BUILD_ROOT / core_name / sim / (_tag(parameters, build_tag + (top if toplevel else "")))
+    waves = os.environ.get("WAVES", "") == "1"
+    runner = get_runner(sim)
+
+    build_kwargs: dict = dict(
+        hdl_toplevel=top,
+        parameters=parameters,
+        build_dir=build_dir,
+        waves=waves,
+        timescale=("1ns", "1ps"),
+    )
+    test_kwargs: dict = {}
+    if lang == "verilog":
+        build_kwargs["sources"] = [*c.verilog, *extra_verilog]
+        if sim == "verilator":
+            # Lint is make lint's job (-Wall there); here only build.
+            build_kwargs["build_args"] = ["-Wno-fatal", "-O2"]
+    else:
+        build_kwargs["sources"] = [*c.vhdl, *extra_vhdl]
+        build_kwargs["build_args"] = ["--std=08"]
+        test_kwargs["test_args"] = ["--std=08"]
+        # GHDL applies generics at elaboration, which the runner does at test time.
+        test_kwargs["parameters"] = parameters
+        del build_kwargs["timescale"]
+
+    build_dir.mkdir(parents=True, exist_ok=True)
+    # Two runs of the same build (e.g. make test in two shells on one tree)
+    # must not rebuild a folder the other is simulating from: lock it.
+    with open(build_dir.parent / f".{build_dir.name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        runner.build(**build_kwargs)
+        results = runner.test(
+            test_module=test_module,
+            hdl_toplevel=top,
+            hdl_toplevel_lang=lang,
+            # Results, logs and waves stay in the build folder; the test module
+            # is found through PYTHONPATH (the runner passes pytest's sys.path on).
+            test_dir=build_dir,
+            build_dir=build_dir,
+            testcase=testcase,
+            extra_env=dict(extra_env or {}),
+            waves=waves,
+            **test_kwargs,
+        )
+    n_tests, n_failed = get_results(Path(results))
+    assert n_tests > 0, f"{core_name} on {sim}: no cocotb test ran"
+    assert n_failed == 0, f"{core_name} on {sim}: {n_failed} of {n_tests} cocotb tests failed"

@@ -1,0 +1,329 @@
+"""The paper's experiment (sec. VI.B, Figs 14-16, Table 3) as RTL in the loop.
+
+From rest, a step of 6.28 rad (one screw turn, 4 mm) on both axes with P, PD
+or PID and the Table 1 gains, PWM carriers 450 Hz / 200 Hz, for T seconds:
+  - RTL: the board image running the real servo firmware, configured and
+    commanded over its UART with the host's protocol code, closing the loop
+    only through its pins with the sim_models plant (:mod:`.pins`);
+  - pure model: torqueloop.sim.model_loop.run_loop with the same law, gains, sample
+    period, scaling, saturation and PWM period as the firmware is given.
+
+Time origin of both: the control sample at which the step set-point is first
+used (RTL: the first telemetry frame whose set-point is the target; model:
+sample 0).  Sample j of one is compared with sample j of the other.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from torqueloop.sim.model_loop import TABLE1, LoopConfig, run_loop
+from sim_models.params import load_params
+from sim_models.stepper import TwoAxisPlant
+from torqueloop.flow import firmware
+from torqueloop.spec import protocol as tp
+from torqueloop.flow.manifest import REPO_ROOT
+from torqueloop.sim.link import Link
+from torqueloop.sim.pins import CLK_HZ, PlantOnPins
+
+LAWS = {"P": 1, "PD": 2, "PID": 3}
+COUNTS_PER_REV = 8400
+#: the paper's tau_max (twice tau_max/2 of sec. VI.A), milli N m: the
+#: torque at full PWM command, as in torqueloop.sim.model_loop
+TAU_MAX_MNM = (2400, 2080)
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    law: str = "P"
+    t_end_s: float = 40.0               # the paper's T
+    step_rad: float = 6.28              # one screw turn, 4 mm (sec. VI.B)
+    period_us: int = 25_000             # control period: the paper's 25 ms speed sample period
+    pwm_hz: tuple[float, float] = (450.0, 200.0)   # the paper's optimal carriers (sec. VI.A)
+    record_s: float = 0.002             # grid of the plant trace (plots)
+    heartbeat_s: float = 0.25           # STATUS poll, as the host tool keeps the link alive
+    brake: bool = True                  # off-phase: brake (slow decay), as sim_models' default
+    baud_div: int | None = None         # UART clocks per bit - 1 after IDENTIFY (None: keep 115200,
+                                        # the RN-XV's rate); short control periods need a faster link
+    progress: bool = True
+
+    @property
+    def fdiv(self) -> tuple[int, int]:
+        """Count_max of eq. (3)-(4): f = 50 MHz / (FDIV * 1023)."""
+        return tuple(max(1, round(CLK_HZ / (1023 * f))) for f in self.pwm_hz)  # type: ignore[return-value]
+
+    @property
+    def pwm_hz_actual(self) -> tuple[float, float]:
+        return tuple(CLK_HZ / (1023 * d) for d in self.fdiv)  # type: ignore[return-value]
+
+    @property
+    def target_counts(self) -> int:
+        return round(self.step_rad * COUNTS_PER_REV / (2 * math.pi))
+
+
+@dataclass
+class Trajectory:
+    """Samples at the control instants, j = 0 at the step; SI units (rad, rad/s)."""
+    t: np.ndarray              # (n,)
+    pos: np.ndarray            # (n, 2) encoder position
+    vel: np.ndarray            # (n, 2) the controller's velocity estimate
+    cmd: np.ndarray            # (n, 2) PWM command, -1023..1023
+    err: np.ndarray            # (n, 2) tracking error
+    true_pos: np.ndarray       # (n, 2) plant screw angle at the sample
+
+
+@dataclass
+class RtlRun:
+    config: ExperimentConfig
+    traj: Trajectory
+    trace_t: np.ndarray        # plant trace (s, same origin), fine grid
+    trace_pos: np.ndarray      # screw angle, rad
+    trace_vel: np.ndarray      # screw speed, rad/s
+    trace_current: np.ndarray  # A
+    cycles: int = 0            # clocks simulated in total (start-up and configuration included)
+    wall_s: float = 0.0
+    cpu_s: float = 0.0
+    t0_jitter_s: float = 0.0   # spread of the telemetry latency used to place the samples on the plant trace
+    identify: dict = field(default_factory=dict)
+    bridge: dict = field(default_factory=dict)
+    faults: list[int] = field(default_factory=list)
+    config_faults: list[int] = field(default_factory=list)   # latched by the configuration, cleared
+    link_errors: int = 0
+    uart_errors: int = 0
+
+
+def firmware_image() -> firmware.Image:
+    """The real servo firmware, as make firmware builds it."""
+    return firmware.build("servo", out=REPO_ROOT / "build" / "rtl_loop" / "firmware")
+
+
+def configure(link: Link, cfg: ExperimentConfig) -> None:
+    """Load the experiment into the firmware over the link, physical gains
+    in the protocol's micro N m units (the firmware converts them)."""
+    link.set_param(tp.GLOBAL_AXIS, "PERIOD_US", cfg.period_us)
+    link.set_param(tp.GLOBAL_AXIS, "LINK_TIMEOUT_MS", 2000)
+    for ax in (0, 1):
+        g = TABLE1[cfg.law][ax]
+        link.set_param(ax, "LAW", LAWS[cfg.law])
+        link.set_param(ax, "TAU_MAX_MNM", TAU_MAX_MNM[ax])
+        link.set_param(ax, "COUNTS_PER_REV", COUNTS_PER_REV)
+        link.set_param(ax, "KP_UNM_RAD", round(g.kp * 1e6))
+        link.set_param(ax, "KD_UNMS_RAD", round(g.kd * 1e6))
+        link.set_param(ax, "KI_UNM_RADS", round(g.ki * 1e6))
+        link.set_param(ax, "FDIV", cfg.fdiv[ax])
+        link.set_param(ax, "PW0", 0)
+        link.set_param(ax, "PWMAX", 1023)
+        link.set_param(ax, "CMD_LIMIT", 1023)
+        link.set_param(ax, "VEL_MODE", 0)          # the paper's filtered Euler difference
+        link.set_param(ax, "BRAKE", int(cfg.brake))
+        link.set_param(ax, "FOLLOW_LIMIT", 10 * COUNTS_PER_REV)   # axis z overshoots by most of a turn
+
+
+def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
+    """Run the experiment on the board image; ``board_factory(rom, ram)``
+    gives a :class:`~torqueloop.sim.pins.BoardPort` (default: native Verilator)."""
+    from torqueloop.sim.native import NativeBoard
+    img = firmware_image()
+    board = (board_factory or NativeBoard.create)(img.rom_hex, img.ram_hex)
+    plant = TwoAxisPlant(seed=0)
+    bridge = PlantOnPins(plant, board)
+    w0, c0 = time.monotonic(), time.process_time()
+    try:
+        # reset with the arm switch down, release, then arm (SW[0] rising edge)
+        board.set_board(0, 1, 0)
+        bridge.run_to(20)
+        board.set_board(1, 1, 0)
+        bridge.run_to(40_000)
+        board.set_board(1, 1, 1)
+        link = Link(board.uart_send, board.uart_recv, lambda n: bridge.run_to(board.cycle + n),
+                    lambda: board.cycle)
+        ident = link.call("IDENTIFY")
+        if cfg.baud_div is not None:
+            link.set_param(tp.GLOBAL_AXIS, "BAUD_DIV", cfg.baud_div)   # replied at the old rate
+            board.set_uart_div(cfg.baud_div + 1)
+        configure(link, cfg)
+        # Changing PERIOD_US used to trip the SoC watchdog (the next tick stayed
+        # at the old period's deadline); the firmware now restarts its tick.
+        # Still wait past an old deadline and record anything latched, so a
+        # regression shows in report.json and fails the rtl_loop test.
+        link.advance(30 * CLK_HZ // 1000)
+        config_faults = [link.call("STATUS", axis=ax)["faults"] for ax in (0, 1)]
+        if any(config_faults):
+            link.call("CLEAR_FAULT", mask=3)
+        link.call("TELEMETRY", every=1)
+        link.call("ENABLE", mask=3, enable=1)
+        # step both axes in the same control period: send both MOVEs right after a sample
+        n_tel = len(link.telemetry)
+        while len(link.telemetry) == n_tel:
+            link.advance(2_000)
+            link.poll()
+        target = cfg.target_counts
+        seqs = [link.post("MOVE", axis=ax, mode=0, target=target) for ax in (0, 1)]
+        for s in seqs:
+            r = link.wait(s)
+            if r["status"] != tp.STATUS["OK"]:
+                raise RuntimeError(f"MOVE refused: {tp.STATUS_NAME[r['status']]}")
+        move_cycle = board.cycle
+        period_cycles = cfg.period_us * CLK_HZ // 1_000_000
+        end = move_cycle + round(cfg.t_end_s * CLK_HZ) + 3 * period_cycles
+        rec = max(1, round(cfg.record_s * CLK_HZ))
+        hb = round(cfg.heartbeat_s * CLK_HZ)
+        next_hb = board.cycle + hb
+        trace: list[tuple] = []
+        next_print = time.monotonic() + 2.0
+        sim0 = board.cycle
+        while board.cycle < end:
+            bridge.run_to(min(end, board.cycle + rec))
+            trace.append((board.cycle, plant.screw_angle(0), plant.screw_angle(1), plant.screw_speed(0),
+                          plant.screw_speed(1), plant.current(0), plant.current(1)))
+            link.poll()
+            if board.cycle >= next_hb:
+                link.post("STATUS", axis=0)
+                next_hb += hb
+            if cfg.progress and time.monotonic() >= next_print:
+                next_print += 5.0
+                wall = time.monotonic() - w0
+                done = (board.cycle - move_cycle) / CLK_HZ
+                speed = (board.cycle - sim0) / max(1e-9, time.monotonic() - w0)
+                log(f"  [{cfg.law}] sim {done:6.2f} / {cfg.t_end_s:.1f} s  wall {wall:6.1f} s  "
+                    f"{speed / 1e6:5.2f} Mcycle/s  ({speed / CLK_HZ:5.3f} x real time)", flush=True)
+        link.poll()
+        run = _assemble(cfg, link, trace, target, period_cycles)
+        run.cycles = board.cycle
+        run.identify = ident
+        run.config_faults = config_faults
+        run.uart_errors = board.uart_errors() if hasattr(board, "uart_errors") else 0
+        run.link_errors = len(link.errors)
+        run.bridge = asdict(bridge.stats)
+    finally:
+        if hasattr(board, "close"):
+            board.close()
+    run.wall_s = time.monotonic() - w0
+    run.cpu_s = time.process_time() - c0
+    return run
+
+
+def _assemble(cfg: ExperimentConfig, link: Link, trace: list[tuple], target: int, period_cycles: int) -> RtlRun:
+    tel = link.telemetry
+    k0 = next(i for i, f in enumerate(tel) if all(a["setpoint"] == target for a in f.axes))
+    n = int(round(cfg.t_end_s * 1e6 / cfg.period_us)) + 1
+    sel = tel[k0:k0 + n]
+    if len(sel) < n:
+        raise RuntimeError(f"only {len(sel)} of {n} control samples arrived")
+    steps = [(f.time_us - sel[0].time_us) // cfg.period_us for f in sel]
+    if steps != list(range(n)):
+        raise RuntimeError("telemetry frames missing (the firmware dropped some)")
+    rad = 2 * math.pi / COUNTS_PER_REV
+    pos = np.array([[a["position"] for a in f.axes] for f in sel], float) * rad
+    vel = np.array([[a["velocity_q8"] for a in f.axes] for f in sel], float) / 256 * rad
+    cmd = np.array([[a["pwm_cmd"] for a in f.axes] for f in sel], float)
+    err = np.array([[a["error"] for a in f.axes] for f in sel], float) * rad
+    faults = sorted({a["faults"] for f in sel for a in f.axes})
+    # place the samples on the plant's clock: a sample at firmware time time_us
+    # leaves its first telemetry byte L clocks later; the smallest latency seen
+    # is taken as the sample instant (the spread is reported)
+    off = np.array([f.cycle - f.time_us * (CLK_HZ // 1_000_000) for f in tel[1:]], float)
+    base = off.min()
+    c_step = base + sel[0].time_us * (CLK_HZ // 1_000_000)
+    tr = np.array(trace, float)
+    tt = (tr[:, 0] - c_step) / CLK_HZ
+    t = np.arange(n) * cfg.period_us * 1e-6
+    true_pos = np.stack([np.interp(t, tt, tr[:, 1 + a]) for a in (0, 1)], axis=1)
+    keep = tt >= -0.1
+    traj = Trajectory(t, pos, vel, cmd, err, true_pos)
+    return RtlRun(cfg, traj, tt[keep], tr[keep][:, 1:3], tr[keep][:, 3:5], tr[keep][:, 5:7],
+                  t0_jitter_s=float(np.percentile(off, 95) - base) / CLK_HZ, faults=faults)
+
+
+@dataclass
+class ModelRun:
+    traj: Trajectory
+    wall_s: float
+    config: dict
+
+
+def run_model(cfg: ExperimentConfig) -> ModelRun:
+    """The pure-model loop (torqueloop.sim.model_loop) set up as the firmware is:
+    same law and gains, sample period, step in whole counts, PWM period of
+    the hardware divisor, 10-bit command, brake off-phase."""
+    target_rad = cfg.target_counts * 2 * math.pi / COUNTS_PER_REV
+    lc = LoopConfig(setpoint_rad=target_rad, t_end_s=cfg.t_end_s, sample_s=cfg.period_us * 1e-6,
+                    drive="brake" if cfg.brake else "coast", pwm_hz=cfg.pwm_hz_actual, gains=TABLE1[cfg.law])
+    params = load_params()
+    r = run_loop(lc, params, TwoAxisPlant(params, seed=0))
+    # the model's duty is the command / 1023 (control.duty_from_torque); sample k's
+    # command is the one computed at k (applied from the next period start)
+    cmd = np.full_like(r.duty, np.nan)
+    cmd[:-1] = np.round(r.duty[1:] * 1023)
+    traj = Trajectory(r.t, r.x_meas, r.v_est, cmd, target_rad - r.x_meas, r.x_true)
+    return ModelRun(traj, r.wall_s, asdict(lc) | {"gains": [asdict(g) for g in lc.gains]})
+
+
+def run_model_fw_law(cfg: ExperimentConfig) -> ModelRun:
+    """A second pure model: the same plant with the *firmware's* law in Python
+    (torqueloop/models/servo.py, the oracle of firmware/servo/control.c: fixed
+    point, anti-windup, deadband) and the hardware's PWM (period FDIV x 1023
+    clocks, duty |cmd| x FDIV clocks, loaded at the next period start).  No
+    RTL, CPU or pins: the difference between this and torqueloop.sim.model_loop is
+    the law's implementation; between this and the RTL, the rest."""
+    from sim_models.bridge import Pins
+    from torqueloop.models.servo import Axis, AxisParams
+    params = load_params()
+    plant = TwoAxisPlant(params, seed=0)
+    period = cfg.period_us * CLK_HZ // 1_000_000
+    pwm_period = [d * 1023 for d in cfg.fdiv]
+    axes = []
+    for ax in (0, 1):
+        g = TABLE1[cfg.law][ax]
+        raw = [tp.gain_raw_from_phys(round(k * 1e6), TAU_MAX_MNM[ax], COUNTS_PER_REV) if k else 0
+               for k in (g.kp, g.kd, g.ki)]
+        a = Axis(AxisParams(law=LAWS[cfg.law], kp_q16=raw[0], kd_q16=raw[1], ki_q16=raw[2], vel_mode=0),
+                 cfg.period_us)
+        a.reset(0, 0)
+        axes.append(a)
+    brake = Pins(0, 0, 1, 1) if cfg.brake else Pins(0, 0, 0, 0)
+    n = int(round(cfg.t_end_s * 1e6 / cfg.period_us)) + 1
+    out = {k: np.zeros((n, 2)) for k in ("pos", "vel", "cmd", "err", "true")}
+    pending, active = [0, 0], [0, 0]
+    next_start, next_off = [0, 0], [None, None]
+    pins = [brake, brake]
+    now = 0
+    w0 = time.monotonic()
+    for k in range(n):
+        ts = k * period
+        while True:
+            evs = [t for t in next_start + next_off if t is not None and t <= ts]
+            nxt = min(evs) if evs else ts
+            if nxt > now:
+                plant.advance((nxt - now) / CLK_HZ, pins)
+                now = nxt
+            if not evs:
+                break
+            for a in (0, 1):
+                if next_off[a] == now:
+                    next_off[a], pins[a] = None, brake
+                if next_start[a] == now:
+                    active[a] = pending[a]
+                    on = abs(active[a]) * cfg.fdiv[a]
+                    pins[a] = brake if on == 0 else (Pins(1, 0, 1, 1) if active[a] > 0 else Pins(0, 1, 1, 1))
+                    next_off[a] = now + on if 0 < on < pwm_period[a] else None
+                    next_start[a] = now + pwm_period[a]
+        for a in (0, 1):
+            if k == 0:
+                axes[a].move(cfg.target_counts, False)
+            pos = plant.count(a)
+            cmd = axes[a].step(pos, 0, ts)
+            pending[a] = cmd
+            out["pos"][k, a] = pos
+            out["vel"][k, a] = axes[a].vel_q8 / 256
+            out["cmd"][k, a] = cmd
+            out["err"][k, a] = cfg.target_counts - pos
+            out["true"][k, a] = plant.screw_angle(a)
+    rad = 2 * math.pi / COUNTS_PER_REV
+    t = np.arange(n) * cfg.period_us * 1e-6
+    traj = Trajectory(t, out["pos"] * rad, out["vel"] * rad, out["cmd"], out["err"] * rad, out["true"])
+    return ModelRun(traj, time.monotonic() - w0, {"law": "torqueloop.models.servo (firmware law)"})

@@ -1,0 +1,307 @@
+"""The simulated board: the servo firmware's own C, compiled for this
+machine, closing the loop around the plant model.
+
+Firmware-in-the-loop, not RTL-in-the-loop: servo.c, tl_link.c and control.c
+(every byte of the protocol and every control step) run unchanged through
+the HAL in ``simboard_hal.c``; the FPGA blocks around them are modelled at
+the level their reference models define:
+
+- PWM (pwm_torque, docs/pwm_torque.md): a carrier of FDIV x 1023 clocks;
+  duty = eq. (1) ``torqueloop.models.pwm_torque.map_duty(cmd, PW0, PWMAX)``,
+  loaded at the next period start (double buffering); IBT-2 pins: the
+  running bridge brakes in its off phase, a disabled one is in the BRAKE
+  parameter's safe state;
+- the quadrature decoder: the plant's count, with the time of its last edge;
+- the plant: ``sim_models.stepper.TwoAxisPlant`` (paper eq. 5-17).
+
+UART bytes reach the firmware when they arrive and its replies leave at
+once (115200 baud adds under 7 ms to a 70-byte frame; the host's timeouts
+are 0.5 s).  The board is a byte pipe (:class:`BytePipe`): ``write`` /
+``read`` bytes and ``advance`` time; :mod:`.server` puts any byte pipe on a
+TCP port, so the RTL co-simulation can take this one's place.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import subprocess
+from pathlib import Path
+from typing import Protocol
+
+from torqueloop.models.pwm_torque import map_duty
+
+REPO = Path(__file__).resolve().parents[2]
+FW = REPO / "firmware"
+SOURCES = [Path(__file__).with_name("simboard_hal.c"), FW / "servo" / "servo.c",
+           FW / "servo" / "control.c", FW / "protocol" / "tl_link.c"]
+HEADERS = [FW / "servo" / "servo.h", FW / "servo" / "control.h", FW / "servo" / "hal.h",
+           FW / "protocol" / "tl_link.h", FW / "protocol" / "tl_protocol.h"]
+BUILD = REPO / "build" / "host"
+CLK_HZ = 50_000_000
+PWM_FULL = 1023
+DEFAULT_BUILD_ID = 0x51B0_0001
+
+
+class BytePipe(Protocol):
+    """What :mod:`.server` needs from a simulated board."""
+
+    t: float   # simulated seconds
+
+    def write(self, data: bytes) -> None: ...
+
+    def read(self) -> bytes: ...
+
+    def advance(self, max_dt: float) -> float:
+        """Run at most ``max_dt`` simulated seconds (a natural step may be
+        shorter); returns the simulated time actually run."""
+        ...
+
+
+def build_library() -> Path:
+    """Compile the firmware and the HAL into a shared library, once per source hash."""
+    h = hashlib.sha256()
+    for p in SOURCES + HEADERS:
+        h.update(p.read_bytes())
+    BUILD.mkdir(parents=True, exist_ok=True)
+    lib = BUILD / f"simboard_{h.hexdigest()[:12]}.so"
+    if not lib.exists():
+        tmp = lib.with_suffix(f".{os.getpid()}.tmp")   # concurrent builders (pytest -n) do not collide
+        # the decoder sample in hal.h is gaining an edge-interval field (firmware work in progress)
+        has_interval = "interval;" in (FW / "servo" / "hal.h").read_text()
+        subprocess.run(["gcc", "-std=c11", *(["-DSB_HAL_HAS_INTERVAL"] if has_interval else []),
+                        "-O2", "-shared", "-fPIC", "-Wall", "-Wextra", "-Werror",
+                        f"-I{FW / 'servo'}", f"-I{FW / 'protocol'}", *map(str, SOURCES), "-o", str(tmp)],
+                       check=True)
+        tmp.replace(lib)
+    return lib
+
+
+class SimBoard:
+    """Firmware + PWM + decoder + plant.  One instance per process (the
+    firmware's state is the library's statics)."""
+
+    def __init__(self, build_id: int = DEFAULT_BUILD_ID, seed: int = 0) -> None:
+        from sim_models.stepper import TwoAxisPlant
+
+        self._lib = ctypes.CDLL(str(build_library()))
+        self._lib.sb_tx_take.restype = ctypes.c_uint32
+        self._lib.sb_period_us.restype = ctypes.c_uint32
+        self._lib.sb_baud_div.restype = ctypes.c_uint32
+        self._lib.sb_bootloader_requested.restype = ctypes.c_int32
+        self.plant = TwoAxisPlant(seed=seed)
+        self.tick = 0                    # 50 MHz clocks since power-up
+        self._edge_tick = [0, 0]
+        self._edge_interval = [0, 0]     # clocks between the last two encoder counts
+        self._next_start = [0, 0]        # clock of each axis's next carrier period start
+        self._off_at: list[int | None] = [None, None]
+        self._duty_cmd = [0, 0]          # command applied at the last period start
+        self._next_tick_at = 0
+        self._txbuf = ctypes.create_string_buffer(16384)
+        self._drive = (ctypes.c_int32 * 6)()
+        self.bridge_fault = [False, False]
+        self.build_id = build_id
+        self.factory_build_id = build_id
+        self.boot: SimBootRom | None = None
+        self._boot_out = b""
+        self._sync_encoders()
+        self._lib.sb_reset(ctypes.c_uint32(build_id))
+        self._next_tick_at = self._period_ticks()
+
+    # ---- byte pipe -------------------------------------------------------------
+    @property
+    def t(self) -> float:
+        return self.tick / CLK_HZ
+
+    def write(self, data: bytes) -> None:
+        if not data:
+            return
+        if self.boot is not None:
+            self.boot.rx(data, self.tick)
+        else:
+            self._lib.sb_rx(data, ctypes.c_uint32(len(data)))
+
+    def read(self) -> bytes:
+        n = self._lib.sb_tx_take(self._txbuf, ctypes.c_uint32(len(self._txbuf)))
+        out = self._txbuf.raw[:n]
+        if self.boot is not None or self._boot_out:
+            out, self._boot_out = out + self._boot_out, b""
+        return out
+
+    def advance(self, max_dt: float) -> float:
+        """Run to the next control iteration (or ``max_dt``, whichever is first)."""
+        t0 = self.tick
+        if self.boot is None and self._lib.sb_bootloader_requested():
+            # main.c's jump_to_bootloader: the reply is out, the firmware stops
+            try:
+                self.boot = SimBootRom(self.tick)
+            except ImportError:      # no torqueloop.spec.bootproto: a boot stub that restarts the firmware
+                self.restart(self.factory_build_id)
+        if self.boot is not None:
+            self._run_pwm_until(self.tick + max(1, int(max_dt * CLK_HZ)))
+            started = self.boot.poll(self.tick)
+            self._boot_out += self.boot.take_tx()
+            if started is not None:
+                self.boot = None
+                self.restart(self.factory_build_id if started == "factory" else started)
+            return (self.tick - t0) / CLK_HZ
+        end = min(self._next_tick_at, self.tick + max(1, int(max_dt * CLK_HZ)))
+        self._run_pwm_until(end)
+        if self.tick == self._next_tick_at:
+            self._sync_encoders()
+            self._lib.sb_tick()
+            self._next_tick_at += self._period_ticks()
+        return (self.tick - t0) / CLK_HZ
+
+    def restart(self, build_id: int) -> None:
+        """A firmware start (reset or the boot ROM's jump): fresh firmware state."""
+        self.build_id = build_id
+        self._sync_encoders()
+        self._lib.sb_reset(ctypes.c_uint32(build_id))
+        self._next_tick_at = self.tick + self._period_ticks()
+
+    # ---- test handles -------------------------------------------------------------
+    def set_estop(self, pressed: bool) -> None:
+        self._lib.sb_set_estop(ctypes.c_int32(int(pressed)))
+
+    def bootloader_requested(self) -> bool:
+        return bool(self._lib.sb_bootloader_requested())
+
+    def drive(self, axis: int) -> dict[str, int]:
+        self._lib.sb_get_drive(ctypes.c_uint32(axis), self._drive)
+        return dict(zip(("cmd", "on", "brake", "fdiv", "pw0", "pwmax"), self._drive))
+
+    # ---- inside -------------------------------------------------------------------
+    def _period_ticks(self) -> int:
+        return int(self._lib.sb_period_us()) * (CLK_HZ // 1_000_000)
+
+    def _sync_encoders(self) -> None:
+        for a in range(2):
+            self._lib.sb_set_encoder(ctypes.c_uint32(a), ctypes.c_int32(self.plant.count(a)),
+                                     ctypes.c_uint32(self._edge_tick[a] & 0xFFFFFFFF),
+                                     ctypes.c_uint32(min(self._edge_interval[a], 0xFFFFFFFF)),
+                                     ctypes.c_uint32(self.tick & 0xFFFFFFFF), ctypes.c_uint32(0),
+                                     ctypes.c_int32(int(self.bridge_fault[a])))
+
+    def _run_pwm_until(self, end: int) -> None:
+        while self.tick < end:
+            for a in range(2):
+                if self._next_start[a] <= self.tick:
+                    d = self.drive(a)
+                    self._duty_cmd[a] = d["cmd"] if d["on"] else 0
+                    carrier = max(1, d["fdiv"]) * PWM_FULL
+                    duty = map_duty(self._duty_cmd[a], d["pw0"], d["pwmax"])
+                    on_ticks = duty * max(1, d["fdiv"])
+                    self._off_at[a] = self.tick + on_ticks if 0 < on_ticks < carrier else None
+                    self._next_start[a] = self.tick + carrier
+                elif self._off_at[a] is not None and self._off_at[a] <= self.tick:
+                    self._off_at[a] = None
+            events = [end] + self._next_start + [t for t in self._off_at if t is not None]
+            nxt = min(t for t in events if t > self.tick)
+            pins = [self._phase_pins(a) for a in range(2)]
+            edges = self.plant.advance((nxt - self.tick) / CLK_HZ, pins)
+            for e in edges:
+                at = self.tick + int(e.t * CLK_HZ)
+                self._edge_interval[e.axis] = at - self._edge_tick[e.axis]
+                self._edge_tick[e.axis] = at
+            self.tick = nxt
+
+    def _phase_pins(self, axis: int):
+        from sim_models.bridge import Pins
+
+        d = self.drive(axis)
+        if not d["on"]:
+            return Pins(0, 0, 1, 1) if d["brake"] else Pins(0, 0, 0, 0)
+        cmd = self._duty_cmd[axis]
+        duty = map_duty(cmd, d["pw0"], d["pwmax"])
+        in_on_phase = duty >= PWM_FULL or self._off_at[axis] is not None
+        if cmd == 0 or duty == 0 or not in_on_phase:
+            return Pins(0, 0, 1, 1)    # running bridge, off phase: both low sides on (pwm_torque)
+        return Pins(1, 0, 1, 1) if cmd > 0 else Pins(0, 1, 1, 1)
+
+
+class SimBootRom:
+    """The boot ROM's upload state machine (docs/bootloader.md) for the
+    simulated board, in simulated time; frames and CRCs through
+    ``torqueloop.spec.bootproto`` (the protocol's single definition).
+
+    The simulated board cannot execute RV32 code: an accepted image
+    restarts the same host-compiled servo firmware, reporting the image's
+    CRC-32 as its build id, so a host sees which image "runs"; a rejected
+    one restarts the factory firmware with the factory build id.
+    ``poll`` returns None while listening, then "factory" or the new build id.
+    """
+
+    def __init__(self, now: int) -> None:
+        from torqueloop.spec import bootproto as bp
+
+        self.bp = bp
+        self._tx = bytearray(b"TLBW\n")
+        self._buf = bytearray()
+        self._window_end = now + bp.ms_to_cycles(bp.WINDOW_MS, CLK_HZ)
+        self._last_rx = now
+        self._synced = False
+        self._saw_bytes = False
+        self._draining_since: int | None = None    # error sent: wait for a quiet line
+        self.result: str | int | None = None
+
+    def take_tx(self) -> bytes:
+        out, self._tx = bytes(self._tx), bytearray()
+        return out
+
+    def rx(self, data: bytes, now: int) -> None:
+        self._last_rx = now
+        self._saw_bytes = True
+        if self._draining_since is not None:
+            return
+        self._buf += data
+        bp = self.bp
+        if not self._synced:
+            i = self._buf.find(bp.SYNC)
+            if i < 0:
+                del self._buf[:max(0, len(self._buf) - len(bp.SYNC) + 1)]
+                return
+            del self._buf[:i]
+            self._synced = True
+        if len(self._buf) < bp.FRAME_OVERHEAD:
+            return
+        try:
+            _, _, length, icrc = bp.decode_header(bytes(self._buf[:bp.FRAME_OVERHEAD]))
+        except bp.FrameError:
+            return self._fail("H", now)
+        if not 1 <= length <= bp.MAX_IMAGE_BYTES:
+            return self._fail("L", now)
+        if len(self._buf) < bp.FRAME_OVERHEAD + length:
+            return
+        image = bytes(self._buf[bp.FRAME_OVERHEAD:bp.FRAME_OVERHEAD + length])
+        if bp.crc32(image) != icrc:
+            return self._fail("C", now)
+        self._tx += b"TLBK\n"
+        self.result = bp.crc32(image)
+
+    def _fail(self, code: str, now: int) -> None:
+        self._tx += b"TLB" + code.encode() + b"\n"
+        self._draining_since = now
+        self._buf.clear()
+
+    def poll(self, now: int) -> str | int | None:
+        bp = self.bp
+        gap = bp.ms_to_cycles(bp.GAP_MS, CLK_HZ)
+        if self.result is not None:
+            return self.result
+        if self._draining_since is not None:
+            if now - self._last_rx >= gap:
+                self._tx += b"TLBF\n"
+                return "factory"
+            return None
+        if self._synced and now - self._last_rx >= gap:
+            self._fail("T", now)
+            return None
+        if not self._synced and now >= self._window_end:
+            if self._saw_bytes:
+                self._fail("G", now)
+                return None
+            self._tx += b"TLBF\n"
+            return "factory"
+        return None

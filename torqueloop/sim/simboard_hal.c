@@ -1,0 +1,152 @@
+/* The servo firmware on the host, for the simulated board of `torqueloop sim`
+ * (torqueloop/sim/simboard.py).  servo.c, tl_link.c and control.c run
+ * unchanged; this file is their hal.h (the "registers" are the statics
+ * below, read and written from Python through ctypes) and the main loop of
+ * firmware/servo/main.c without the RISC-V parts: bytes in, one control
+ * iteration per period, telemetry frames out.  Compiled to a shared library
+ * by simboard.py into build/host/. */
+#include <string.h>
+
+#include "hal.h"
+#include "servo.h"
+#include "tl_link.h"
+
+static tl_servo_t servo;
+static tl_enc_sample_t enc[2];
+static int32_t pwm_cmd[2];
+static int32_t pwm_on[2], pwm_brake[2];
+static uint32_t pwm_fdiv[2], pwm_pw0[2], pwm_pwmax[2];
+static uint32_t safety;
+static uint32_t baud_div;
+static uint32_t build_id;
+static uint8_t tx_buf[16384];
+static uint32_t tx_len;
+
+/* ---- hal.h --------------------------------------------------------------- */
+void hal_enc_read(uint32_t axis, tl_enc_sample_t *s) { *s = enc[axis]; }
+void hal_enc_clear_illegal(uint32_t axis) { enc[axis].illegal = 0; }
+void hal_pwm_cmd(uint32_t axis, int32_t cmd) { pwm_cmd[axis] = cmd; }
+void hal_pwm_enable(uint32_t axis, bool on, bool brake)
+{
+    pwm_on[axis] = on;
+    pwm_brake[axis] = brake;
+}
+void hal_pwm_config(uint32_t axis, uint32_t fdiv, uint32_t pw0, uint32_t pwmax)
+{
+    pwm_fdiv[axis] = fdiv;
+    pwm_pw0[axis] = pw0;
+    pwm_pwmax[axis] = pwmax;
+}
+uint32_t hal_safety(void) { return safety; }
+void hal_safety_ack(uint32_t bits)
+{
+    /* W1C like soc_sys: a cause still present (e-stop input) keeps its bit. */
+    uint32_t keep = (safety & TL_HAL_SAFE_ESTOP_IN) ? TL_HAL_SAFE_ESTOP : 0u;
+    safety &= ~(bits & ~keep);
+    if (!(safety & (TL_HAL_SAFE_ESTOP | TL_HAL_SAFE_FAULT0 | TL_HAL_SAFE_FAULT1 | TL_HAL_SAFE_WDOG |
+                    TL_HAL_SAFE_ESTOP_IN)))
+        safety &= ~TL_HAL_SAFE_FORCED;
+}
+uint32_t hal_build_id(void) { return build_id; }
+uint32_t hal_clk_hz(void) { return 50000000u; }
+void hal_set_baud_div(uint32_t div) { baud_div = div; }
+void hal_irq_off(void) {}
+void hal_irq_on(void) {}
+
+static bool tx(const uint8_t *wire, uint32_t len)
+{
+    if (tx_len + len > sizeof tx_buf)
+        return false;
+    memcpy(&tx_buf[tx_len], wire, len);
+    tx_len += len;
+    return true;
+}
+
+/* ---- the simulator's side -------------------------------------------------- */
+/* Power-up with the encoders as sb_set_encoder left them (the plant's rest position). */
+void sb_reset(uint32_t id)
+{
+    memset(pwm_cmd, 0, sizeof pwm_cmd);
+    memset(pwm_on, 0, sizeof pwm_on);
+    memset(pwm_brake, 0, sizeof pwm_brake);
+    /* power-up: the SoC latch holds the drives safe with its reset-time ESTOP bit */
+    safety = TL_HAL_SAFE_FORCED | TL_HAL_SAFE_ESTOP;
+    baud_div = 0;
+    build_id = id;
+    tx_len = 0;
+    tl_servo_init(&servo);
+}
+
+void sb_rx(const uint8_t *data, uint32_t len)
+{
+    for (uint32_t i = 0; i < len; i++)
+        tl_servo_rx_byte(&servo, data[i], tx);
+}
+
+/* One control period: the timer interrupt, then what main.c's loop does next. */
+void sb_tick(void)
+{
+    tl_servo_tick(&servo);
+    if (servo.telem_due) {
+        uint8_t p[TLP_TELEM_LEN];
+        uint8_t wire[TLP_MAX_WIRE];
+        servo.telem_due = false;
+        tl_servo_telemetry(&servo, p);
+        uint32_t n = (uint32_t)tl_frame_encode(servo.telem_seq++, TLP_TELEMETRY_CMD, p, TLP_TELEM_LEN, wire,
+                                               sizeof wire);
+        if (!tx(wire, n) && servo.cnt.tx_dropped != 0xFFFFu)
+            servo.cnt.tx_dropped++;
+    }
+    if (servo.baud_div_pending) {
+        baud_div = servo.baud_div_pending;
+        servo.baud_div_pending = 0;
+    }
+}
+
+uint32_t sb_tx_take(uint8_t *dst, uint32_t cap)
+{
+    uint32_t n = tx_len < cap ? tx_len : cap;
+    memcpy(dst, tx_buf, n);
+    memmove(tx_buf, &tx_buf[n], tx_len - n);
+    tx_len -= n;
+    return n;
+}
+
+void sb_set_encoder(uint32_t axis, int32_t pos, uint32_t edge_time, uint32_t interval, uint32_t now,
+                    uint32_t illegal, int32_t bridge_fault)
+{
+    enc[axis].pos = pos;
+    enc[axis].edge_time = edge_time;
+#ifdef SB_HAL_HAS_INTERVAL   /* hal.h's decoder sample grew the last edge interval; simboard.py detects it */
+    enc[axis].interval = interval;
+#else
+    (void)interval;
+#endif
+    enc[axis].now = now;
+    enc[axis].illegal = illegal;
+    enc[axis].bridge_fault = bridge_fault != 0;
+}
+
+/* drive[0..5] = cmd, on, brake, fdiv, pw0, pwmax */
+void sb_get_drive(uint32_t axis, int32_t *drive)
+{
+    drive[0] = pwm_cmd[axis];
+    drive[1] = pwm_on[axis];
+    drive[2] = pwm_brake[axis];
+    drive[3] = (int32_t)pwm_fdiv[axis];
+    drive[4] = (int32_t)pwm_pw0[axis];
+    drive[5] = (int32_t)pwm_pwmax[axis];
+}
+
+/* The e-stop input (KEY0): pressed sets the input and latches ESTOP, forcing the drives safe. */
+void sb_set_estop(int32_t pressed)
+{
+    if (pressed)
+        safety |= TL_HAL_SAFE_ESTOP_IN | TL_HAL_SAFE_ESTOP | TL_HAL_SAFE_FORCED;
+    else
+        safety &= ~TL_HAL_SAFE_ESTOP_IN;
+}
+
+uint32_t sb_period_us(void) { return (uint32_t)servo.g[tl_param_index(TLP_P_PERIOD_US)]; }
+uint32_t sb_baud_div(void) { return baud_div; }
+int32_t sb_bootloader_requested(void) { return servo.bootloader_req; }

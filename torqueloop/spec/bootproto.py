@@ -1,0 +1,246 @@
+"""Host side of the boot-ROM upload (docs/bootloader.md): frame, CRC-32,
+replies, ROM layout, and sending an image over pyserial ``serial_for_url``
+(a serial port such as ``/dev/ttyUSB0`` or the RN-XV's ``socket://host:2000``).
+
+This module is the single definition of the upload protocol: the bootloader
+(firmware/boot/boot.c) is compiled against ``boot_proto.h``, which
+:func:`c_header` generates from the constants below, and the cocotb benches
+build their frames with :func:`encode_frame`, the same code the host tool uses.
+"""
+
+from __future__ import annotations
+
+import enum
+import struct
+import zlib
+from pathlib import Path
+
+from torqueloop.spec import regs
+
+# --- protocol constants (docs/bootloader.md) -----------------------------------
+
+SYNC = bytes([0xA5, 0x5A, 0xB0, 0x07])   # non-ASCII, no 0x00: neither RN-XV text nor a COBS delimiter
+VERSION = 1
+HEADER_FMT = "<BBHIII"                   # version, 0, 0, load address, length, image CRC-32
+HEADER_BYTES = struct.calcsize(HEADER_FMT)        # 16; the header's own CRC-32 follows
+FRAME_OVERHEAD = len(SYNC) + HEADER_BYTES + 4     # 24 bytes before the image
+LOAD_ADDR = regs.RAM_BASE                # images are RAM-linked; entry = load address
+BOOT_STACK_BYTES = 256                   # the bootloader's stack at the top of RAM, never uploaded over
+MAX_IMAGE_BYTES = regs.RAM_SIZE - BOOT_STACK_BYTES
+WINDOW_MS = 500                          # listen after reset
+GAP_MS = 500                             # longest silence inside a frame
+BAUD = 115_200                           # the UART core's default (BAUD_DIV = 0)
+
+# ROM layout: bootloader code, then the factory descriptor and image.
+BOOT_CODE_BYTES = 0x800
+FACTORY_MAGIC = 0x57464C54               # 'TLFW' little-endian
+FACTORY_DESC_FMT = "<IIII"               # magic, length, CRC-32, load address
+FACTORY_OFS = BOOT_CODE_BYTES
+FACTORY_IMAGE_OFS = FACTORY_OFS + struct.calcsize(FACTORY_DESC_FMT)
+FACTORY_MAX_BYTES = min(regs.BOOT_ROM_SIZE - FACTORY_IMAGE_OFS, MAX_IMAGE_BYTES)
+
+REPLY_PREFIX = b"TLB"
+REPLY_BYTES = len(REPLY_PREFIX) + 2      # prefix, code, newline
+
+
+def ms_to_cycles(ms: int, clk_hz: int = regs.CLK_HZ) -> int:
+    return clk_hz // 1000 * ms
+
+
+class Reply(enum.Enum):
+    """The bootloader's one-letter reply codes (sent as ``TLB<code>\\n``)."""
+    WINDOW = "W"        # window open, send now
+    OK = "K"            # image accepted, starting it
+    BAD_HEADER = "H"    # header CRC, version or load address wrong
+    BAD_LENGTH = "L"    # length 0 or larger than MAX_IMAGE_BYTES
+    TIMEOUT = "T"       # frame interrupted (gap longer than GAP_MS)
+    BAD_CRC = "C"       # image CRC-32 mismatch
+    GARBAGE = "G"       # bytes in the window but no sync
+    FACTORY = "F"       # factory firmware copied to RAM and starting
+    NO_FACTORY = "N"    # no valid factory image in ROM: listening without timeout
+
+    @property
+    def is_error(self) -> bool:
+        return self in ERRORS
+
+
+ERRORS = frozenset({Reply.BAD_HEADER, Reply.BAD_LENGTH, Reply.TIMEOUT, Reply.BAD_CRC, Reply.GARBAGE})
+REPLY_TEXT = {
+    Reply.WINDOW: "bootloader listening",
+    Reply.OK: "image accepted and started",
+    Reply.BAD_HEADER: "header rejected (header CRC, version or load address)",
+    Reply.BAD_LENGTH: f"length 0 or larger than {MAX_IMAGE_BYTES} bytes",
+    Reply.TIMEOUT: f"frame interrupted (no byte for {GAP_MS} ms)",
+    Reply.BAD_CRC: "image CRC-32 mismatch",
+    Reply.GARBAGE: "bytes but no sync in the window",
+    Reply.FACTORY: "factory firmware started",
+    Reply.NO_FACTORY: "no factory firmware in ROM, waiting for an upload",
+}
+
+
+def crc32(data: bytes) -> int:
+    """CRC-32/ISO-HDLC (zlib, Ethernet): reflected 0xEDB88320, init/xorout all ones."""
+    return zlib.crc32(data) & 0xFFFFFFFF
+
+
+# --- frames ---------------------------------------------------------------------
+
+class FrameError(ValueError):
+    pass
+
+
+def encode_header(length: int, image_crc: int, load_addr: int = LOAD_ADDR, version: int = VERSION) -> bytes:
+    """Sync + header + header CRC, without any range check (benches build bad ones on purpose)."""
+    hdr = struct.pack(HEADER_FMT, version, 0, 0, load_addr, length, image_crc)
+    return SYNC + hdr + struct.pack("<I", crc32(hdr))
+
+
+def encode_frame(image: bytes) -> bytes:
+    """The upload frame for a flat RAM image (docs/bootloader.md, 'Upload frame')."""
+    if not image:
+        raise FrameError("empty image")
+    if len(image) > MAX_IMAGE_BYTES:
+        raise FrameError(f"image is {len(image)} bytes, the bootloader takes at most {MAX_IMAGE_BYTES}")
+    return encode_header(len(image), crc32(image)) + image
+
+
+def decode_header(frame: bytes) -> tuple[int, int, int, int]:
+    """(version, load address, length, image CRC) of a frame; raises FrameError if it is bad."""
+    if len(frame) < FRAME_OVERHEAD or frame[:len(SYNC)] != SYNC:
+        raise FrameError("no sync")
+    hdr = frame[len(SYNC):len(SYNC) + HEADER_BYTES]
+    (hcrc,) = struct.unpack_from("<I", frame, len(SYNC) + HEADER_BYTES)
+    if crc32(hdr) != hcrc:
+        raise FrameError("header CRC mismatch")
+    version, z0, z1, load, length, icrc = struct.unpack(HEADER_FMT, hdr)
+    if version != VERSION or z0 or z1 or load != LOAD_ADDR:
+        raise FrameError("bad version or load address")
+    return version, load, length, icrc
+
+
+class ReplyParser:
+    """Picks ``TLB<code>\\n`` replies out of a byte stream that may also carry
+    RN-XV text and servo link frames."""
+
+    def __init__(self) -> None:
+        self._buf = bytearray()
+
+    def feed(self, data: bytes) -> list[Reply]:
+        self._buf += data
+        out: list[Reply] = []
+        while True:
+            i = self._buf.find(REPLY_PREFIX)
+            if i < 0:
+                del self._buf[:max(0, len(self._buf) - (len(REPLY_PREFIX) - 1))]
+                return out
+            if len(self._buf) < i + REPLY_BYTES:
+                del self._buf[:i]
+                return out
+            code, nl = chr(self._buf[i + 3]), self._buf[i + 4]
+            try:
+                if nl != 0x0A:
+                    raise ValueError
+                out.append(Reply(code))
+                del self._buf[:i + REPLY_BYTES]
+            except ValueError:
+                del self._buf[:i + 1]
+
+
+# --- images ---------------------------------------------------------------------
+
+class ImageError(ValueError):
+    pass
+
+
+def image_from_elf(raw: bytes) -> bytes:
+    """Flat RAM image of a RAM-linked RV32 ELF: its PT_LOAD file bytes from
+    the load address, gaps zero-filled (.bss has no file bytes and is left to
+    the image's crt0).  Refuses an ELF that does not start and enter at the
+    RAM base, since the bootloader jumps there."""
+    if len(raw) < 52 or raw[:4] != b"\x7fELF" or raw[4] != 1 or raw[5] != 1:
+        raise ImageError("not a 32-bit little-endian ELF")
+    (_t, machine, _v, entry, phoff, _sh, _fl, _eh, phentsize, phnum) = struct.unpack_from("<HHIIIIIHHH", raw, 16)
+    if machine != 243:
+        raise ImageError(f"ELF machine {machine} is not RISC-V")
+    if phentsize < 32 or phoff + phnum * phentsize > len(raw):
+        raise ImageError("truncated ELF: program headers run past the end of the file")
+    segs = []
+    for i in range(phnum):
+        p_type, off, _va, paddr, filesz, _mem, _f, _a = struct.unpack_from("<8I", raw, phoff + i * phentsize)
+        if p_type == 1 and filesz:
+            if off + filesz > len(raw):
+                raise ImageError("truncated ELF")
+            segs.append((paddr, raw[off:off + filesz]))
+    if not segs:
+        raise ImageError("ELF has no loadable bytes")
+    segs.sort()
+    if segs[0][0] != LOAD_ADDR or entry != LOAD_ADDR:
+        raise ImageError(f"image loads at 0x{segs[0][0]:08x} and enters at 0x{entry:08x}; the bootloader "
+                         f"loads and enters at 0x{LOAD_ADDR:08x} (link with firmware/common/link.ld)")
+    out = bytearray()
+    for addr, data in segs:
+        pos = addr - LOAD_ADDR
+        if pos < len(out):
+            raise ImageError(f"overlapping segments at 0x{addr:08x}")
+        out += bytes(pos - len(out)) + data
+    return bytes(out)
+
+
+def load_image(path: str | Path) -> bytes:
+    """An ELF (converted) or a flat .bin (taken as the RAM image at LOAD_ADDR)."""
+    raw = Path(path).read_bytes()
+    img = image_from_elf(raw) if raw[:4] == b"\x7fELF" else raw
+    if not img:
+        raise ImageError(f"{path}: empty image")
+    if len(img) > MAX_IMAGE_BYTES:
+        raise ImageError(f"{path}: {len(img)} bytes, the bootloader takes at most {MAX_IMAGE_BYTES}")
+    return img
+
+
+# --- boot ROM contents ------------------------------------------------------------
+
+def rom_image(boot_code: bytes, factory: bytes | None, rom_bytes: int = regs.BOOT_ROM_SIZE) -> bytes:
+    """Boot ROM bytes: bootloader code at 0, the factory descriptor at
+    FACTORY_OFS and the factory image after it (docs/bootloader.md, 'ROM layout').
+    Without a factory image the descriptor is zero (the bootloader then says N)."""
+    if len(boot_code) > BOOT_CODE_BYTES:
+        raise ImageError(f"bootloader is {len(boot_code)} bytes, its ROM slot {BOOT_CODE_BYTES}")
+    rom = bytearray(boot_code) + bytes(BOOT_CODE_BYTES - len(boot_code))
+    if factory is not None:
+        if not factory or len(factory) > FACTORY_MAX_BYTES:
+            raise ImageError(f"factory image is {len(factory)} bytes, the ROM has room for {FACTORY_MAX_BYTES}")
+        rom += struct.pack(FACTORY_DESC_FMT, FACTORY_MAGIC, len(factory), crc32(factory), LOAD_ADDR) + factory
+    return bytes(rom) + bytes(rom_bytes - len(rom))
+
+
+def hex_words(data: bytes) -> str:
+    """$readmemh text: one little-endian 32-bit word per line, word 0 first."""
+    data += bytes(-len(data) % 4)
+    return "".join(f"{int.from_bytes(data[i:i + 4], 'little'):08x}\n" for i in range(0, len(data), 4))
+
+
+def c_header(window_cycles: int | None = None, gap_cycles: int | None = None, baud_div: int = 0) -> str:
+    """boot_proto.h for firmware/boot: the constants above as C defines."""
+    w = ms_to_cycles(WINDOW_MS) if window_cycles is None else window_cycles
+    g = ms_to_cycles(GAP_MS) if gap_cycles is None else gap_cycles
+    sync = ", ".join(f"0x{b:02X}u" for b in SYNC)
+    codes = "\n".join(f"#define BOOT_REPLY_{r.name} '{r.value}'" for r in Reply)
+    return f"""/* Generated by torqueloop/spec/bootproto.py (c_header) - do not edit. */
+#ifndef BOOT_PROTO_H
+#define BOOT_PROTO_H
+#define BOOT_SYNC_BYTES {{{sync}}}
+#define BOOT_VERSION {VERSION}u
+#define BOOT_HEADER_BYTES {HEADER_BYTES}u
+#define BOOT_LOAD_ADDR 0x{LOAD_ADDR:08X}u
+#define BOOT_MAX_IMAGE_BYTES {MAX_IMAGE_BYTES}u
+#define BOOT_STACK_BYTES {BOOT_STACK_BYTES}u
+#define BOOT_WINDOW_CYCLES {w}u
+#define BOOT_GAP_CYCLES {g}u
+#define BOOT_BAUD_DIV {baud_div}u
+#define BOOT_CODE_BYTES 0x{BOOT_CODE_BYTES:X}u
+#define BOOT_FACTORY_OFS 0x{FACTORY_OFS:X}u
+#define BOOT_FACTORY_MAGIC 0x{FACTORY_MAGIC:08X}u
+#define BOOT_FACTORY_MAX_BYTES {FACTORY_MAX_BYTES}u
+{codes}
+#endif
+"""

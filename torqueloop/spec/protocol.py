@@ -1,0 +1,266 @@
+"""The torqueloop link protocol, Python side (host tool, cocotb tests).
+
+Everything comes from the single definition torqueloop/spec/protocol.toml,
+read at import time; :mod:`torqueloop.flow.gen_protocol` writes the C header
+and docs/protocol.md from the same data, so the three can never disagree.
+
+Frame: ``COBS(seq:u16 cmd:u8 len:u8 payload crc:u16) 0x00``, CRC-16/CCITT-FALSE
+over seq..payload, all little-endian (docs/protocol.md).
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+PROTOCOL_TOML = Path(__file__).resolve().with_name("protocol.toml")
+_FMT = {"u8": "B", "i8": "b", "u16": "H", "i16": "h", "u32": "I", "i32": "i"}
+
+
+@dataclass(frozen=True)
+class Command:
+    name: str
+    cmd: int
+    desc: str
+    req: tuple[tuple[str, str], ...]
+    rep: tuple[tuple[str, str], ...]
+
+    @property
+    def req_fmt(self) -> str:
+        return "<" + "".join(_FMT[t] for _, t in self.req)
+
+    @property
+    def rep_fmt(self) -> str:
+        return "<" + "".join(_FMT[t] for _, t in self.rep)
+
+
+@dataclass(frozen=True)
+class Param:
+    name: str
+    id: int
+    scope: str
+    min: int
+    max: int
+    default: int
+    desc: str
+
+
+@dataclass(frozen=True)
+class Frame:
+    seq: int
+    cmd: int
+    payload: bytes
+
+
+@dataclass(frozen=True)
+class FrameError:
+    """A delimited chunk that is not a valid frame; status names why."""
+    status: int
+    raw: bytes
+
+
+def _load() -> dict:
+    with open(PROTOCOL_TOML, "rb") as f:
+        return tomllib.load(f)
+
+
+SPEC = _load()
+META: dict = SPEC["meta"]
+PROTO_VERSION: int = META["version"]
+MAX_PAYLOAD: int = META["max_payload"]
+HEADER_BYTES: int = META["header_bytes"]
+CRC_BYTES: int = META["crc_bytes"]
+REPLY_FLAG: int = META["reply_flag"]
+TELEMETRY_CMD: int = META["telemetry_cmd"]
+ERROR_CMD: int = META["error_cmd"]
+SEQ_WINDOW: int = META["seq_window"]
+BOOTLOADER_MAGIC: int = META["bootloader_magic"]
+FIRMWARE_VERSION: int = META["firmware_version"]
+MAX_PACKET = HEADER_BYTES + MAX_PAYLOAD + CRC_BYTES
+# COBS adds one byte per 254 plus the leading code byte.
+MAX_ENCODED = MAX_PACKET + MAX_PACKET // 254 + 1
+
+STATUS: dict[str, int] = {s["name"]: s["code"] for s in SPEC["status"]}
+STATUS_NAME: dict[int, str] = {v: k for k, v in STATUS.items()}
+FAULT: dict[str, int] = {f["name"]: 1 << f["bit"] for f in SPEC["fault"]}
+COMMANDS: dict[str, Command] = {
+    c["name"]: Command(c["name"], c["cmd"], c["desc"],
+                       tuple(tuple(x) for x in c["req"]), tuple(tuple(x) for x in c["rep"]))
+    for c in SPEC["command"]}
+BY_CMD: dict[int, Command] = {c.cmd: c for c in COMMANDS.values()}
+PARAMS: dict[str, Param] = {p["name"]: Param(p["name"], p["id"], p["scope"], p["min"], p["max"],
+                                             p["default"], p["desc"]) for p in SPEC["param"]}
+PARAM_BY_ID: dict[int, Param] = {p.id: p for p in PARAMS.values()}
+TELEMETRY_HEAD: tuple[tuple[str, str], ...] = tuple(tuple(x) for x in SPEC["telemetry"]["head"])
+TELEMETRY_AXIS: tuple[tuple[str, str], ...] = tuple(tuple(x) for x in SPEC["telemetry"]["axis"])
+AXIS_COUNT = 2
+GLOBAL_AXIS = 0xFF
+
+
+# --- framing -------------------------------------------------------------------
+
+def crc16(data: bytes, crc: int = 0xFFFF) -> int:
+    """CRC-16/CCITT-FALSE (check value of b'123456789' is 0x29B1)."""
+    for b in data:
+        crc ^= b << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) & 0xFFFF if crc & 0x8000 else (crc << 1) & 0xFFFF
+    return crc
+
+
+def cobs_encode(data: bytes) -> bytes:
+    out = bytearray([0])
+    code_at, code = 0, 1
+    for b in data:
+        if b == 0:
+            out[code_at] = code
+            code_at, code = len(out), 1
+            out.append(0)
+        else:
+            out.append(b)
+            code += 1
+            if code == 0xFF:
+                out[code_at] = code
+                code_at, code = len(out), 1
+                out.append(0)
+    out[code_at] = code
+    return bytes(out)
+
+
+def cobs_decode(data: bytes) -> bytes | None:
+    """Inverse of cobs_encode; None if ``data`` is not valid COBS."""
+    out = bytearray()
+    i, n = 0, len(data)
+    while i < n:
+        code = data[i]
+        if code == 0 or i + code > n:
+            return None
+        block = data[i + 1:i + code]
+        if 0 in block:
+            return None
+        out += block
+        i += code
+        if code < 0xFF and i < n:
+            out.append(0)
+    return bytes(out)
+
+
+def encode_frame(seq: int, cmd: int, payload: bytes = b"") -> bytes:
+    """One frame, ready for the wire: 0x00 on both sides, so text the bridge
+    inserted before it (``*HELLO*``) ends as its own bad chunk, not glued to the frame."""
+    if len(payload) > MAX_PAYLOAD:
+        raise ValueError(f"payload of {len(payload)} bytes > {MAX_PAYLOAD}")
+    body = struct.pack("<HBB", seq & 0xFFFF, cmd, len(payload)) + payload
+    return b"\x00" + cobs_encode(body + struct.pack("<H", crc16(body))) + b"\x00"
+
+
+def parse_packet(raw: bytes) -> Frame | FrameError:
+    """Check one delimiter-free chunk exactly as the firmware does."""
+    if len(raw) > MAX_ENCODED:
+        return FrameError(STATUS["OVERSIZE"], raw)
+    pkt = cobs_decode(raw)
+    if pkt is None or len(pkt) < HEADER_BYTES + CRC_BYTES:
+        return FrameError(STATUS["FRAMING"], raw)
+    if len(pkt) > MAX_PACKET:
+        return FrameError(STATUS["OVERSIZE"], raw)
+    body, crc = pkt[:-CRC_BYTES], struct.unpack("<H", pkt[-CRC_BYTES:])[0]
+    if crc16(body) != crc:
+        return FrameError(STATUS["CRC"], raw)
+    seq, cmd, ln = struct.unpack("<HBB", body[:HEADER_BYTES])
+    if ln != len(body) - HEADER_BYTES:
+        return FrameError(STATUS["LENGTH"], raw)
+    return Frame(seq, cmd, bytes(body[HEADER_BYTES:]))
+
+
+class FrameDecoder:
+    """Byte-stream to frames: feed whatever arrives, get frames and errors back.
+    Text between frames (the RN-XV's ``*HELLO*``) comes back as a FrameError."""
+
+    def __init__(self) -> None:
+        self._buf = bytearray()
+        self._overflow = False
+
+    def feed(self, data: bytes) -> list[Frame | FrameError]:
+        """Every frame and error completed by ``data``, in order.  A list, not
+        a generator: a caller that stops reading early must not see a frame
+        twice or have the next one merged into the old buffer."""
+        out: list[Frame | FrameError] = []
+        for b in data:
+            if b == 0:
+                if self._overflow:
+                    out.append(FrameError(STATUS["OVERSIZE"], bytes(self._buf)))
+                elif self._buf:
+                    out.append(parse_packet(bytes(self._buf)))
+                self._buf.clear()
+                self._overflow = False
+            elif len(self._buf) < MAX_ENCODED:
+                self._buf.append(b)
+            else:
+                self._overflow = True
+        return out
+
+
+# --- payloads ------------------------------------------------------------------
+
+def request(name: str, seq: int, **fields: int) -> bytes:
+    c = COMMANDS[name]
+    payload = struct.pack(c.req_fmt, *(fields[n] for n, _ in c.req))
+    return encode_frame(seq, c.cmd, payload)
+
+
+def decode_reply(frame: Frame) -> dict[str, int]:
+    """Fields of a reply frame by name; an error reply has only 'status'."""
+    c = BY_CMD.get(frame.cmd & ~REPLY_FLAG)
+    if not frame.payload:
+        raise ValueError("reply without status")
+    status = frame.payload[0]
+    if c is None or status != STATUS["OK"]:
+        return {"status": status}
+    vals = struct.unpack(c.rep_fmt, frame.payload)
+    return dict(zip((n for n, _ in c.rep), vals))
+
+
+def decode_telemetry(frame: Frame) -> dict:
+    head_fmt = "<" + "".join(_FMT[t] for _, t in TELEMETRY_HEAD)
+    ax_fmt = "<" + "".join(_FMT[t] for _, t in TELEMETRY_AXIS)
+    hs, asz = struct.calcsize(head_fmt), struct.calcsize(ax_fmt)
+    out: dict = dict(zip((n for n, _ in TELEMETRY_HEAD), struct.unpack(head_fmt, frame.payload[:hs])))
+    out["axes"] = [dict(zip((n for n, _ in TELEMETRY_AXIS),
+                            struct.unpack(ax_fmt, frame.payload[hs + i * asz:hs + (i + 1) * asz])))
+                   for i in range(AXIS_COUNT)]
+    return out
+
+
+def telemetry_payload_bytes() -> int:
+    return (struct.calcsize("<" + "".join(_FMT[t] for _, t in TELEMETRY_HEAD))
+            + AXIS_COUNT * struct.calcsize("<" + "".join(_FMT[t] for _, t in TELEMETRY_AXIS)))
+
+
+# --- physical units (the same integer arithmetic as firmware/servo/control.c) ----
+
+TWO_PI_NUM, TWO_PI_DEN = 710, 113   # 2 pi to 2.7e-7, the rational the firmware uses
+
+
+def gain_raw_from_phys(micro: int, tau_max_mnm: int, counts_per_rev: int) -> int:
+    """q16 PWM steps per count (or per count/s, per count*s) from micro N m per rad
+    (per rad/s, per rad s): raw = g / tau_max * 1023 / (counts_per_rev / 2 pi) * 2^16."""
+    num = micro * 1023 * 65536 * TWO_PI_NUM
+    den = tau_max_mnm * 1000 * counts_per_rev * TWO_PI_DEN
+    return min(0x7FFF_FFFF, (num + den // 2) // den)
+
+
+def gain_phys_from_raw(raw: int, tau_max_mnm: int, counts_per_rev: int) -> int:
+    num = raw * tau_max_mnm * 1000 * counts_per_rev * TWO_PI_DEN
+    den = 1023 * 65536 * TWO_PI_NUM
+    return min(100_000_000, (num + den // 2) // den)
+
+
+def counts_to_rad(counts: int, counts_per_rev: int = 8400) -> float:
+    return counts * 2 * math.pi / counts_per_rev
+
+
+def counts_to_mm(counts: int, counts_per_rev: int = 8400, pitch_um: int = 4000) -> float:
+    return counts * pitch_um / 1000 / counts_per_rev

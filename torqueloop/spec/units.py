@@ -1,0 +1,158 @@
+"""Physical units on the command line, integers on the wire.
+
+Positions: ``6.28rad``, ``4mm``, ``1rev``, ``8400`` or ``8400counts``; the
+board's COUNTS_PER_REV and PITCH_UM (read from it) convert them, so the tool
+needs no second copy of the mechanics.
+
+Parameters: a friendly name in SI units (``kp`` in N m/rad, ``pwm_freq`` in
+Hz, ``period`` in s ...) maps to one protocol parameter and a scale; every
+raw protocol name (``KP_Q16``, ``FOLLOW_LIMIT``) is accepted as well.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+from torqueloop.spec import protocol as P
+
+CLK_HZ = 50_000_000   # DE0-CV CLOCK_50; the board reports its own in IDENTIFY
+PWM_FULL = 1023        # 2^10 - 1 ticks per carrier period (pwm_torque)
+LAWS = {"off": 0, "p": 1, "pd": 2, "pid": 3}
+
+
+@dataclass(frozen=True)
+class Mechanics:
+    counts_per_rev: int = 8400
+    pitch_um: int = 4000
+
+    def to_counts(self, value: float, unit: str) -> int:
+        if unit in ("", "counts", "count", "cts"):
+            return int(round(value))
+        if unit == "rad":
+            return int(round(value * self.counts_per_rev / (2 * math.pi)))
+        if unit in ("rev", "turn", "turns"):
+            return int(round(value * self.counts_per_rev))
+        if unit == "mm":
+            return int(round(value * 1000 * self.counts_per_rev / self.pitch_um))
+        if unit == "deg":
+            return int(round(value * self.counts_per_rev / 360))
+        raise ValueError(f"unknown position unit {unit!r} (use rad, mm, rev, deg or counts)")
+
+    def from_counts(self, counts: float, unit: str) -> float:
+        if unit in ("", "counts"):
+            return float(counts)
+        if unit == "rad":
+            return counts * 2 * math.pi / self.counts_per_rev
+        if unit == "mm":
+            return counts * self.pitch_um / 1000 / self.counts_per_rev
+        if unit == "rev":
+            return counts / self.counts_per_rev
+        if unit == "deg":
+            return counts * 360 / self.counts_per_rev
+        raise ValueError(f"unknown position unit {unit!r}")
+
+
+_POS_RE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-z]*)\s*$")
+
+
+def parse_position(text: str, mech: Mechanics, default_unit: str = "counts") -> int:
+    """``'6.28rad'`` -> counts.  A bare number is in ``default_unit``."""
+    m = _POS_RE.match(text.lower())
+    if not m:
+        raise ValueError(f"cannot read position {text!r} (examples: 6.28rad, 4mm, 1rev, 8400)")
+    return mech.to_counts(float(m.group(1)), m.group(2) or default_unit)
+
+
+@dataclass(frozen=True)
+class Friendly:
+    """A parameter as people say it: ``value_SI * scale = raw``."""
+
+    param: str
+    scale: float
+    unit: str
+    help: str
+
+
+FRIENDLY: dict[str, Friendly] = {
+    "kp": Friendly("KP_UNM_RAD", 1e6, "N m/rad", "proportional gain, eq. (20)"),
+    "kd": Friendly("KD_UNMS_RAD", 1e6, "N m s/rad", "derivative gain, eq. (21)"),
+    "ki": Friendly("KI_UNM_RADS", 1e6, "N m/(rad s)", "integral gain, eq. (22)"),
+    "tau_max": Friendly("TAU_MAX_MNM", 1e3, "N m", "torque at full command (the paper's tau_max)"),
+    "period": Friendly("PERIOD_US", 1e6, "s", "control period (the paper's 25 ms)"),
+    "link_timeout": Friendly("LINK_TIMEOUT_MS", 1e3, "s", "link watchdog of an enabled axis"),
+    "pw0": Friendly("PW0", 1, "ticks of 1023", "dead-zone edge PW0, eq. (1)"),
+    "pwmax": Friendly("PWMAX", 1, "ticks of 1023", "duty at full command PW_F, eq. (1)"),
+    "cmd_limit": Friendly("CMD_LIMIT", 1, "steps", "PWM command saturation, eq. (19)"),
+    "follow_limit": Friendly("FOLLOW_LIMIT", 1, "counts", "following-error fault limit"),
+    "soft_min": Friendly("SOFT_MIN", 1, "counts", "lowest allowed position"),
+    "soft_max": Friendly("SOFT_MAX", 1, "counts", "highest allowed position"),
+    "vmax": Friendly("VMAX", 1, "counts/s", "trapezoid top speed"),
+    "amax": Friendly("AMAX", 1, "counts/s^2", "trapezoid acceleration"),
+    "counts_per_rev": Friendly("COUNTS_PER_REV", 1, "counts", "encoder counts per screw turn"),
+    "pitch": Friendly("PITCH_UM", 1e6, "m", "ball-screw lead"),
+}
+# Parameters with their own conversions (not a plain scale).
+SPECIAL = {"law": "LAW", "pwm_freq": "FDIV"}
+
+
+def fdiv_from_hz(f_hz: float, clk_hz: int = CLK_HZ) -> int:
+    """Eq. (4): Count_max = clk / (f * (2^10 - 1)) (pwm_torque's period is 1023 ticks),
+    the integer whose carrier is nearest to ``f_hz`` (rounding the divisor is not:
+    at 20 kHz the divisors 2 and 3 give 24.4 and 16.3 kHz)."""
+    if f_hz <= 0:
+        raise ValueError("PWM frequency must be positive")
+    exact = clk_hz / (f_hz * PWM_FULL)
+    cands = {max(1, math.floor(exact)), max(1, math.ceil(exact))}
+    return min(sorted(cands), key=lambda d: abs(hz_from_fdiv(d, clk_hz) - f_hz))
+
+
+def hz_from_fdiv(fdiv: int, clk_hz: int = CLK_HZ) -> float:
+    return clk_hz / (max(1, fdiv) * PWM_FULL)
+
+
+def resolve(name: str) -> tuple[str, str]:
+    """User name -> (protocol parameter, kind): kind 'friendly', 'special' or 'raw'.
+    A protocol name spelt as in docs/protocol.md (upper case) is always raw."""
+    if name in P.PARAMS:
+        return name, "raw"
+    low = name.lower()
+    if low in FRIENDLY:
+        return FRIENDLY[low].param, "friendly"
+    if low in SPECIAL:
+        return SPECIAL[low], "special"
+    up = name.upper()
+    if up in P.PARAMS:
+        return up, "raw"
+    known = ", ".join(sorted([*FRIENDLY, *SPECIAL]))
+    raise ValueError(f"unknown parameter {name!r}; friendly names: {known}; or a protocol name "
+                     f"such as KP_Q16 (docs/protocol.md)")
+
+
+def to_raw(name: str, text: str, clk_hz: int = CLK_HZ) -> tuple[str, int]:
+    """(protocol parameter, raw integer) for ``set NAME VALUE``."""
+    param, kind = resolve(name)
+    if kind == "special":
+        if param == "LAW":
+            if text.lower() in LAWS:
+                return param, LAWS[text.lower()]
+            return param, int(text)
+        return param, fdiv_from_hz(float(text), clk_hz)
+    if kind == "friendly":
+        return param, int(round(float(text) * FRIENDLY[name.lower()].scale))
+    return param, int(text, 0)
+
+
+def from_raw(name: str, raw: int, clk_hz: int = CLK_HZ) -> tuple[float | int | str, str]:
+    """(value as the user named it, unit) for ``get NAME``."""
+    param, kind = resolve(name)
+    if kind == "special":
+        if param == "LAW":
+            inv = {v: k for k, v in LAWS.items()}
+            return inv.get(raw, str(raw)), ""
+        return round(hz_from_fdiv(raw, clk_hz), 3), "Hz"
+    if kind == "friendly":
+        f = FRIENDLY[name.lower()]
+        return (raw if f.scale == 1 else raw / f.scale), f.unit
+    return raw, ""
