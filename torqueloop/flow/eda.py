@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Mapping
 
+from torqueloop.flow import tools
 from torqueloop.flow.manifest import REPO_ROOT, Core
 
 BUILD = REPO_ROOT / "build"
@@ -48,7 +49,7 @@ def _rel(p: Path) -> str:
 
 def verilator_lint(c: Core, params: Mapping[str, int] | None = None) -> Result:
     """verilator --lint-only -Wall: any warning fails (waivers are local /* verilator lint_off */)."""
-    exe = shutil.which("verilator")
+    exe = shutil.which(tools.verilator())
     if exe is None:
         return Result(False, f"verilator lint {c.name}", "verilator not on PATH (run make setup)")
     params = params if params is not None else c.synth_params

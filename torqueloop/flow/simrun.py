@@ -23,6 +23,7 @@ from cocotb_tools.check_results import get_results
 from cocotb_tools.runner import get_runner
 
 from torqueloop.flow.manifest import REPO_ROOT, Core, core as manifest_core
+from torqueloop.flow.tools import use_project_tools
 
 #: simulator -> HDL language it simulates here
 SIMULATORS: dict[str, str] = {"icarus": "verilog", "verilator": "verilog", "ghdl": "vhdl"}
@@ -88,6 +89,7 @@ def run(
     top = toplevel or c.top
     build_dir = BUILD_ROOT / core_name / sim / (_tag(parameters, build_tag + (top if toplevel else "")))
     waves = os.environ.get("WAVES", "") == "1"
+    use_project_tools()
     runner = get_runner(sim)
 
     build_kwargs: dict = dict(

