@@ -24,6 +24,7 @@ from typing import Any, Callable
 from torqueloop.spec import protocol as P
 from torqueloop.host import analysis
 from torqueloop.spec import units
+from torqueloop.spec.pwm import carrier_hz
 from torqueloop.host import config as hconfig
 from torqueloop.host.client import Client, NoAnswer, ProtocolError, decode_faults, describe_faults
 from torqueloop.host.transport import DEFAULT_BAUD, LinkOpenError, open_link
@@ -372,7 +373,7 @@ def cmd_step_test(ctx: Ctx) -> int:
     k0 = max(0, moved[0] - 1) if not a.trapezoid else max(0, moved[0] - 1)
     t = cap.t[k0:] - cap.t[k0]
     x = cap.data["position"][k0:, a.axis]
-    fig = analysis.step_figures(t, x, sp[k0:], start, target, a.axis, a.band / 100)
+    fig = analysis.step_figures(t, x, sp[k0:], start, target, a.band / 100)
     faults = int(max(cap.data["faults"][:, a.axis]))
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -380,8 +381,9 @@ def cmd_step_test(ctx: Ctx) -> int:
     analysis.write_csv(stem.with_suffix(".csv"), cap, mech, a.unit)
     analysis.plot(stem.with_suffix(".png"), cap, mech, a.unit, axes=[a.axis],
                   title=f"step {mech.from_counts(start, a.unit):.4g} -> {mech.from_counts(target, a.unit):.4g} "
-                        f"{a.unit}, axis {a.axis}", figures=[fig])
-    figs = fig.in_unit(mech, a.unit)
+                        f"{a.unit}, axis {a.axis}", figures=[(a.axis, fig)])
+    figs = analysis.in_unit(fig, mech, a.unit)
+    figs["axis"] = a.axis
     figs["faults"] = decode_faults(faults)
     figs["records"] = cap.n
     (stem.with_suffix(".json")).write_text(json.dumps(figs, indent=2, default=_jsonable) + "\n")
@@ -389,11 +391,11 @@ def cmd_step_test(ctx: Ctx) -> int:
             lambda: "\n".join([
                 f"step {start} -> {target} counts on axis {a.axis} ({cap.n} samples)",
                 f"  overshoot      {fig.overshoot_pct:.2f} %",
-                f"  rise (10-90 %) {fig.rise_time_s:.3f} s",
-                f"  settling       {fig.settling_time_s:.3f} s  (band +-{fig.band_counts:.0f} counts)",
-                f"  final error    {fig.steady_state_error_counts:.1f} counts "
-                f"({mech.from_counts(fig.steady_state_error_counts, a.unit):.4g} {a.unit})",
-                f"  RMSE eq. (26)  {fig.rmse_counts:.1f} counts ({mech.from_counts(fig.rmse_counts, a.unit):.4g} {a.unit})",
+                f"  rise (10-90 %) {analysis.fmt_s(fig.rise_time_s)}",
+                f"  settling       {analysis.fmt_s(fig.settling_time_s)}  (band +-{fig.band:.0f} counts)",
+                f"  steady state   {fig.steady_state_error:.1f} counts "
+                f"({mech.from_counts(fig.steady_state_error, a.unit):.4g} {a.unit}; mean of the last 10 %)",
+                f"  RMSE eq. (26)  {fig.rmse:.1f} counts ({mech.from_counts(fig.rmse, a.unit):.4g} {a.unit})",
                 f"  faults         {describe_faults(faults)}",
                 f"wrote {stem}.png, .csv, .json"]))
     return 0 if not faults else 1
@@ -409,7 +411,7 @@ def cmd_config(ctx: Ctx) -> int:
         readable = {"axes": [{"kp_N_m_per_rad": c.get_param("KP_UNM_RAD", i) / 1e6,
                               "kd_N_m_s_per_rad": c.get_param("KD_UNMS_RAD", i) / 1e6,
                               "ki_N_m_per_rad_s": c.get_param("KI_UNM_RADS", i) / 1e6,
-                              "pwm_freq_hz": round(units.hz_from_fdiv(axes[i]["FDIV"], ident["clk_hz"]), 3)}
+                              "pwm_freq_hz": round(carrier_hz(axes[i]["FDIV"], ident["clk_hz"]), 3)}
                              for i in range(P.AXIS_COUNT)]}
         cfg = hconfig.HostConfig(axes, glob, ident["build_id"], ident["proto_version"], "host")
         Path(a.file).write_text(hconfig.to_json(cfg, readable))
@@ -463,8 +465,13 @@ def cmd_upload(ctx: Ctx) -> int:
 
 
 def cmd_sim(ctx: Ctx) -> int:
-    from torqueloop.sim.server import BoardServer
-    from torqueloop.sim.simboard import SimBoard
+    try:
+        from torqueloop.sim.server import BoardServer
+        from torqueloop.sim.simboard import SimBoard
+        import sim_models.stepper  # noqa: F401  (the plant; SimBoard imports it when built)
+    except ImportError as e:   # a host-only install (pip install torqueloop[host])
+        raise SimStackMissing(f"the simulated board needs the simulation stack ({e.name} is missing): "
+                              f"pip install 'torqueloop[sim]'") from None
 
     a = ctx.args
     if a.rtl:
@@ -482,6 +489,10 @@ def cmd_sim(ctx: Ctx) -> int:
     except KeyboardInterrupt:
         pass
     return 0
+
+
+class SimStackMissing(Exception):
+    """``torqueloop sim`` in an install without the simulation extras."""
 
 
 # ---- argument parsing --------------------------------------------------------------
@@ -600,7 +611,7 @@ def main(argv: list[str] | None = None) -> int:
     except NoAnswer as e:
         print(f"torqueloop: {e}", file=sys.stderr)
         return 3
-    except (ProtocolError, LinkOpenError, hconfig.HostConfigError, ValueError, OSError) as e:
+    except (ProtocolError, LinkOpenError, hconfig.HostConfigError, SimStackMissing, ValueError, OSError) as e:
         print(f"torqueloop: {e}", file=sys.stderr)
         return 1
     finally:
