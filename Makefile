@@ -38,16 +38,17 @@ $(STAMP): pyproject.toml scripts/setup.sh $(wildcard */__init__.py)
 sim: $(STAMP) ## all cocotb test benches on every applicable simulator
 	$(PY) -m pytest tb $(PYTEST_K) $(XDIST)
 
-lint: $(STAMP) ## Verilator -Wall, GHDL --std=08, Yosys synth check, VHDL/Verilog equivalence, SAT properties, board constraints
+lint: $(STAMP) ## Verilator -Wall, GHDL --std=08, Yosys synth check, VHDL/Verilog equivalence, SAT properties, board constraints, generated files, import layers
 	$(PY) scripts/lint.py
 	$(PY) scripts/check_constraints.py
+	$(PY) -m torqueloop.flow.generate --check
+	$(PY) -m torqueloop.flow.layers
 
 unit: $(STAMP) ## Python unit tests (plant, reference models, tools)
 	$(PY) -m pytest tests $(PYTEST_K) $(XDIST)
 
 test: $(STAMP) ## lint + sim + unit: what CI runs
-	$(PY) scripts/lint.py
-	$(PY) scripts/check_constraints.py
+	$(MAKE) --no-print-directory lint
 	$(PY) -m pytest tb tests $(PYTEST_K) $(XDIST)
 
 synth: $(STAMP) ## Yosys synth_intel_alm (Cyclone V): per-core table in build/synth/, then the board top against the 5CEBA4

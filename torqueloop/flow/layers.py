@@ -1,0 +1,151 @@
+"""The layers of the Python side and the one direction their imports may go.
+
+    spec                               the single sources, one definition of each equation
+    host   models   sim_models   flow  the lab tool | core models | the plant | EDA flows
+    sim                                co-simulation, simulated boards, the experiment
+    characterize                       the characterisation method and its bench
+    cli                                the ``torqueloop`` command (the application)
+
+A module may import its own layer and the layers its entry in ``ALLOWED``
+names, nothing else of ours: never upward, never sideways between the
+middle layers.  It may not load a file by path (importlib's
+``spec_from_file_location``, ``runpy``, ``exec`` of a file) or edit
+``sys.path``: what a module needs it imports by name.
+
+:func:`violations` reads the sources (``ast``; nothing is imported), so a
+function-level (lazy) import counts as much as a top-level one.
+``make lint`` and tests/test_layers.py run it.
+"""
+
+from __future__ import annotations
+
+import ast
+from dataclasses import dataclass
+from pathlib import Path
+
+from torqueloop.spec.repo import REPO_ROOT
+
+#: layer -> the layers it may import (besides itself)
+ALLOWED: dict[str, frozenset[str]] = {
+    "torqueloop.spec": frozenset(),
+    "torqueloop.host": frozenset({"torqueloop.spec"}),
+    "torqueloop.models": frozenset({"torqueloop.spec"}),
+    "sim_models": frozenset({"torqueloop.spec"}),
+    "torqueloop.flow": frozenset({"torqueloop.spec"}),
+    "torqueloop.sim": frozenset({"torqueloop.spec", "torqueloop.host", "torqueloop.models", "sim_models",
+                                 "torqueloop.flow"}),
+    "torqueloop.characterize": frozenset({"torqueloop.spec", "torqueloop.host", "torqueloop.models",
+                                          "sim_models", "torqueloop.flow", "torqueloop.sim"}),
+    "torqueloop.cli": frozenset({"torqueloop.spec", "torqueloop.host", "torqueloop.models", "sim_models",
+                                 "torqueloop.flow", "torqueloop.sim", "torqueloop.characterize"}),
+}
+#: modules outside every layer that any module may import
+SHARED = frozenset({"torqueloop"})          # the package's __init__ (version only)
+PACKAGES = ("torqueloop", "sim_models")     # what counts as "ours"
+
+
+@dataclass(frozen=True)
+class Violation:
+    file: str
+    line: int
+    what: str
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}: {self.what}"
+
+
+def layer_of(module: str) -> str | None:
+    """The layer a dotted module name belongs to (None: not ours, or SHARED)."""
+    best = None
+    for layer in ALLOWED:
+        if module == layer or module.startswith(layer + "."):
+            if best is None or len(layer) > len(best):
+                best = layer
+    return best
+
+
+def _module_name(path: Path, root: Path) -> str:
+    rel = path.relative_to(root).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _imports(tree: ast.AST, module: str, is_pkg: bool) -> list[tuple[int, str]]:
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:   # relative: resolve against this module's package
+                base = module.split(".")
+                base = base if is_pkg else base[:-1]
+                base = base[:len(base) - node.level + 1]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            if layer_of(target) is not None:
+                out.append((node.lineno, target))
+            else:   # `from torqueloop import sim` imports the module torqueloop.sim
+                out += [(node.lineno, f"{target}.{a.name}") for a in node.names]
+    return out
+
+
+def _path_tricks(tree: ast.AST) -> list[tuple[int, str]]:
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and node.attr in ("spec_from_file_location", "run_path"):
+            out.append((node.lineno, f"loads a file by path ({node.attr})"))
+        elif isinstance(node, ast.Attribute) and node.attr in ("insert", "append", "extend") \
+                and isinstance(node.value, ast.Attribute) and node.value.attr == "path" \
+                and isinstance(node.value.value, ast.Name) and node.value.value.id == "sys":
+            out.append((node.lineno, f"edits sys.path (sys.path.{node.attr})"))
+        elif isinstance(node, (ast.Assign, ast.AugAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for t in targets:
+                t = t.value if isinstance(t, ast.Subscript) else t
+                if isinstance(t, ast.Attribute) and t.attr == "path" and isinstance(t.value, ast.Name) \
+                        and t.value.id == "sys":
+                    out.append((node.lineno, "assigns sys.path"))
+    return out
+
+
+def violations(root: Path = REPO_ROOT, packages: tuple[str, ...] = PACKAGES) -> list[Violation]:
+    """Every import against the direction, file loaded by path and sys.path
+    edit in the packages under ``root``."""
+    found: list[Violation] = []
+    for pkg in packages:
+        for path in sorted((root / pkg).rglob("*.py")):
+            module = _module_name(path, root)
+            mine = layer_of(module)
+            rel = str(path.relative_to(root))
+            tree = ast.parse(path.read_text(), filename=rel)
+            for line, what in _path_tricks(tree):
+                found.append(Violation(rel, line, what))
+            if mine is None:
+                continue   # torqueloop/__init__.py
+            allowed = ALLOWED[mine] | {mine} | SHARED
+            for line, target in _imports(tree, module, path.name == "__init__.py"):
+                if not target.split(".")[0] in packages:
+                    continue
+                theirs = layer_of(target)
+                if theirs is None:   # the package itself or its __init__'s names (SHARED)
+                    continue
+                if theirs not in allowed:
+                    found.append(Violation(rel, line, f"{mine} imports {target} ({theirs}): "
+                                                      f"against the layer direction"))
+    return found
+
+
+def main() -> int:
+    bad = violations()
+    for v in bad:
+        print(f"[layers] {v}")
+    print(f"[layers] {'FAIL' if bad else 'ok  '} import direction of torqueloop/ and sim_models/ "
+          f"({len(bad)} violations)")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
