@@ -23,7 +23,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from torqueloop.sim.model_loop import TABLE1, LoopConfig, LoopResult, run_loop, step_metrics  # noqa: E402
+from torqueloop.sim.model_loop import TABLE1, LoopConfig, LoopResult, run_loop  # noqa: E402
+from torqueloop.spec.metrics import step_metrics  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 AXES = ("x", "z")
@@ -68,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--t-end", type=float, default=40.0, help="simulated time per law (s), paper T = 40")
     ap.add_argument("--laws", nargs="*", default=list(TABLE1))
     ap.add_argument("--drive", choices=("brake", "coast"), default="brake")
-    ap.add_argument("--pw0", type=float, default=0.0, help="dead-zone compensation, fraction of full scale")
+    ap.add_argument("--pw0", type=int, default=0, help="dead-zone compensation PW0 of eq. (1), ticks of 1023")
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     results: dict[str, LoopResult] = {}
@@ -83,9 +84,9 @@ def main(argv: list[str] | None = None) -> int:
         plot(args.out / f"step_{law}.png", law, r, cfg.setpoint_rad)
         for a, name in enumerate(AXES):
             m = step_metrics(r.t, r.x_meas[:, a], cfg.setpoint_rad)
-            rows.append({"law": law, "axis": name, **m})
-            print(f"  axis {name}: rise {m['rise_s']:.3f} s, overshoot {m['overshoot_pct']:.1f} %, "
-                  f"final error {m['final_error_rad']:+.4f} rad, RMSE {m['rmse_rad']:.4f} rad")
+            rows.append({"law": law, "axis": name, **m.as_dict()})
+            print(f"  axis {name}: rise {m.rise_time_s} s, overshoot {m.overshoot_pct:.1f} %, "
+                  f"steady-state error {m.steady_state_error:+.4f} rad, RMSE {m.rmse:.4f} rad")
         print(f"  wall {time.monotonic() - t0:.1f} s, {r.calls} plant calls", flush=True)
     fig, axs = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     for law, r in results.items():

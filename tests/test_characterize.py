@@ -24,7 +24,7 @@ from torqueloop.characterize import (
     step5_candidates,
     steps67_linearity,
 )
-from torqueloop.characterize.config import config_to_json, default_divider
+from torqueloop.spec.charconfig import config_to_json
 from torqueloop.characterize.data import format_sweep, parse_sweep
 
 BENCH = BenchConstants(wheel_radius_m=0.025, theta_deg=90.0, supply_v=12.0)
@@ -208,7 +208,7 @@ def test_step8_counts_for_the_paper_frequencies():
     for f, want in ((450.0, 109), (200.0, 244)):
         fs = freq_sweep(lambda x, f=f: TAU_MAX / 2 * (1 + 0.3 * (f - x) / f))
         r = characterize_motor(fs, [duty_sweep(f, dead_zone_motor(12.0))])
-        a = axis_config(r, divider=default_divider())
+        a = axis_config(r)
         assert a.count_max == want
         assert a.achieved_hz == pytest.approx(50e6 / (want * 1023), rel=1e-6)
         # nearest count: half a count of ~109 (0.46 %) plus the 1024/1023 of the period (0.1 %)
@@ -220,7 +220,7 @@ def test_step8_counts_for_the_paper_frequencies():
 def make_config(tmp_path):
     fs = freq_sweep(lambda x: TAU_MAX / 2 * (1 + 0.3 * (450 - x) / 450))
     r = characterize_motor(fs, [duty_sweep(448, dead_zone_motor(12.0))])
-    cfg = build_config({"x": axis_config(r, divider=default_divider())}, Thresholds(), divider=default_divider())
+    cfg = build_config({"x": axis_config(r)}, Thresholds())
     p = tmp_path / "cfg.json"
     p.write_text(config_to_json(cfg))
     return p
@@ -230,7 +230,7 @@ def test_config_round_trips_and_is_reproducible(tmp_path):
     p = make_config(tmp_path)
     text = p.read_text()
     assert make_config(tmp_path).read_text() == text  # no date, no randomness
-    cfg = load_config(p, divider=default_divider())
+    cfg = load_config(p)
     assert cfg.axes["x"].count_max == 109 and cfg.clk_hz == 50_000_000 and cfg.pwm_bits == 10
     assert "thresholds" in cfg.provenance and cfg.provenance["thresholds"]["r2_min"] == 0.98
 
@@ -254,7 +254,7 @@ def test_load_config_refuses_bad_files_naming_the_field(tmp_path, edit, message)
     doc = json.loads(make_config(tmp_path).read_text())
     edit(doc)
     with pytest.raises(ConfigError, match=message):
-        load_config(doc, divider=default_divider())
+        load_config(doc)
 
 
 def test_load_config_reports_bad_json_with_its_line(tmp_path):

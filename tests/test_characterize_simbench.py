@@ -21,7 +21,8 @@ from pathlib import Path
 import pytest
 
 from torqueloop.characterize import load_config
-from torqueloop.characterize.config import axis_config, build_config, write_config
+from torqueloop.characterize.config import axis_config, build_config
+from torqueloop.spec.charconfig import write_config
 from torqueloop.characterize.method import Thresholds
 from torqueloop.characterize.simbench import PinWaveform, Reading, SweepPlan, model_waveform, run_bench
 

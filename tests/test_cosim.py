@@ -13,7 +13,7 @@ import pytest
 from sim_models.bridge import Pins
 from sim_models.stepper import TwoAxisPlant
 from torqueloop.sim import pins as cp
-from torqueloop.sim.report import rmse, step_metrics
+from torqueloop.spec.metrics import rmse, step_metrics
 
 
 def _pins_code(p0: Pins, p1: Pins) -> int:
@@ -147,8 +147,8 @@ def test_step_metrics() -> None:
     t = np.linspace(0, 10, 401)
     x = 1 - np.exp(-t) * np.cos(3 * t)
     m = step_metrics(t, x, 1.0)
-    assert 0 < m["overshoot_pct"] < 40
+    assert 0 < m.overshoot_pct < 40
     # last exit from the band: inside the envelope bound exp(-t) = 0.02, after exp(-t) = 0.04
-    assert -math.log(0.04) < m["settling_s"] <= -math.log(0.02)
-    assert np.all(np.abs(x[t >= m["settling_s"]] - 1) <= 0.02)
-    assert step_metrics(t, t / 20, 1.0)["settling_s"] is None
+    assert -math.log(0.04) < m.settling_time_s <= -math.log(0.02)
+    assert np.all(np.abs(x[t >= m.settling_time_s] - 1) <= 0.02)
+    assert step_metrics(t, t / 20, 1.0).settling_time_s is None

@@ -8,25 +8,30 @@ from torqueloop.models.freq_div import (FreqDivModel, FreqDivParams, carrier_hz,
 
 
 def test_paper_frequencies():
-    # 50e6 / (450 * 1024) = 108.5 -> 109; 50e6 / (200 * 1024) = 244.1 -> 244
+    # carriers of the divisors around 50e6 / (450 * 1023) = 108.6: 452.6 / 448.4 Hz -> 109;
+    # around 50e6 / (200 * 1023) = 244.4: 200.3 / 199.5 Hz -> 244
     assert count_max(450) == 109
     assert count_max(200) == 244
     assert FreqDivParams().default_div == 109
 
 
-def test_20khz_is_22_percent_high():
+def test_20khz_lands_on_the_nearer_carrier():
+    """Divisor 2 gives 24.4 kHz (+22 %), 3 gives 16.3 kHz (-19 %): the nearer is 3."""
     e = frequency_error(20_000)
-    assert e.count_max == 2
-    assert e.f_eq2_hz == pytest.approx(24_414.0625)
-    assert e.error_eq2 == pytest.approx(0.2207, abs=1e-4)
+    assert e.count_max == 3
+    assert e.f_carrier_hz == pytest.approx(50e6 / 3 / 1023)
+    assert e.error_carrier == pytest.approx(-0.1854, abs=1e-4)
+    assert abs(carrier_hz(3) - 20_000) < abs(carrier_hz(2) - 20_000)
 
 
 def test_sweep_50_to_500_hz_error_below_half_percent():
-    """Over the paper's sweep (section VI.A) the rounding error stays small."""
+    """Over the paper's sweep (section VI.A) the carrier lands within half a divisor step."""
     for f in range(50, 501, 10):
         e = frequency_error(f)
-        assert abs(e.error_eq2) <= 0.5 / e.count_max + 1e-12
-        assert abs(e.error_eq2) < 0.005, (f, e)
+        assert abs(e.error_carrier) <= 0.5 / e.count_max * 1.01 + 1e-12, (f, e)
+        assert abs(e.error_carrier) < 0.005, (f, e)
+        for d in (e.count_max - 1, e.count_max + 1):   # no neighbour is nearer
+            assert abs(e.f_carrier_hz - f) <= abs(carrier_hz(d) - f)
         # the pins' carrier is 1024/1023 of eq. 2's
         assert e.f_carrier_hz == pytest.approx(e.f_eq2_hz * 1024 / 1023)
 

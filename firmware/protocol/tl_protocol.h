@@ -167,34 +167,36 @@
 #define TLP_P_LINK_TIMEOUT_MS 65u
 #define TLP_P_BAUD_DIV 66u
 
-typedef struct { uint8_t id; uint8_t global; int32_t min; int32_t max; int32_t dflt; } tlp_param_info_t;
+#define TLP_AXIS_COUNT 2u
+/* dflt[axis]: a global parameter's default is dflt[0] */
+typedef struct { uint8_t id; uint8_t global; int32_t min; int32_t max; int32_t dflt[TLP_AXIS_COUNT]; } tlp_param_info_t;
 #define TLP_PARAM_COUNT 25u
 static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {
-    {0u, 0u, 0L, 3L, 1L},  /* LAW */
-    {1u, 0u, 0L, 2147483647L, 17132L},  /* KP_Q16 */
-    {2u, 0u, 0L, 2147483647L, 0L},  /* KD_Q16 */
-    {3u, 0u, 0L, 2147483647L, 0L},  /* KI_Q16 */
-    {4u, 0u, 0L, 100000000L, 820000L},  /* KP_UNM_RAD */
-    {5u, 0u, 0L, 100000000L, 0L},  /* KD_UNMS_RAD */
-    {6u, 0u, 0L, 100000000L, 0L},  /* KI_UNM_RADS */
-    {7u, 0u, 1L, 1000000L, 2400L},  /* TAU_MAX_MNM */
-    {8u, 0u, 1L, 1000000L, 8400L},  /* COUNTS_PER_REV */
-    {9u, 0u, 1L, 1000000L, 4000L},  /* PITCH_UM */
-    {10u, 0u, 0L, 1023L, 1023L},  /* CMD_LIMIT */
-    {11u, 0u, 0L, 1023L, 0L},  /* PW0 */
-    {12u, 0u, 0L, 1023L, 1023L},  /* PWMAX */
-    {13u, 0u, 1L, 65535L, 109L},  /* FDIV */
-    {14u, 0u, 0L, 2147483647L, 32768L},  /* DEADBAND_Q16 */
-    {15u, 0u, 1L, 2147483647L, 16800L},  /* FOLLOW_LIMIT */
-    {16u, 0u, (-2147483647L), 2147483647L, (-1000000L)},  /* SOFT_MIN */
-    {17u, 0u, (-2147483647L), 2147483647L, 1000000L},  /* SOFT_MAX */
-    {18u, 0u, 1L, 10000000L, 8400L},  /* VMAX */
-    {19u, 0u, 1L, 100000000L, 16800L},  /* AMAX */
-    {20u, 0u, 0L, 1L, 1L},  /* VEL_MODE */
-    {21u, 0u, 0L, 1L, 1L},  /* BRAKE */
-    {64u, 1u, 200L, 25000L, 25000L},  /* PERIOD_US */
-    {65u, 1u, 10L, 60000L, 500L},  /* LINK_TIMEOUT_MS */
-    {66u, 1u, 15L, 65535L, 433L},  /* BAUD_DIV */
+    {0u, 0u, 0L, 3L, {1L, 1L}},  /* LAW */
+    {1u, 0u, 0L, 2147483647L, {17134L, 23145L}},  /* KP_Q16 */
+    {2u, 0u, 0L, 2147483647L, {0L, 0L}},  /* KD_Q16 */
+    {3u, 0u, 0L, 2147483647L, {0L, 0L}},  /* KI_Q16 */
+    {4u, 0u, 0L, 100000000L, {820000L, 960000L}},  /* KP_UNM_RAD */
+    {5u, 0u, 0L, 100000000L, {0L, 0L}},  /* KD_UNMS_RAD */
+    {6u, 0u, 0L, 100000000L, {0L, 0L}},  /* KI_UNM_RADS */
+    {7u, 0u, 1L, 1000000L, {2400L, 2080L}},  /* TAU_MAX_MNM */
+    {8u, 0u, 1L, 1000000L, {8400L, 8400L}},  /* COUNTS_PER_REV */
+    {9u, 0u, 1L, 1000000L, {4000L, 4000L}},  /* PITCH_UM */
+    {10u, 0u, 0L, 1023L, {1023L, 1023L}},  /* CMD_LIMIT */
+    {11u, 0u, 0L, 1023L, {0L, 0L}},  /* PW0 */
+    {12u, 0u, 0L, 1023L, {1023L, 1023L}},  /* PWMAX */
+    {13u, 0u, 1L, 65535L, {109L, 244L}},  /* FDIV */
+    {14u, 0u, 0L, 2147483647L, {32768L, 32768L}},  /* DEADBAND_Q16 */
+    {15u, 0u, 1L, 2147483647L, {16800L, 16800L}},  /* FOLLOW_LIMIT */
+    {16u, 0u, (-2147483647L), 2147483647L, {(-1000000L), (-1000000L)}},  /* SOFT_MIN */
+    {17u, 0u, (-2147483647L), 2147483647L, {1000000L, 1000000L}},  /* SOFT_MAX */
+    {18u, 0u, 1L, 10000000L, {8400L, 8400L}},  /* VMAX */
+    {19u, 0u, 1L, 100000000L, {16800L, 16800L}},  /* AMAX */
+    {20u, 0u, 0L, 1L, {1L, 1L}},  /* VEL_MODE */
+    {21u, 0u, 0L, 1L, {1L, 1L}},  /* BRAKE */
+    {64u, 1u, 200L, 25000L, {25000L, 25000L}},  /* PERIOD_US */
+    {65u, 1u, 10L, 60000L, {500L, 500L}},  /* LINK_TIMEOUT_MS */
+    {66u, 1u, 15L, 65535L, {433L, 433L}},  /* BAUD_DIV */
 };
 
 #endif

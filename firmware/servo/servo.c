@@ -69,7 +69,7 @@ void tl_servo_init(tl_servo_t *s)
 {
     s->clk_hz = hal_clk_hz();
     for (uint32_t k = 0; k < TLP_PARAM_COUNT; k++)
-        s->g[k] = TLP_PARAM_INFO[k].dflt;
+        s->g[k] = TLP_PARAM_INFO[k].dflt[0];
 #ifdef TL_DEFAULT_PERIOD_US
     s->g[tl_param_index(TLP_P_PERIOD_US)] = TL_DEFAULT_PERIOD_US;
 #endif
@@ -91,15 +91,11 @@ void tl_servo_init(tl_servo_t *s)
     s->jitter_cycles_max = 0;
     for (uint32_t i = 0; i < TL_AXES; i++) {
         tl_axis_t *a = &s->ax[i];
+        /* Per-axis defaults from the protocol definition, which takes them from
+           torqueloop/spec/system.toml: the paper's Table 1 P gains, tau_max and
+           carrier of this axis's motor. */
         for (uint32_t k = 0; k < TLP_PARAM_COUNT; k++)
-            a->p[k] = TLP_PARAM_INFO[k].dflt;
-        /* Table 1 P gains of the paper (axis x 0.82, axis z 0.96 N m/rad, tau_max 2.4 / 2.08 N m). */
-        if (i == 1u) {
-            a->p[tl_param_index(TLP_P_TAU_MAX_MNM)] = 2080;
-            a->p[tl_param_index(TLP_P_KP_Q16)] = tl_gain_raw_from_phys(960000, 2080, 8400);
-        } else {
-            a->p[tl_param_index(TLP_P_KP_Q16)] = tl_gain_raw_from_phys(820000, 2400, 8400);
-        }
+            a->p[k] = TLP_PARAM_INFO[k].dflt[i];
         tl_enc_sample_t e;
         hal_enc_read(i, &e);
         a->pos = e.pos;

@@ -12,7 +12,7 @@
 #include "control.h"
 #include "tl_link.h"
 
-#define TL_AXES 2u
+#define TL_AXES TLP_AXIS_COUNT   /* the protocol's axis count (torqueloop/spec/system.toml) */
 
 typedef struct {
     int32_t p[TLP_PARAM_COUNT];   /* raw parameter values, indexed like TLP_PARAM_INFO */

@@ -281,7 +281,7 @@ static void test_servo_safety(void)
     CHECK(hal_fake.irq_depth == 0, "critical sections balanced");
 
     /* a new link rate is handed to main.c, which applies it once the reply has gone out */
-    CHECK(sv.baud_div_pending == 0u && (int32_t)hal_fake.baud_div == TLP_PARAM_INFO[tl_param_index(TLP_P_BAUD_DIV)].dflt,
+    CHECK(sv.baud_div_pending == 0u && (int32_t)hal_fake.baud_div == TLP_PARAM_INFO[tl_param_index(TLP_P_BAUD_DIV)].dflt[0],
           "default baud divisor applied at init");
     CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_BAUD_DIV, 5207) == TLP_ST_OK && sv.baud_div_pending == 5207u,
           "9600 baud pending");

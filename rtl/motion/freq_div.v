@@ -4,9 +4,11 @@
 // Makes a one-clock enable `tick` every `div` clocks.  pwm_torque advances
 // its period counter on each tick, so with div = Count_max the tick runs at
 // f_pwm = f_motor * 2^PWM_BITS (eq. 2) and the PWM carrier at f_motor.
-// Count_max = round(T_pwm / T_clk) (eq. 3-4) is worked out by firmware or by
-// torqueloop/models/freq_div.py: count_max(); the reset value comes from
-// DEFAULT_MOTOR_HZ, so the bridge gets the paper's 450 Hz without firmware.
+// Count_max (eq. 3-4) is worked out once, by torqueloop/spec/pwm.py
+// (divider_for: the divisor whose carrier is nearest the wanted frequency),
+// for the firmware, the host and the reset value: DEFAULT_DIV is the
+// register map's FDIV reset (`TL_AXIS_FDIV_DIV_RESET, the paper's 450 Hz), so
+// the bridge gets the paper's carrier without firmware.
 //
 // The divisor is a run-time register because the characterisation flow
 // sweeps the frequency (paper section II.B, steps 1-5) and firmware picks
@@ -19,10 +21,8 @@
 `default_nettype none
 
 module freq_div #(
-    parameter integer CLK_HZ           = 50_000_000,  // system clock, Hz
-    parameter integer PWM_BITS         = 10,          // gamma = 2^PWM_BITS ticks per PWM step (eq. 2)
     parameter integer DIV_BITS         = 16,          // divisor register width
-    parameter integer DEFAULT_MOTOR_HZ = 450          // carrier after reset, Hz (paper: motor 1 optimum)
+    parameter integer DEFAULT_DIV      = 109          // divisor after reset, 1 .. 2^DIV_BITS - 1 (109: 448 Hz)
 ) (
     input  wire                clk,
     input  wire                rst,      // synchronous, active high: divisor back to the default
@@ -32,13 +32,6 @@ module freq_div #(
     output reg                 tick      // one-clock pulse every max(div, 1) clocks
 );
 
-    // Count_max of eq. (4) for the default frequency, rounded half up and
-    // clipped to the register: round(CLK_HZ / (DEFAULT_MOTOR_HZ * 2^PWM_BITS)).
-    localparam integer F_PWM_HZ    = DEFAULT_MOTOR_HZ * (2 ** PWM_BITS);
-    localparam integer DIV_ROUNDED = (CLK_HZ + F_PWM_HZ / 2) / F_PWM_HZ;
-    localparam integer DIV_MAX     = (2 ** DIV_BITS) - 1;
-    localparam integer DEFAULT_DIV = (DIV_ROUNDED > DIV_MAX) ? DIV_MAX :
-                                     (DIV_ROUNDED < 1)       ? 1       : DIV_ROUNDED;
     localparam [DIV_BITS-1:0] DEFAULT_DIV_VEC = DEFAULT_DIV[DIV_BITS-1:0];
 
     reg  [DIV_BITS-1:0] div_q;

@@ -8,10 +8,8 @@ use ieee.numeric_std.all;
 
 entity freq_div is
     generic (
-        CLK_HZ           : positive := 50_000_000;  -- system clock, Hz
-        PWM_BITS         : positive := 10;          -- gamma = 2^PWM_BITS ticks per PWM step (eq. 2)
         DIV_BITS         : positive := 16;          -- divisor register width
-        DEFAULT_MOTOR_HZ : positive := 450          -- carrier after reset, Hz (paper: motor 1 optimum)
+        DEFAULT_DIV      : positive := 109          -- divisor after reset, 1 .. 2^DIV_BITS - 1 (109: 448 Hz)
     );
     port (
         clk    : in  std_logic;
@@ -24,22 +22,7 @@ entity freq_div is
 end entity freq_div;
 
 architecture rtl of freq_div is
-    -- Count_max of eq. (4) for the default frequency, rounded half up and
-    -- clipped to the register range [1, 2^DIV_BITS - 1].
-    function default_div return natural is
-        constant F_PWM_HZ    : natural := DEFAULT_MOTOR_HZ * (2 ** PWM_BITS);
-        constant DIV_ROUNDED : natural := (CLK_HZ + F_PWM_HZ / 2) / F_PWM_HZ;
-        constant DIV_MAX     : natural := (2 ** DIV_BITS) - 1;
-    begin
-        if DIV_ROUNDED > DIV_MAX then
-            return DIV_MAX;
-        elsif DIV_ROUNDED < 1 then
-            return 1;
-        end if;
-        return DIV_ROUNDED;
-    end function;
-
-    constant DEFAULT_DIV_VEC : unsigned(DIV_BITS - 1 downto 0) := to_unsigned(default_div, DIV_BITS);
+    constant DEFAULT_DIV_VEC : unsigned(DIV_BITS - 1 downto 0) := to_unsigned(DEFAULT_DIV, DIV_BITS);
 
     signal div_q   : unsigned(DIV_BITS - 1 downto 0);
     signal cnt     : unsigned(DIV_BITS - 1 downto 0);   -- clocks since the last tick, 0 .. div-1

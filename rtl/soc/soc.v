@@ -20,7 +20,6 @@ module soc #(
     parameter         ROM_INIT         = "",
     parameter [31:0]  BUILD_ID         = 32'd0,
     parameter integer CLK_HZ           = `TL_CLK_HZ,
-    parameter integer DEFAULT_MOTOR_HZ = 450,
     parameter [31:0]  HART_ID          = 32'd0
 ) (
     input  wire        clk,
@@ -74,7 +73,7 @@ module soc #(
 
     soc_fabric #(
         .RAM_BYTES(RAM_BYTES), .RAM_INIT(RAM_INIT), .ROM_INIT(ROM_INIT), .BUILD_ID(BUILD_ID),
-        .CLK_HZ(CLK_HZ), .DEFAULT_MOTOR_HZ(DEFAULT_MOTOR_HZ)
+        .CLK_HZ(CLK_HZ)
     ) u_fabric (
         .clk(clk), .rst(rst),
         .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),

@@ -11,10 +11,7 @@
 // Slave contract as in soc_ram.v.
 `default_nettype none
 
-module soc_axis #(
-    parameter integer CLK_HZ           = 50_000_000,
-    parameter integer DEFAULT_MOTOR_HZ = 450          // paper: motor 1 optimum (section VI)
-) (
+module soc_axis (
     input  wire        clk,
     input  wire        rst,
     input  wire        req,
@@ -100,7 +97,8 @@ module soc_axis #(
     /* verilator lint_on UNUSEDSIGNAL */
 
     freq_div #(
-        .CLK_HZ(CLK_HZ), .PWM_BITS(PWM_BITS), .DIV_BITS(DIV_BITS), .DEFAULT_MOTOR_HZ(DEFAULT_MOTOR_HZ)
+        .DIV_BITS(DIV_BITS),
+        .DEFAULT_DIV(`TL_AXIS_FDIV_RESET)   // the register map's FDIV reset (system.toml: 450 Hz); DIV is its only field
     ) u_freq_div (
         .clk(clk), .rst(rst),
         .div_we(wr && idx == `TL_AXIS_FDIV_IDX), .div_in(div_merged[DIV_BITS-1:0]),

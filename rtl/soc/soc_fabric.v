@@ -24,8 +24,7 @@ module soc_fabric #(
     parameter         RAM_INIT         = "",     // $readmemh image of the RAM
     parameter         ROM_INIT         = "",     // $readmemh image of the boot ROM
     parameter [31:0]  BUILD_ID         = 32'd0,
-    parameter integer CLK_HZ           = `TL_CLK_HZ,
-    parameter integer DEFAULT_MOTOR_HZ = 450
+    parameter integer CLK_HZ           = `TL_CLK_HZ
 ) (
     input  wire        clk,
     input  wire        rst,            // synchronous, active high
@@ -232,7 +231,7 @@ module soc_fabric #(
 
     wire [1:0] rpwm_raw, lpwm_raw, pwm_raw;
 
-    soc_axis #(.CLK_HZ(CLK_HZ), .DEFAULT_MOTOR_HZ(DEFAULT_MOTOR_HZ)) u_axis0 (
+    soc_axis u_axis0 (
         .clk(clk), .rst(rst), .req(req_axis0), .we(dbus_we), .be(dbus_be), .addr(p_addr),
         .wdata(dbus_wdata), .ack(ax0_ack), .err(ax0_err), .rdata(ax0_rdata),
         .safe(safe), .bridge_fault(bridge_fault_s[0]),
@@ -242,7 +241,7 @@ module soc_fabric #(
         .period_event(period_event[0]), .index_event(index_event[0]), .fault_event(fault_event[0])
     );
 
-    soc_axis #(.CLK_HZ(CLK_HZ), .DEFAULT_MOTOR_HZ(DEFAULT_MOTOR_HZ)) u_axis1 (
+    soc_axis u_axis1 (
         .clk(clk), .rst(rst), .req(req_axis1), .we(dbus_we), .be(dbus_be), .addr(p_addr),
         .wdata(dbus_wdata), .ack(ax1_ack), .err(ax1_err), .rdata(ax1_rdata),
         .safe(safe), .bridge_fault(bridge_fault_s[1]),

@@ -19,7 +19,8 @@ import numpy as np
 
 from sim_models import axis as ax
 from sim_models.bridge import Pins
-from torqueloop.sim.model_loop import TABLE1, LoopConfig, run_loop, step_metrics
+from torqueloop.sim.model_loop import TABLE1, LoopConfig, run_loop
+from torqueloop.spec.metrics import step_metrics
 from sim_models.params import load_params
 from sim_models.reference import simulate
 from sim_models.waveforms import pwm_schedule, run_fast
@@ -53,8 +54,8 @@ def main() -> int:
           f"{[a.events for a in plant.axes]}")
     for a, name in enumerate("xz"):
         m = step_metrics(r.t, r.x_meas[:, a], 6.28)
-        print(f"  axis {name}: rise {m['rise_s']:.3f} s, overshoot {m['overshoot_pct']:.1f} %, "
-              f"final error {m['final_error_rad']:+.4f} rad")
+        print(f"  axis {name}: rise {m.rise_time_s:.3f} s, overshoot {m.overshoot_pct:.1f} %, "
+              f"steady-state error {m.steady_state_error:+.4f} rad")
     # 2. open-loop PWM at fixed duty: cost of plain stepping, 10 s
     plant = TwoAxisPlant(p, seed=0)
     tick = 20e-9

@@ -15,8 +15,9 @@ from torqueloop.models.quad_decoder import (
     max_rejected_glitch_clocks,
     min_accepted_pulse_clocks,
 )
+from torqueloop.spec.system import SYSTEM
 
-CLK_HZ = 50e6
+CLK_HZ = float(SYSTEM.clk_hz)
 
 
 def main() -> int:

@@ -17,8 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from torqueloop.sim import cocotb_run, experiment, native
+from torqueloop.spec.system import SYSTEM
 
-CLK = 50_000_000
+CLK = SYSTEM.clk_hz
 
 
 def _line(name: str, r: experiment.RtlRun) -> None:

@@ -22,7 +22,6 @@ def _paper_like_config(tmp_path: Path):
     from torqueloop.characterize import (
         BenchConstants, Sweep, Thresholds, axis_config, build_config, characterize_motor, write_config,
     )
-    from torqueloop.characterize.config import default_divider
 
     bench = BenchConstants(0.025, 90.0, 12.0)
     axes = {}
@@ -33,7 +32,7 @@ def _paper_like_config(tmp_path: Path):
         d = np.arange(1.0, 100.0, 2.0)
         ds = Sweep("duty", name, bench, d, np.maximum(0.0, tau_max * (d - pw0) / (100 - pw0)), 0.02 * d,
                    freq_hz=f_opt)
-        axes[name] = axis_config(characterize_motor(fs, [ds]), divider=default_divider())
+        axes[name] = axis_config(characterize_motor(fs, [ds]))
     cfg = build_config(axes, Thresholds())
     write_config(tmp_path / "cfg.json", cfg)
     return cfg

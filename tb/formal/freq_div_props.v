@@ -22,8 +22,8 @@ module freq_div_props #(
     wire [DIV_BITS-1:0] div;
     wire                tick;
 
-    // 2 MHz clock, 64 ticks per period, 2 kHz default: Count_max = 15.6 -> 16, clipped to 15.
-    freq_div #(.CLK_HZ(2_000_000), .PWM_BITS(6), .DIV_BITS(DIV_BITS), .DEFAULT_MOTOR_HZ(2_000)) dut (
+    // the reset divisor is the register's largest value
+    freq_div #(.DIV_BITS(DIV_BITS), .DEFAULT_DIV(GAP_MAX)) dut (
         .clk(clk), .rst(rst), .div_we(div_we), .div_in(div_in), .div(div), .tick(tick)
     );
 

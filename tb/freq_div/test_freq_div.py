@@ -18,9 +18,7 @@ class TB:
 
     def __init__(self, dut) -> None:
         self.dut = dut
-        self.p = FreqDivParams(
-            clk_hz=int(dut.CLK_HZ.value), pwm_bits=int(dut.PWM_BITS.value),
-            div_bits=int(dut.DIV_BITS.value), default_motor_hz=int(dut.DEFAULT_MOTOR_HZ.value))
+        self.p = FreqDivParams(div_bits=int(dut.DIV_BITS.value), default_div=int(dut.DEFAULT_DIV.value))
         self.model = FreqDivModel(self.p)
         self.cycle = 0
         cocotb.start_soon(Clock(dut.clk, 20, unit="ns").start())
@@ -114,8 +112,8 @@ async def random_divisor_writes_follow_model(dut):
 
 PARAMS = {
     "default": {},
-    # Narrow register: the default Count_max (977 at 50 Hz) clips to 255.
-    "narrow": {"DIV_BITS": 8, "DEFAULT_MOTOR_HZ": 50},
+    # Narrow register: an 8-bit divisor, its largest value after reset.
+    "narrow": {"DIV_BITS": 8, "DEFAULT_DIV": 255},
 }
 
 

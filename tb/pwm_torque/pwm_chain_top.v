@@ -7,7 +7,7 @@ module pwm_chain_top #(
     parameter integer CLK_HZ           = 50_000_000,
     parameter integer PWM_BITS         = 6,
     parameter integer DIV_BITS         = 16,
-    parameter integer DEFAULT_MOTOR_HZ = 20_000
+    parameter integer DEFAULT_DIV      = 40
 ) (
     input  wire                clk,
     input  wire                rst,
@@ -29,8 +29,7 @@ module pwm_chain_top #(
     wire [PWM_BITS-1:0] duty_applied;
     /* verilator lint_on UNUSEDSIGNAL */
 
-    freq_div #(.CLK_HZ(CLK_HZ), .PWM_BITS(PWM_BITS), .DIV_BITS(DIV_BITS),
-               .DEFAULT_MOTOR_HZ(DEFAULT_MOTOR_HZ)) u_div (
+    freq_div #(.DIV_BITS(DIV_BITS), .DEFAULT_DIV(DEFAULT_DIV)) u_div (
         .clk(clk), .rst(rst), .div_we(div_we), .div_in(div_in), .div(div), .tick(tick)
     );
 

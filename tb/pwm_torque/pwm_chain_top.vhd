@@ -7,7 +7,7 @@ entity pwm_chain_top is
         CLK_HZ           : positive := 50_000_000;
         PWM_BITS         : positive := 6;
         DIV_BITS         : positive := 16;
-        DEFAULT_MOTOR_HZ : positive := 20_000
+        DEFAULT_DIV      : positive := 40
     );
     port (
         clk          : in  std_logic;
@@ -29,8 +29,7 @@ architecture rtl of pwm_chain_top is
     signal tick : std_logic;
 begin
     u_div : entity work.freq_div
-        generic map (CLK_HZ => CLK_HZ, PWM_BITS => PWM_BITS, DIV_BITS => DIV_BITS,
-                     DEFAULT_MOTOR_HZ => DEFAULT_MOTOR_HZ)
+        generic map (DIV_BITS => DIV_BITS, DEFAULT_DIV => DEFAULT_DIV)
         port map (clk => clk, rst => rst, div_we => div_we, div_in => div_in, div => div, tick => tick);
 
     u_pwm : entity work.pwm_torque

@@ -316,7 +316,7 @@ async def chain_carrier_matches_ref(dut):
     width on RPWM, timed in ns, equal torqueloop.models.freq_div.carrier_hz() and
     map_duty() for the reset default (eq. 4 Count_max) and written divisors."""
     p = FreqDivParams(clk_hz=int(dut.CLK_HZ.value), pwm_bits=int(dut.PWM_BITS.value),
-                      div_bits=int(dut.DIV_BITS.value), default_motor_hz=int(dut.DEFAULT_MOTOR_HZ.value))
+                      div_bits=int(dut.DIV_BITS.value), default_div=int(dut.DEFAULT_DIV.value))
     n, m = p.pwm_bits, full_scale(p.pwm_bits)
     clk_ns = 1e9 / p.clk_hz
     cocotb.start_soon(Clock(dut.clk, clk_ns, unit="ns").start())
@@ -389,7 +389,7 @@ CHAIN_DIR = REPO_ROOT / "tb" / "pwm_torque"
 def test_pwm_torque_chain(sim):
     """freq_div + pwm_torque together (Icarus and GHDL: a cheap build each)."""
     run("pwm_torque", sim, "test_pwm_torque", toplevel="pwm_chain_top",
-        parameters={"PWM_BITS": 6, "DEFAULT_MOTOR_HZ": 20_000},
+        parameters={"PWM_BITS": 6, "DEFAULT_DIV": count_max(20_000, pwm_bits=6)},
         extra_verilog=[REPO_ROOT / "rtl" / "motion" / "freq_div.v", CHAIN_DIR / "pwm_chain_top.v"],
         extra_vhdl=[REPO_ROOT / "rtl" / "motion" / "freq_div.vhd", CHAIN_DIR / "pwm_chain_top.vhd"],
         testcase="chain_carrier_matches_ref")

@@ -50,8 +50,8 @@ def test_rtl_loop_verilator_native() -> None:
     assert cmp["rmse_rad_s"] <= 0.05 * 5.3, cmp      # 5 % of axis x's peak speed
     x_rtl = cmp["per_axis"]["x"]["rtl"]
     x_model = cmp["per_axis"]["x"]["model"]
-    assert x_model["settling_s"] is not None, "the model itself did not settle: test set-up wrong"
-    assert x_rtl["settling_s"] is not None, x_rtl
+    assert x_model["settling_time_s"] is not None, "the model itself did not settle: test set-up wrong"
+    assert x_rtl["settling_time_s"] is not None, x_rtl
     assert abs(x_rtl["steady_state_error_counts"]) <= 0.02 * cfg.target_counts, x_rtl
     assert abs(x_rtl["steady_state_error_counts"] - x_model["steady_state_error_counts"]) <= 20, (x_rtl, x_model)
     # the plant really moved: the true screw angle follows the telemetry position

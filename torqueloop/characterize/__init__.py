@@ -3,25 +3,16 @@ frequency and dead zone of each motor out, as the build's configuration.
 
     data    - the sweep CSV format, reading/writing with validation
     method  - steps 2, 5, 6-7 and the loop back to step 5
-    config  - step 8: divider count (eq. 4), PW0 in counts, JSON file, load_config
+    config  - step 8: divider count (eq. 4), PW0 in counts (the file: torqueloop.spec.charconfig)
     plots   - Fig. 10 / Fig. 11 style figures
     cli     - the command (scripts/characterize.py)
 
 docs/characterization.md is the lab's guide.
 """
 
-from .config import (
-    CLK_HZ,
-    PWM_BITS,
-    AxisConfig,
-    Config,
-    ConfigError,
-    DividerModel,
-    axis_config,
-    build_config,
-    load_config,
-    write_config,
-)
+from torqueloop.spec.charconfig import AxisConfig, Config, ConfigError, load_config, write_config
+
+from .config import CLK_HZ, PWM_BITS, axis_config, build_config
 from .data import BenchConstants, DataError, Sweep, parse_sweep, read_sweep, write_sweep
 from .method import (
     Candidate,
@@ -36,7 +27,7 @@ from .method import (
 )
 
 __all__ = [
-    "CLK_HZ", "PWM_BITS", "AxisConfig", "Config", "ConfigError", "DividerModel",
+    "CLK_HZ", "PWM_BITS", "AxisConfig", "Config", "ConfigError",
     "axis_config", "build_config", "load_config", "write_config",
     "BenchConstants", "DataError", "Sweep", "parse_sweep", "read_sweep", "write_sweep",
     "Candidate", "Linearity", "MethodError", "MotorResult", "Thresholds",

@@ -34,7 +34,7 @@ module char_bench_top #(
     /* verilator lint_on UNUSEDSIGNAL */
 
     freq_div #(
-        .CLK_HZ(CLK_HZ), .PWM_BITS(PWM_BITS), .DIV_BITS(DIV_BITS)
+        .DIV_BITS(DIV_BITS)
     ) u_div (
         .clk(clk), .rst(rst), .div_we(div_we), .div_in(div_in), .div(div), .tick(tick)
     );

@@ -29,10 +29,10 @@ import sys
 from pathlib import Path
 from typing import Sequence
 
-from .config import (
-    CLK_HZ, PWM_BITS, ConfigError, axis_config, build_config, c_header, default_divider, load_config, register_writes,
-    verilog_header, write_config,
-)
+from torqueloop.spec.charconfig import ConfigError, load_config, register_writes, write_config
+from torqueloop.spec.pwm import carrier_hz, divider_for
+
+from .config import CLK_HZ, PWM_BITS, axis_config, build_config, c_header, verilog_header
 from .data import DataError, Sweep, read_sweep
 from .method import MethodError, MotorResult, Thresholds, characterize_motor, step5_candidates
 
@@ -101,7 +101,6 @@ def report(name: str, r: MotorResult) -> str:
 def cmd_run(args: argparse.Namespace) -> int:
     th = _thresholds(args.set)
     data_dir = Path(args.data_dir)
-    div = default_divider()
     results: dict[str, MotorResult] = {}
     worst = EXIT_OK
     for name, files in _axes(data_dir, args.axis).items():
@@ -125,11 +124,11 @@ def cmd_run(args: argparse.Namespace) -> int:
     if worst != EXIT_OK:
         print("no configuration written: not every axis passed", file=sys.stderr)
         return worst
-    axes = {n: axis_config(r, clk_hz=args.clk_hz, pwm_bits=args.pwm_bits, divider=div, base_dir=data_dir)
+    axes = {n: axis_config(r, clk_hz=args.clk_hz, pwm_bits=args.pwm_bits, base_dir=data_dir)
             for n, r in results.items()}
-    cfg = build_config(axes, th, clk_hz=args.clk_hz, pwm_bits=args.pwm_bits, divider=div)
+    cfg = build_config(axes, th, clk_hz=args.clk_hz, pwm_bits=args.pwm_bits)
     write_config(args.out, cfg)
-    load_config(args.out, divider=div)  # what we write must be what the readers accept
+    load_config(args.out)  # what we write must be what the readers accept
     for n, a in cfg.axes.items():
         print(f"[{n}] step 8: {a.pwm_freq_hz:.6g} Hz -> count_max {a.count_max} -> {a.achieved_hz:.6g} Hz "
               f"({a.freq_error_pct:+.3f} %), PW0 {a.pw0_counts} / PW_F {a.pw_max_counts} counts of {(1 << args.pwm_bits) - 1}")
@@ -158,11 +157,10 @@ def cmd_step5(args: argparse.Namespace) -> int:
     except (DataError, MethodError) as e:
         print(f"error: {e}", file=sys.stderr)
         return EXIT_ERROR
-    div = default_divider()
     print(f"tau_max = {s5.tau_max_nm:.4g} N m, target {s5.target_nm:.4g} N m: {s5.message}")
     for i, c in enumerate(s5.candidates, 1):
-        cm = div.count_max(c.freq_hz, args.clk_hz, args.pwm_bits)
-        ach = div.achieved_hz(cm, args.clk_hz, args.pwm_bits)
+        cm = divider_for(c.freq_hz, args.clk_hz, args.pwm_bits)
+        ach = carrier_hz(cm, args.clk_hz, args.pwm_bits)
         print(f"{i}. {c.freq_hz:.4f} Hz ({c.kind}); on the board: count_max {cm} gives {ach:.4f} Hz "
               f"- record the duty sweep there")
     return EXIT_OK

@@ -25,7 +25,10 @@ import numpy as np
 
 from torqueloop.flow.manifest import REPO_ROOT, core
 
-from .config import CLK_HZ, PWM_BITS, Config, pwm_full_scale
+from torqueloop.spec.charconfig import Config
+from torqueloop.spec.pwm import full_scale as pwm_full_scale
+
+from .config import CLK_HZ, PWM_BITS
 from .data import BenchConstants, Sweep, read_sweep, write_sweep
 from .method import MotorResult, Thresholds, characterize_motor
 

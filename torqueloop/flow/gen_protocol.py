@@ -14,6 +14,15 @@ def _ctype(t: str) -> str:
             "u32": "uint32_t", "i32": "int32_t"}[t]
 
 
+def _c_int(v: int) -> str:
+    return f"(-{-v}L)" if v < 0 else f"{v}L"
+
+
+def _axis_defaults(p: P.Param) -> tuple[int, ...]:
+    """One default per axis (a global parameter's repeated)."""
+    return p.defaults if len(p.defaults) == P.AXIS_COUNT else (p.default,) * P.AXIS_COUNT
+
+
 def _size(fields: tuple[tuple[str, str], ...]) -> int:
     return struct.calcsize("<" + "".join(P._FMT[t] for _, t in fields))
 
@@ -57,13 +66,16 @@ def c_header() -> str:
     L.append("#define TLP_GLOBAL_AXIS 0xFFu")
     for p in P.PARAMS.values():
         L.append(f"#define TLP_P_{p.name} {p.id}u")
-    L += ["", "typedef struct { uint8_t id; uint8_t global; int32_t min; int32_t max; int32_t dflt; } tlp_param_info_t;",
+    L += ["", f"#define TLP_AXIS_COUNT {P.AXIS_COUNT}u",
+          "/* dflt[axis]: a global parameter's default is dflt[0] */",
+          "typedef struct { uint8_t id; uint8_t global; int32_t min; int32_t max; int32_t dflt[TLP_AXIS_COUNT]; }"
+          " tlp_param_info_t;",
           f"#define TLP_PARAM_COUNT {len(P.PARAMS)}u",
           "static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {"]
     for p in P.PARAMS.values():
         mn = f"(-{-p.min}L)" if p.min < 0 else f"{p.min}L"
         L.append(f"    {{{p.id}u, {1 if p.scope == 'global' else 0}u, {mn}, {p.max}L, "
-                 f"{'(-%dL)' % -p.default if p.default < 0 else '%dL' % p.default}}},  /* {p.name} */")
+                 f"{{{', '.join(_c_int(d) for d in _axis_defaults(p))}}}}},  /* {p.name} */")
     L += ["};", "", "#endif", ""]
     return "\n".join(L)
 
@@ -115,9 +127,10 @@ def markdown() -> str:
           "head: " + ", ".join(f"`{n}:{t}`" for n, t in P.TELEMETRY_HEAD) + "; then for axis 0 and 1: "
           + ", ".join(f"`{n}:{t}`" for n, t in P.TELEMETRY_AXIS) + f" ({P.telemetry_payload_bytes()} bytes).",
           "velocity_q8 is counts/s x 256.", "",
-          "## Parameters", "", "| id | name | scope | min | max | default | meaning |", "|---|---|---|---|---|---|---|"]
+          "## Parameters", "", "| id | name | scope | min | max | default (x / z where they differ) | meaning |", "|---|---|---|---|---|---|---|"]
     for p in P.PARAMS.values():
-        L.append(f"| {p.id} | {p.name} | {p.scope} | {p.min} | {p.max} | {p.default} | {p.desc} |")
+        dflt = " / ".join(str(d) for d in p.defaults) if len(set(p.defaults)) > 1 else str(p.default)
+        L.append(f"| {p.id} | {p.name} | {p.scope} | {p.min} | {p.max} | {dflt} | {p.desc} |")
     L += ["", "Global parameters are addressed with axis 0xFF.", ""]
     return "\n".join(L)
 

@@ -19,13 +19,13 @@ Step figures (for a step from ``start`` to ``target``, in counts):
 from __future__ import annotations
 
 import csv
-import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
+from torqueloop.spec.metrics import StepMetrics, step_metrics
 from torqueloop.spec.units import Mechanics
 
 FIELDS = ("setpoint", "position", "error", "velocity_q8", "pwm_cmd", "faults", "enabled")
@@ -52,64 +52,32 @@ def to_capture(records: Sequence[dict]) -> Capture:
     return Capture(t, data)
 
 
-@dataclass(frozen=True)
-class StepFigures:
-    axis: int
-    start_counts: float
-    target_counts: float
-    overshoot_pct: float
-    rise_time_s: float
-    settling_time_s: float
-    steady_state_error_counts: float
-    rmse_counts: float
-    peak_counts: float
-    band_counts: float
-
-    def in_unit(self, mech: Mechanics, unit: str) -> dict[str, float | str | int]:
-        d: dict[str, float | str | int] = asdict(self)
-        for k in ("start_counts", "target_counts", "steady_state_error_counts", "rmse_counts",
-                  "peak_counts", "band_counts"):
-            d[k.replace("counts", unit)] = mech.from_counts(float(getattr(self, k)), unit)
-        d["unit"] = unit
-        return d
-
-
-def _crossing(t: np.ndarray, progress: np.ndarray, level: float) -> float:
-    idx = np.nonzero(progress >= level)[0]
-    if not idx.size:
-        return math.nan
-    i = int(idx[0])
-    if i == 0:
-        return float(t[0])
-    p0, p1 = progress[i - 1], progress[i]
-    return float(t[i - 1] + (level - p0) / (p1 - p0) * (t[i] - t[i - 1]))
+#: the position fields of a StepMetrics, converted by :func:`in_unit`
+_POSITIONS = ("start", "target", "steady_state_error", "final_error", "rmse", "peak", "band")
 
 
 def step_figures(t: np.ndarray, x: np.ndarray, sp: np.ndarray, start: float, target: float,
-                 axis: int = 0, band_frac: float = 0.02, band_min_counts: float = 2.0) -> StepFigures:
-    """Figures of one axis's step (t from the step command, x and sp in counts)."""
-    step = target - start
-    if step == 0:
-        raise ValueError("a step of zero counts has no response to measure")
-    s = math.copysign(1.0, step)
-    progress = (x - start) / step
-    over = float(np.max((x - target) * s))
-    band = max(band_frac * abs(step), band_min_counts)
-    outside = np.nonzero(np.abs(x - target) > band)[0]
-    if not outside.size:
-        settle = float(t[0])
-    elif outside[-1] == len(x) - 1:
-        settle = math.nan
-    else:
-        settle = float(t[outside[-1] + 1])
-    e = sp - x
-    dur = float(t[-1] - t[0])
-    rmse = math.sqrt(float(np.trapezoid(e * e, t)) / dur) if dur > 0 else float(abs(e[0]))
-    tail = x[-max(1, len(x) // 10):]
-    return StepFigures(axis, float(start), float(target), max(0.0, over) / abs(step) * 100,
-                       _crossing(t, progress, 0.9) - _crossing(t, progress, 0.1), settle,
-                       float(target - tail.mean()), rmse,
-                       float(x[np.argmax((x - start) * s)]), band)
+                 band_frac: float = 0.02, band_min_counts: float = 2.0) -> StepMetrics:
+    """Figures of one axis's step (t from the step command, x and sp in
+    counts), by the project's one definition (torqueloop.spec.metrics); the
+    settling band is at least ``band_min_counts`` (the encoder's resolution)."""
+    return step_metrics(t, x, target, start, sp, band_frac, band_min_counts)
+
+
+def in_unit(m: StepMetrics, mech: Mechanics, unit: str) -> dict[str, float | str | None]:
+    """The figures with every position both in counts (``<name>_counts``) and
+    in ``unit`` (``<name>_<unit>``); times and percentages as they are."""
+    d: dict[str, float | str | None] = {k: v for k, v in m.as_dict().items() if k not in _POSITIONS}
+    for k in _POSITIONS:
+        d[f"{k}_counts"] = float(getattr(m, k))
+        if unit != "counts":
+            d[f"{k}_{unit}"] = mech.from_counts(float(getattr(m, k)), unit)
+    d["unit"] = unit
+    return d
+
+
+def fmt_s(v: float | None) -> str:
+    return "not settled" if v is None else f"{v:.3f} s"
 
 
 def write_csv(path: Path, cap: Capture, mech: Mechanics, unit: str = "rad") -> None:
@@ -148,7 +116,7 @@ def read_csv(path: Path) -> Capture:
 
 
 def plot(path: Path | None, cap: Capture, mech: Mechanics, unit: str = "rad",
-         axes: Sequence[int] = (0, 1), title: str = "", figures: Sequence[StepFigures] = ()):
+         axes: Sequence[int] = (0, 1), title: str = "", figures: Sequence[tuple[int, StepMetrics]] = ()):
     """Position and set-point, error, velocity and PWM command against time.
     Saved to ``path`` (PNG) if given; returns the figure."""
     import matplotlib
@@ -175,9 +143,9 @@ def plot(path: Path | None, cap: Capture, mech: Mechanics, unit: str = "rad",
         ax.grid(True, alpha=0.3)
         ax.legend(loc="best", fontsize=8)
     text = []
-    for f in figures:
-        text.append(f"axis {f.axis}: overshoot {f.overshoot_pct:.1f} %, rise {f.rise_time_s:.3f} s, "
-                    f"settling {f.settling_time_s:.3f} s, RMSE {mech.from_counts(f.rmse_counts, unit):.4g} {unit}")
+    for axis, f in figures:
+        text.append(f"axis {axis}: overshoot {f.overshoot_pct:.1f} %, rise {fmt_s(f.rise_time_s)}, "
+                    f"settling {fmt_s(f.settling_time_s)}, RMSE {mech.from_counts(f.rmse, unit):.4g} {unit}")
     fig.suptitle("\n".join([title] + text) if title or text else "", fontsize=9)
     fig.tight_layout()
     if path is not None:

@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from torqueloop.spec import protocol as P
+from torqueloop.spec.charconfig import ConfigError, load_config
 
 SCHEMA = "torqueloop-host-config"
 SCHEMA_VERSION = 1
@@ -129,9 +130,7 @@ def parse(doc: Any, where: str = "config") -> HostConfig:
 
 
 def from_characterization(path: Path) -> HostConfig:
-    """The characterisation flow's file through its own validating reader."""
-    from torqueloop.characterize.config import ConfigError, load_config
-
+    """The characterisation flow's file through its one validating reader."""
     try:
         c = load_config(path)
     except ConfigError as e:

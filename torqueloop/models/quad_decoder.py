@@ -20,14 +20,15 @@ from __future__ import annotations
 import math
 import random
 from dataclasses import dataclass, field
-from typing import Iterator
+
+from torqueloop.spec.system import SYSTEM
 
 #: counts per motor-shaft revolution (16 lines, 4x decoding)
-COUNTS_PER_MOTOR_REV = 64
+COUNTS_PER_MOTOR_REV = SYSTEM.counts_per_motor_rev
 #: gearbox ratio G of the paper
-GEAR_RATIO = 131.25
+GEAR_RATIO = SYSTEM.gear_ratio
 #: counts per output (ball-screw) revolution
-COUNTS_PER_SCREW_REV = round(COUNTS_PER_MOTOR_REV * GEAR_RATIO)  # 8400
+COUNTS_PER_SCREW_REV = SYSTEM.counts_per_turn  # 8400
 
 
 @dataclass(frozen=True)

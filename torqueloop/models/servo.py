@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from torqueloop.spec.system import SYSTEM
 
 INT64_MAX = (1 << 63) - 1
 
@@ -40,7 +41,7 @@ class AxisParams:
     kd_q16: int = 0
     ki_q16: int = 0
     deadband_q16: int = 0x8000
-    cmd_limit: int = 1023
+    cmd_limit: int = SYSTEM.pwm_full
     vel_mode: int = 1
     vmax_cps: int = 8400
     amax_cps2: int = 16800
@@ -50,7 +51,7 @@ class AxisParams:
 class Axis:
     p: AxisParams
     period_us: int
-    clk_hz: int = 50_000_000
+    clk_hz: int = SYSTEM.clk_hz
     sp_q16: int = 0
     target_q16: int = 0
     prof_v_q16: int = 0

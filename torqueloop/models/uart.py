@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass, field
+from torqueloop.spec.system import SYSTEM
 
 #: receiver needs at least 16 clocks per bit (three distinct sample points)
 MIN_DIV = 15
@@ -26,7 +27,7 @@ MIN_DIV = 15
 class UartParams:
     """Build-time parameters of rtl/uart/uart.v."""
 
-    clk_hz: int = 50_000_000
+    clk_hz: int = SYSTEM.clk_hz
     default_baud: int = 115_200
     fifo_depth: int = 16
     rts_slack: int = 4

@@ -28,22 +28,24 @@ from torqueloop.flow import firmware
 from torqueloop.spec import protocol as tp
 from torqueloop.flow.manifest import REPO_ROOT
 from torqueloop.sim.link import Link
-from torqueloop.sim.pins import CLK_HZ, PlantOnPins
+from torqueloop.sim.pins import PlantOnPins
+from torqueloop.spec.pwm import carrier_hz, divider_for
+from torqueloop.spec.system import SYSTEM
 
 LAWS = {"P": 1, "PD": 2, "PID": 3}
-COUNTS_PER_REV = 8400
-#: the paper's tau_max (twice tau_max/2 of sec. VI.A), milli N m: the
-#: torque at full PWM command, as in torqueloop.sim.model_loop
-TAU_MAX_MNM = (2400, 2080)
+CLK_HZ = SYSTEM.clk_hz
+COUNTS_PER_REV = SYSTEM.counts_per_turn
+#: the paper's tau_max (twice tau_max/2 of sec. VI.A), milli N m: the torque at full PWM command
+TAU_MAX_MNM = tuple(a.tau_max_mnm for a in SYSTEM.axes)
 
 
 @dataclass(frozen=True)
 class ExperimentConfig:
     law: str = "P"
-    t_end_s: float = 40.0               # the paper's T
-    step_rad: float = 6.28              # one screw turn, 4 mm (sec. VI.B)
-    period_us: int = 25_000             # control period: the paper's 25 ms speed sample period
-    pwm_hz: tuple[float, float] = (450.0, 200.0)   # the paper's optimal carriers (sec. VI.A)
+    t_end_s: float = SYSTEM.t_end_s     # the paper's T
+    step_rad: float = SYSTEM.step_rad   # one screw turn, 4 mm (sec. VI.B)
+    period_us: int = SYSTEM.period_us   # control period: the paper's 25 ms speed sample period
+    pwm_hz: tuple[float, ...] = SYSTEM.pwm_hz   # the paper's optimal carriers (sec. VI.A)
     record_s: float = 0.002             # grid of the plant trace (plots)
     heartbeat_s: float = 0.25           # STATUS poll, as the host tool keeps the link alive
     brake: bool = True                  # off-phase: brake (slow decay), as sim_models' default
@@ -52,13 +54,13 @@ class ExperimentConfig:
     progress: bool = True
 
     @property
-    def fdiv(self) -> tuple[int, int]:
-        """Count_max of eq. (3)-(4): f = 50 MHz / (FDIV * 1023)."""
-        return tuple(max(1, round(CLK_HZ / (1023 * f))) for f in self.pwm_hz)  # type: ignore[return-value]
+    def fdiv(self) -> tuple[int, ...]:
+        """Count_max of eq. (4) for each carrier (torqueloop.spec.pwm)."""
+        return tuple(divider_for(f) for f in self.pwm_hz)
 
     @property
-    def pwm_hz_actual(self) -> tuple[float, float]:
-        return tuple(CLK_HZ / (1023 * d) for d in self.fdiv)  # type: ignore[return-value]
+    def pwm_hz_actual(self) -> tuple[float, ...]:
+        return tuple(carrier_hz(d) for d in self.fdiv)
 
     @property
     def target_counts(self) -> int:
@@ -116,8 +118,8 @@ def configure(link: Link, cfg: ExperimentConfig) -> None:
         link.set_param(ax, "KI_UNM_RADS", round(g.ki * 1e6))
         link.set_param(ax, "FDIV", cfg.fdiv[ax])
         link.set_param(ax, "PW0", 0)
-        link.set_param(ax, "PWMAX", 1023)
-        link.set_param(ax, "CMD_LIMIT", 1023)
+        link.set_param(ax, "PWMAX", SYSTEM.pwm_full)
+        link.set_param(ax, "CMD_LIMIT", SYSTEM.pwm_full)
         link.set_param(ax, "VEL_MODE", 0)          # the paper's filtered Euler difference
         link.set_param(ax, "BRAKE", int(cfg.brake))
         link.set_param(ax, "FOLLOW_LIMIT", 10 * COUNTS_PER_REV)   # axis z overshoots by most of a turn
@@ -255,27 +257,26 @@ def run_model(cfg: ExperimentConfig) -> ModelRun:
                     drive="brake" if cfg.brake else "coast", pwm_hz=cfg.pwm_hz_actual, gains=TABLE1[cfg.law])
     params = load_params()
     r = run_loop(lc, params, TwoAxisPlant(params, seed=0))
-    # the model's duty is the command / 1023 (control.duty_from_torque); sample k's
-    # command is the one computed at k (applied from the next period start)
-    cmd = np.full_like(r.duty, np.nan)
-    cmd[:-1] = np.round(r.duty[1:] * 1023)
-    traj = Trajectory(r.t, r.x_meas, r.v_est, cmd, target_rad - r.x_meas, r.x_true)
+    # sample k's command is the one computed at k (applied from the next period start)
+    traj = Trajectory(r.t, r.x_meas, r.v_est, r.cmd, target_rad - r.x_meas, r.x_true)
     return ModelRun(traj, r.wall_s, asdict(lc) | {"gains": [asdict(g) for g in lc.gains]})
 
 
 def run_model_fw_law(cfg: ExperimentConfig) -> ModelRun:
     """A second pure model: the same plant with the *firmware's* law in Python
     (torqueloop/models/servo.py, the oracle of firmware/servo/control.c: fixed
-    point, anti-windup, deadband) and the hardware's PWM (period FDIV x 1023
-    clocks, duty |cmd| x FDIV clocks, loaded at the next period start).  No
-    RTL, CPU or pins: the difference between this and torqueloop.sim.model_loop is
-    the law's implementation; between this and the RTL, the rest."""
-    from sim_models.bridge import Pins
+    point, anti-windup, deadband) and the hardware's PWM
+    (torqueloop.models.pwm_schedule).  No RTL, CPU or pins: the difference
+    between this and torqueloop.sim.model_loop is the law's implementation;
+    between this and the RTL, the rest."""
+    from torqueloop.models.pwm_schedule import PwmChannel, PwmSetting, run_until
     from torqueloop.models.servo import Axis, AxisParams
+    from torqueloop.spec.bridge import BRAKE, COAST
     params = load_params()
     plant = TwoAxisPlant(params, seed=0)
     period = cfg.period_us * CLK_HZ // 1_000_000
-    pwm_period = [d * 1023 for d in cfg.fdiv]
+    safe = BRAKE if cfg.brake else COAST
+    channels = [PwmChannel(PwmSetting(div=d, safe=safe)) for d in cfg.fdiv]
     axes = []
     for ax in (0, 1):
         g = TABLE1[cfg.law][ax]
@@ -285,39 +286,18 @@ def run_model_fw_law(cfg: ExperimentConfig) -> ModelRun:
                  cfg.period_us)
         a.reset(0, 0)
         axes.append(a)
-    brake = Pins(0, 0, 1, 1) if cfg.brake else Pins(0, 0, 0, 0)
     n = int(round(cfg.t_end_s * 1e6 / cfg.period_us)) + 1
     out = {k: np.zeros((n, 2)) for k in ("pos", "vel", "cmd", "err", "true")}
-    pending, active = [0, 0], [0, 0]
-    next_start, next_off = [0, 0], [None, None]
-    pins = [brake, brake]
-    now = 0
     w0 = time.monotonic()
     for k in range(n):
         ts = k * period
-        while True:
-            evs = [t for t in next_start + next_off if t is not None and t <= ts]
-            nxt = min(evs) if evs else ts
-            if nxt > now:
-                plant.advance((nxt - now) / CLK_HZ, pins)
-                now = nxt
-            if not evs:
-                break
-            for a in (0, 1):
-                if next_off[a] == now:
-                    next_off[a], pins[a] = None, brake
-                if next_start[a] == now:
-                    active[a] = pending[a]
-                    on = abs(active[a]) * cfg.fdiv[a]
-                    pins[a] = brake if on == 0 else (Pins(1, 0, 1, 1) if active[a] > 0 else Pins(0, 1, 1, 1))
-                    next_off[a] = now + on if 0 < on < pwm_period[a] else None
-                    next_start[a] = now + pwm_period[a]
+        run_until(plant, channels, (k - 1) * period if k else 0, ts)
         for a in (0, 1):
             if k == 0:
                 axes[a].move(cfg.target_counts, False)
             pos = plant.count(a)
             cmd = axes[a].step(pos, 0, ts)
-            pending[a] = cmd
+            channels[a].load(PwmSetting(cmd=cmd, div=cfg.fdiv[a], safe=safe))
             out["pos"][k, a] = pos
             out["vel"][k, a] = axes[a].vel_q8 / 256
             out["cmd"][k, a] = cmd

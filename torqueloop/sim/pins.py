@@ -29,8 +29,9 @@ import numpy as np
 
 from sim_models.bridge import Pins
 from sim_models.stepper import TwoAxisPlant
+from torqueloop.spec.system import SYSTEM
 
-CLK_HZ = 50_000_000
+CLK_HZ = SYSTEM.clk_hz
 TICK_S = 1.0 / CLK_HZ
 
 

@@ -1,12 +1,9 @@
 """Report of the step experiment: RTL in the loop against the pure model,
 the analogue of the paper's Figs 14-16 and Table 3 (build/report/).
 
-Metrics:
-  - RMSE of eq. (26)-(27) between RTL and model, position and velocity:
-    sqrt(1/T int_0^T (e_x^2 + e_z^2) dt) over the control samples
-    (trapezoid rule), also per axis;
-  - per run and axis: settling time (last entry into the +-2 % band of the
-    step), overshoot (% of the step), steady-state error (counts, final sample).
+Metrics (torqueloop.spec.metrics, the one definition):
+  - RMSE of eq. (26)-(27) between RTL and model, position and velocity, also per axis;
+  - per run and axis: settling time, overshoot, steady-state error.
 """
 
 from __future__ import annotations
@@ -19,33 +16,17 @@ from pathlib import Path
 import numpy as np
 
 from torqueloop.sim.experiment import COUNTS_PER_REV, ModelRun, RtlRun, Trajectory
+from torqueloop.spec.metrics import rmse, step_metrics
 
 AXES = ("x", "z")
-SETTLE_BAND = 0.02
 
 
-def rmse(t: np.ndarray, e: np.ndarray) -> float:
-    """eq. (26) with eq. (27): e is (n,) or (n, axes); axes are summed in square."""
-    e2 = e**2 if e.ndim == 1 else (e**2).sum(axis=1)
-    span = t[-1] - t[0]
-    return float(math.sqrt(np.trapezoid(e2, t) / span)) if span > 0 else float("nan")
-
-
-def step_metrics(t: np.ndarray, x: np.ndarray, target: float) -> dict[str, float | int | None]:
-    band = SETTLE_BAND * target
-    outside = np.nonzero(np.abs(x - target) > band)[0]
-    if outside.size == 0:
-        settle = 0.0
-    elif outside[-1] == len(x) - 1:
-        settle = None                               # not settled within T
-    else:
-        settle = float(t[outside[-1] + 1])
-    return {
-        "settling_s": settle,
-        "overshoot_pct": float(max(0.0, (x.max() - target) / target * 100)),
-        "steady_state_error_counts": int(round((target - x[-1]) * COUNTS_PER_REV / (2 * math.pi))),
-        "final_rad": float(x[-1]),
-    }
+def _metrics(t: np.ndarray, x: np.ndarray, target: float) -> dict:
+    """torqueloop.spec.metrics (the one definition) in rad, plus the
+    steady-state error in encoder counts."""
+    m = step_metrics(t, x, target).as_dict()
+    m["steady_state_error_counts"] = m["steady_state_error"] * COUNTS_PER_REV / (2 * math.pi)
+    return m
 
 
 def compare(rtl: RtlRun, model: ModelRun, fw_model: ModelRun | None = None) -> dict:
@@ -72,8 +53,8 @@ def compare(rtl: RtlRun, model: ModelRun, fw_model: ModelRun | None = None) -> d
             "rmse_rad": rmse(t, d),
             "rmse_rad_s": rmse(t, a.vel[:n, i] - b.vel[:n, i]),
             "max_abs_diff_counts": int(round(np.abs(d).max() * COUNTS_PER_REV / (2 * math.pi))),
-            "rtl": step_metrics(t, a.pos[:n, i], target),
-            "model": step_metrics(t, b.pos[:n, i], target),
+            "rtl": _metrics(t, a.pos[:n, i], target),
+            "model": _metrics(t, b.pos[:n, i], target),
         }
     return out
 
@@ -180,15 +161,16 @@ def markdown(rep: dict) -> str:
             step = v["config"]["step_rad"]
             lines.append(f"| {law} | {v['rmse_rad_fw_law']:.4f} | {100 * v['rmse_rad_fw_law'] / step:.2f} % | "
                          f"{v['rmse_rad_s_fw_law']:.4f} | {v['rmse_rad_model_vs_fw_law']:.4f} |")
-    lines += ["", "## Step response (settling: last entry into the 2 % band; steady-state error: final sample)", "",
+    lines += ["", "## Step response (settling: last entry into the 2 % band; steady-state error: mean of the "
+              "last 10 % of the record)", "",
               "| law | axis | run | settling (s) | overshoot (%) | steady-state error (counts) |",
               "|---|---|---|---|---|---|"]
     for law, v in rep["laws"].items():
         for ax, pa in v["per_axis"].items():
             for who in ("rtl", "model"):
                 s = pa[who]
-                lines.append(f"| {law} | {ax} | {who} | {_fmt(s['settling_s'], '.2f')} | "
-                             f"{s['overshoot_pct']:.1f} | {s['steady_state_error_counts']} |")
+                lines.append(f"| {law} | {ax} | {who} | {_fmt(s['settling_time_s'], '.2f')} | "
+                             f"{s['overshoot_pct']:.1f} | {s['steady_state_error_counts']:.1f} |")
     lines += ["", "## Runs", "", "| law | simulated clocks | wall (s) | CPU (s) | Mclock/wall-s | Mclock/CPU-s |"
               " rollbacks / segments | faults |", "|---|---|---|---|---|---|---|---|"]
     for law, v in rep["laws"].items():

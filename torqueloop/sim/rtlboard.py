@@ -1,6 +1,6 @@
 """The RTL board image as a :class:`~torqueloop.sim.simboard.BytePipe`, so
 ``torqueloop sim --rtl`` serves the co-simulated SoC (issue 7,
-torqueloop/cosim: the Verilator model of the whole board image running the
+torqueloop/sim: the Verilator model of the whole board image running the
 real servo firmware, the plant closing the loop through its pins) on the
 same TCP port as the firmware-in-the-loop board.
 
@@ -13,7 +13,9 @@ time, which is what keeps it quiet.
 
 from __future__ import annotations
 
-CLK_HZ = 50_000_000
+from torqueloop.spec.system import SYSTEM
+
+CLK_HZ = SYSTEM.clk_hz
 
 
 class RtlBoard:

@@ -6,11 +6,10 @@ Firmware-in-the-loop, not RTL-in-the-loop: servo.c, tl_link.c and control.c
 the HAL in ``simboard_hal.c``; the FPGA blocks around them are modelled at
 the level their reference models define:
 
-- PWM (pwm_torque, docs/pwm_torque.md): a carrier of FDIV x 1023 clocks;
-  duty = eq. (1) ``torqueloop.models.pwm_torque.map_duty(cmd, PW0, PWMAX)``,
-  loaded at the next period start (double buffering); IBT-2 pins: the
-  running bridge brakes in its off phase, a disabled one is in the BRAKE
-  parameter's safe state;
+- PWM (freq_div + pwm_torque): ``torqueloop.models.pwm_schedule``, the one
+  event-level model of the PWM block (carrier of FDIV x 1023 clocks, eq. 1
+  duty, double buffering, brake in the off phase, the BRAKE parameter's
+  safe state while disabled);
 - the quadrature decoder: the plant's count, with the time of its last edge;
 - the plant: ``sim_models.stepper.TwoAxisPlant`` (paper eq. 5-17).
 
@@ -30,7 +29,9 @@ import subprocess
 from pathlib import Path
 from typing import Protocol
 
-from torqueloop.models.pwm_torque import map_duty
+from torqueloop.models.pwm_schedule import PwmChannel, PwmSetting, run_until
+from torqueloop.spec.bridge import BRAKE, COAST
+from torqueloop.spec.system import SYSTEM
 
 REPO = Path(__file__).resolve().parents[2]
 FW = REPO / "firmware"
@@ -39,8 +40,7 @@ SOURCES = [Path(__file__).with_name("simboard_hal.c"), FW / "servo" / "servo.c",
 HEADERS = [FW / "servo" / "servo.h", FW / "servo" / "control.h", FW / "servo" / "hal.h",
            FW / "protocol" / "tl_link.h", FW / "protocol" / "tl_protocol.h"]
 BUILD = REPO / "build" / "host"
-CLK_HZ = 50_000_000
-PWM_FULL = 1023
+CLK_HZ = SYSTEM.clk_hz
 DEFAULT_BUILD_ID = 0x51B0_0001
 
 
@@ -94,9 +94,7 @@ class SimBoard:
         self.tick = 0                    # 50 MHz clocks since power-up
         self._edge_tick = [0, 0]
         self._edge_interval = [0, 0]     # clocks between the last two encoder counts
-        self._next_start = [0, 0]        # clock of each axis's next carrier period start
-        self._off_at: list[int | None] = [None, None]
-        self._duty_cmd = [0, 0]          # command applied at the last period start
+        self._pwm = [PwmChannel(), PwmChannel()]   # the PWM blocks (freq_div + pwm_torque)
         self._next_tick_at = 0
         self._txbuf = ctypes.create_string_buffer(16384)
         self._drive = (ctypes.c_int32 * 6)()
@@ -107,6 +105,7 @@ class SimBoard:
         self._boot_out = b""
         self._sync_encoders()
         self._lib.sb_reset(ctypes.c_uint32(build_id))
+        self._load_drives()
         self._next_tick_at = self._period_ticks()
 
     # ---- byte pipe -------------------------------------------------------------
@@ -121,6 +120,7 @@ class SimBoard:
             self.boot.rx(data, self.tick)
         else:
             self._lib.sb_rx(data, ctypes.c_uint32(len(data)))
+            self._load_drives()
 
     def read(self) -> bytes:
         n = self._lib.sb_tx_take(self._txbuf, ctypes.c_uint32(len(self._txbuf)))
@@ -151,6 +151,7 @@ class SimBoard:
         if self.tick == self._next_tick_at:
             self._sync_encoders()
             self._lib.sb_tick()
+            self._load_drives()
             self._next_tick_at += self._period_ticks()
         return (self.tick - t0) / CLK_HZ
 
@@ -159,11 +160,13 @@ class SimBoard:
         self.build_id = build_id
         self._sync_encoders()
         self._lib.sb_reset(ctypes.c_uint32(build_id))
+        self._load_drives()
         self._next_tick_at = self.tick + self._period_ticks()
 
     # ---- test handles -------------------------------------------------------------
     def set_estop(self, pressed: bool) -> None:
         self._lib.sb_set_estop(ctypes.c_int32(int(pressed)))
+        self._load_drives()
 
     def bootloader_requested(self) -> bool:
         return bool(self._lib.sb_bootloader_requested())
@@ -184,41 +187,24 @@ class SimBoard:
                                      ctypes.c_uint32(self.tick & 0xFFFFFFFF), ctypes.c_uint32(0),
                                      ctypes.c_int32(int(self.bridge_fault[a])))
 
+    def _load_drives(self) -> None:
+        """What the firmware last wrote to each axis's PWM registers, as the
+        PWM block takes it (torqueloop.models.pwm_schedule)."""
+        for a, ch in enumerate(self._pwm):
+            d = self.drive(a)
+            ch.load(PwmSetting(cmd=d["cmd"] if d["on"] else 0, div=d["fdiv"], pw0=d["pw0"], pwmax=d["pwmax"],
+                               enabled=bool(d["on"]), safe=BRAKE if d["brake"] else COAST))
+
+    def _edges(self, start: int, edges: list) -> None:
+        for e in edges:
+            at = start + int(e.t * CLK_HZ)
+            self._edge_interval[e.axis] = at - self._edge_tick[e.axis]
+            self._edge_tick[e.axis] = at
+
     def _run_pwm_until(self, end: int) -> None:
-        while self.tick < end:
-            for a in range(2):
-                if self._next_start[a] <= self.tick:
-                    d = self.drive(a)
-                    self._duty_cmd[a] = d["cmd"] if d["on"] else 0
-                    carrier = max(1, d["fdiv"]) * PWM_FULL
-                    duty = map_duty(self._duty_cmd[a], d["pw0"], d["pwmax"])
-                    on_ticks = duty * max(1, d["fdiv"])
-                    self._off_at[a] = self.tick + on_ticks if 0 < on_ticks < carrier else None
-                    self._next_start[a] = self.tick + carrier
-                elif self._off_at[a] is not None and self._off_at[a] <= self.tick:
-                    self._off_at[a] = None
-            events = [end] + self._next_start + [t for t in self._off_at if t is not None]
-            nxt = min(t for t in events if t > self.tick)
-            pins = [self._phase_pins(a) for a in range(2)]
-            edges = self.plant.advance((nxt - self.tick) / CLK_HZ, pins)
-            for e in edges:
-                at = self.tick + int(e.t * CLK_HZ)
-                self._edge_interval[e.axis] = at - self._edge_tick[e.axis]
-                self._edge_tick[e.axis] = at
-            self.tick = nxt
-
-    def _phase_pins(self, axis: int):
-        from sim_models.bridge import Pins
-
-        d = self.drive(axis)
-        if not d["on"]:
-            return Pins(0, 0, 1, 1) if d["brake"] else Pins(0, 0, 0, 0)
-        cmd = self._duty_cmd[axis]
-        duty = map_duty(cmd, d["pw0"], d["pwmax"])
-        in_on_phase = duty >= PWM_FULL or self._off_at[axis] is not None
-        if cmd == 0 or duty == 0 or not in_on_phase:
-            return Pins(0, 0, 1, 1)    # running bridge, off phase: both low sides on (pwm_torque)
-        return Pins(1, 0, 1, 1) if cmd > 0 else Pins(0, 1, 1, 1)
+        if end > self.tick:
+            run_until(self.plant, self._pwm, self.tick, end, CLK_HZ, self._edges)
+            self.tick = end
 
 
 class SimBootRom:

@@ -15,6 +15,8 @@ import struct
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
+from torqueloop.spec.refs import resolve
+from torqueloop.spec.system import SYSTEM
 
 PROTOCOL_TOML = Path(__file__).resolve().with_name("protocol.toml")
 _FMT = {"u8": "B", "i8": "b", "u16": "H", "i16": "h", "u32": "I", "i32": "i"}
@@ -44,8 +46,13 @@ class Param:
     scope: str
     min: int
     max: int
-    default: int
+    defaults: tuple[int, ...]   # per axis (one entry for a global parameter)
     desc: str
+
+    @property
+    def default(self) -> int:
+        """Axis 0's default (the only one of a global parameter)."""
+        return self.defaults[0]
 
 
 @dataclass(frozen=True)
@@ -91,13 +98,48 @@ COMMANDS: dict[str, Command] = {
                        tuple(tuple(x) for x in c["req"]), tuple(tuple(x) for x in c["rep"]))
     for c in SPEC["command"]}
 BY_CMD: dict[int, Command] = {c.cmd: c for c in COMMANDS.values()}
-PARAMS: dict[str, Param] = {p["name"]: Param(p["name"], p["id"], p["scope"], p["min"], p["max"],
-                                             p["default"], p["desc"]) for p in SPEC["param"]}
-PARAM_BY_ID: dict[int, Param] = {p.id: p for p in PARAMS.values()}
+AXIS_COUNT = len(SYSTEM.axes)
+GLOBAL_AXIS = 0xFF
+#: a raw gain's default follows from its physical default (and TAU_MAX_MNM, COUNTS_PER_REV)
+RAW_GAIN_OF = {"KP_Q16": "KP_UNM_RAD", "KD_Q16": "KD_UNMS_RAD", "KI_Q16": "KI_UNM_RADS"}
+
+
+class ProtocolSpecError(ValueError):
+    """protocol.toml breaks a rule; the message names the parameter."""
+
+
+def _params(spec: list[dict]) -> dict[str, Param]:
+    """The parameter table, defaults resolved: a number, a "system:" reference
+    (one value, or one per axis), or for a raw gain "derived" (computed from
+    its physical gain's defaults with :func:`gain_raw_from_phys`)."""
+    raw: dict[str, dict] = {p["name"]: p for p in spec}
+
+    def per_axis(p: dict) -> tuple[int, ...]:
+        n = AXIS_COUNT if p["scope"] == "axis" else 1
+        v = p["default"]
+        if v == "derived":
+            if p["name"] not in RAW_GAIN_OF:
+                raise ProtocolSpecError(f"protocol.toml param {p['name']}: only raw gains may be 'derived'")
+            phys, tau, cpr = (per_axis(raw[k]) for k in (RAW_GAIN_OF[p["name"]], "TAU_MAX_MNM", "COUNTS_PER_REV"))
+            return tuple(gain_raw_from_phys(g, t, c) for g, t, c in zip(phys, tau, cpr))
+        v = resolve(v, f"protocol.toml param {p['name']}.default")
+        vals = v if isinstance(v, tuple) else (v,) * n
+        if len(vals) != n:
+            raise ProtocolSpecError(f"protocol.toml param {p['name']}: {len(vals)} defaults for {n} axes")
+        return tuple(int(x) for x in vals)
+
+    out = {}
+    for p in spec:
+        d = per_axis(p)
+        if not all(p["min"] <= x <= p["max"] for x in d):
+            raise ProtocolSpecError(f"protocol.toml param {p['name']}: default {d} outside {p['min']}..{p['max']}")
+        out[p["name"]] = Param(p["name"], p["id"], p["scope"], p["min"], p["max"], d, p["desc"])
+    return out
+
+
+PARAM_BY_ID: dict[int, Param] = {}
 TELEMETRY_HEAD: tuple[tuple[str, str], ...] = tuple(tuple(x) for x in SPEC["telemetry"]["head"])
 TELEMETRY_AXIS: tuple[tuple[str, str], ...] = tuple(tuple(x) for x in SPEC["telemetry"]["axis"])
-AXIS_COUNT = 2
-GLOBAL_AXIS = 0xFF
 
 
 # --- framing -------------------------------------------------------------------
@@ -246,21 +288,26 @@ TWO_PI_NUM, TWO_PI_DEN = 710, 113   # 2 pi to 2.7e-7, the rational the firmware 
 
 def gain_raw_from_phys(micro: int, tau_max_mnm: int, counts_per_rev: int) -> int:
     """q16 PWM steps per count (or per count/s, per count*s) from micro N m per rad
-    (per rad/s, per rad s): raw = g / tau_max * 1023 / (counts_per_rev / 2 pi) * 2^16."""
-    num = micro * 1023 * 65536 * TWO_PI_NUM
+    (per rad/s, per rad s): raw = g / tau_max * M / (counts_per_rev / 2 pi) * 2^16, M = 1023."""
+    num = micro * SYSTEM.pwm_full * 65536 * TWO_PI_NUM
     den = tau_max_mnm * 1000 * counts_per_rev * TWO_PI_DEN
     return min(0x7FFF_FFFF, (num + den // 2) // den)
 
 
 def gain_phys_from_raw(raw: int, tau_max_mnm: int, counts_per_rev: int) -> int:
     num = raw * tau_max_mnm * 1000 * counts_per_rev * TWO_PI_DEN
-    den = 1023 * 65536 * TWO_PI_NUM
+    den = SYSTEM.pwm_full * 65536 * TWO_PI_NUM
     return min(100_000_000, (num + den // 2) // den)
 
 
-def counts_to_rad(counts: int, counts_per_rev: int = 8400) -> float:
+def counts_to_rad(counts: int, counts_per_rev: int = SYSTEM.counts_per_turn) -> float:
     return counts * 2 * math.pi / counts_per_rev
 
 
-def counts_to_mm(counts: int, counts_per_rev: int = 8400, pitch_um: int = 4000) -> float:
+def counts_to_mm(counts: int, counts_per_rev: int = SYSTEM.counts_per_turn,
+                 pitch_um: int = SYSTEM.lead_um) -> float:
     return counts * pitch_um / 1000 / counts_per_rev
+
+
+PARAMS: dict[str, Param] = _params(SPEC["param"])
+PARAM_BY_ID.update({p.id: p for p in PARAMS.values()})

@@ -14,6 +14,8 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+from torqueloop.spec.refs import resolve
+
 REGMAP_TOML = Path(__file__).resolve().with_name("regmap.toml")
 
 ACCESS_TYPES = ("rw", "ro", "w1c", "wo")
@@ -168,7 +170,7 @@ class RegMapError(ValueError):
 def _field(d: dict, where: str) -> Field:
     msb, lsb = d["bits"]
     f = Field(name=d["name"], msb=int(msb), lsb=int(lsb), access=d["access"],
-              reset=int(d.get("reset", 0)), desc=d.get("desc", ""),
+              reset=int(resolve(d.get("reset", 0), f"{where}.{d.get('name', '?')}.reset")), desc=d.get("desc", ""),
               volatile=bool(d.get("volatile", False)))
     if f.access not in ACCESS_TYPES:
         raise RegMapError(f"{where}.{f.name}: access {f.access!r} not in {ACCESS_TYPES}")
@@ -216,7 +218,7 @@ def parse(data: dict) -> RegMap:
         for inst in instances:
             blocks.append(Block(name=inst["name"], kind=b["name"], base=int(inst["base"]),
                                 desc=b.get("desc", ""), registers=regs))
-    rm = RegMap(name=meta["name"], version=int(meta["version"]), clk_hz=int(meta["clk_hz"]),
+    rm = RegMap(name=meta["name"], version=int(meta["version"]), clk_hz=int(resolve(meta["clk_hz"], "meta.clk_hz")),
                 regions=regions, blocks=tuple(blocks))
     _check_layout(rm)
     return rm

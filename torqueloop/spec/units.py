@@ -16,16 +16,17 @@ import re
 from dataclasses import dataclass
 
 from torqueloop.spec import protocol as P
+from torqueloop.spec.pwm import carrier_hz, divider_for
+from torqueloop.spec.system import SYSTEM
 
-CLK_HZ = 50_000_000   # DE0-CV CLOCK_50; the board reports its own in IDENTIFY
-PWM_FULL = 1023        # 2^10 - 1 ticks per carrier period (pwm_torque)
+CLK_HZ = SYSTEM.clk_hz   # the board reports its own in IDENTIFY
 LAWS = {"off": 0, "p": 1, "pd": 2, "pid": 3}
 
 
 @dataclass(frozen=True)
 class Mechanics:
-    counts_per_rev: int = 8400
-    pitch_um: int = 4000
+    counts_per_rev: int = SYSTEM.counts_per_turn
+    pitch_um: int = SYSTEM.lead_um
 
     def to_counts(self, value: float, unit: str) -> int:
         if unit in ("", "counts", "count", "cts"):
@@ -97,21 +98,6 @@ FRIENDLY: dict[str, Friendly] = {
 SPECIAL = {"law": "LAW", "pwm_freq": "FDIV"}
 
 
-def fdiv_from_hz(f_hz: float, clk_hz: int = CLK_HZ) -> int:
-    """Eq. (4): Count_max = clk / (f * (2^10 - 1)) (pwm_torque's period is 1023 ticks),
-    the integer whose carrier is nearest to ``f_hz`` (rounding the divisor is not:
-    at 20 kHz the divisors 2 and 3 give 24.4 and 16.3 kHz)."""
-    if f_hz <= 0:
-        raise ValueError("PWM frequency must be positive")
-    exact = clk_hz / (f_hz * PWM_FULL)
-    cands = {max(1, math.floor(exact)), max(1, math.ceil(exact))}
-    return min(sorted(cands), key=lambda d: abs(hz_from_fdiv(d, clk_hz) - f_hz))
-
-
-def hz_from_fdiv(fdiv: int, clk_hz: int = CLK_HZ) -> float:
-    return clk_hz / (max(1, fdiv) * PWM_FULL)
-
-
 def resolve(name: str) -> tuple[str, str]:
     """User name -> (protocol parameter, kind): kind 'friendly', 'special' or 'raw'.
     A protocol name spelt as in docs/protocol.md (upper case) is always raw."""
@@ -138,7 +124,7 @@ def to_raw(name: str, text: str, clk_hz: int = CLK_HZ) -> tuple[str, int]:
             if text.lower() in LAWS:
                 return param, LAWS[text.lower()]
             return param, int(text)
-        return param, fdiv_from_hz(float(text), clk_hz)
+        return param, divider_for(float(text), clk_hz)
     if kind == "friendly":
         return param, int(round(float(text) * FRIENDLY[name.lower()].scale))
     return param, int(text, 0)
@@ -151,7 +137,7 @@ def from_raw(name: str, raw: int, clk_hz: int = CLK_HZ) -> tuple[float | int | s
         if param == "LAW":
             inv = {v: k for k, v in LAWS.items()}
             return inv.get(raw, str(raw)), ""
-        return round(hz_from_fdiv(raw, clk_hz), 3), "Hz"
+        return round(carrier_hz(raw, clk_hz), 3), "Hz"
     if kind == "friendly":
         f = FRIENDLY[name.lower()]
         return (raw if f.scale == 1 else raw / f.scale), f.unit
