@@ -5,7 +5,7 @@
     scripts/run_elf.py --memory-map
 
 The ELF's loadable segments are written at their addresses into the RAM of
-rtl/cpu/cpu_sim_top (SoC memory map: RAM at 0x8000_0000), the core starts in
+tb/cpu/cpu_sim_top (SoC memory map: RAM at 0x8000_0000), the core starts in
 the boot ROM at 0x0000_0000, whose two-instruction stub jumps to the ELF
 entry point, and runs until the program stores a non-zero word to its
 `tohost` symbol.  Prints cycles and retired instructions (both from reset,
@@ -46,10 +46,10 @@ RAM_BASE = 0x8000_0000  # SoC memory map (torqueloop/spec/regmap.toml), as cpu_s
 
 def _ram_bytes() -> int:
     """cpu_sim_top's RAM_BYTES default: one source for the harness and --memory-map."""
-    src = (REPO / "rtl" / "cpu" / "cpu_sim_top.v").read_text()
+    src = (REPO / "tb" / "cpu" / "cpu_sim_top.v").read_text()
     m = re.search(r"parameter\s+RAM_BYTES\s*=\s*(\d+)", src)
     if m is None:
-        raise RuntimeError("RAM_BYTES default not found in rtl/cpu/cpu_sim_top.v")
+        raise RuntimeError("RAM_BYTES default not found in tb/cpu/cpu_sim_top.v")
     return int(m.group(1))
 
 

@@ -24,7 +24,7 @@ def pins() -> dict[str, board.BoardPin]:
     return board.load_board_pins()
 
 
-FAKE_SOURCES = [REPO_ROOT / "rtl/common/reset_sync.v", REPO_ROOT / "rtl/board/de0_cv_top.v"]
+FAKE_SOURCES = [REPO_ROOT / "rtl/common/tl_reset_sync.v", REPO_ROOT / "rtl/board/de0_cv_top.v"]
 
 
 # --- the header layout and the board data ----------------------------------------------------
@@ -261,7 +261,7 @@ def test_repository_constraints_are_consistent():
     cores = load_manifest()
     t = board.load_pin_table()
     if t.board.top not in cores:
-        pytest.skip(f"core {t.board.top} not in rtl/manifest.toml yet (waits for rtl/soc/soc.v)")
+        pytest.skip(f"core {t.board.top} not in rtl/manifest.toml yet (waits for rtl/soc/tl_soc.v)")
     failed = [c for c in board_check.run_all() if not c.ok]
     assert not failed, "\n".join(f"{c.name}:\n{c.detail[:3000]}" for c in failed)
 

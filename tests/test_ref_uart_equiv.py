@@ -9,12 +9,12 @@ from torqueloop.flow.manifest import core
 
 MUTANTS = [
     # (core, file name, good text, broken text)
-    ("uart_rx", "uart_rx.vhd",
+    ("uart_rx", "tl_uart_rx.vhd",
      "bit_val <= (votes(0) and votes(1)) or (votes(0) and rx) or (votes(1) and rx);",
      "bit_val <= votes(1);"),
-    ("uart_tx", "uart_tx.vhd", "bits_left <= to_unsigned(10, 4);", "bits_left <= to_unsigned(9, 4);"),
-    ("uart", "uart.vhd", "unsigned(rx_level_i) >= RTS_LEVEL", "unsigned(rx_level_i) > RTS_LEVEL"),
-    ("sync_fifo", "sync_fifo.vhd",
+    ("uart_tx", "tl_uart_tx.vhd", "bits_left <= to_unsigned(10, 4);", "bits_left <= to_unsigned(9, 4);"),
+    ("uart", "tl_uart.vhd", "unsigned(rx_level_i) >= RTS_LEVEL", "unsigned(rx_level_i) > RTS_LEVEL"),
+    ("sync_fifo", "tl_sync_fifo.vhd",
      "full    <= '1' when level_i = to_unsigned(DEPTH, AW + 1) else '0';",
      "full    <= '1' when level_i = to_unsigned(DEPTH - 1, AW + 1) else '0';"),
 ]

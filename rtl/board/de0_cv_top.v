@@ -8,7 +8,7 @@
 // the timing constraints.  Wiring to the IBT-2 modules, the encoders and
 // the RN-XV: docs/hardware.md.
 //
-// Around the SoC (rtl/soc/soc.v) this adds only what is board-specific:
+// Around the SoC (rtl/soc/tl_soc.v) this adds only what is board-specific:
 //   - RESET_N through reset_sync (asynchronous assertion, synchronous release);
 //   - drive_interlock between the SoC's bridge outputs and the IBT-2 pins: the
 //     drives run only after SW[0] has been moved up (with no stop and no fault
@@ -58,7 +58,7 @@ module de0_cv_top #(
     wire clk = CLOCK_50;
     wire rst;
 
-    reset_sync #(.STAGES(2)) u_reset_sync (.clk(clk), .arst_n(RESET_N), .rst_out(rst));
+    tl_reset_sync #(.STAGES(2)) u_reset_sync (.clk(clk), .arst_n(RESET_N), .rst_out(rst));
 
     // ---- raw pin-level nets of the GPIO headers (unsynchronised) ----
     wire [AXES-1:0] ibt2_rpwm_pin;
@@ -83,7 +83,7 @@ module de0_cv_top #(
     wire [AXES-1:0] soc_pwm, soc_dir;   // PWM+DIR mode: no IBT-2 input for it
     /* verilator lint_on UNUSEDSIGNAL */
 
-    soc #(
+    tl_soc #(
         .RAM_BYTES(RAM_BYTES),
         .ROM_INIT(ROM_INIT),
         .RAM_INIT(RAM_INIT)
@@ -129,14 +129,14 @@ module de0_cv_top #(
     wire [AXES-1:0] fault_latched;      // for a future status register; LEDR[8] shows the sum
     /* verilator lint_on UNUSEDSIGNAL */
 
-    sync_2ff #(.WIDTH(1), .RESET_VAL(1)) u_sync_estop (
+    tl_sync_2ff #(.WIDTH(1), .RESET_VAL(1)) u_sync_estop (
         .clk(clk), .rst(rst), .async_in(KEY[0]), .sync_out(estop_n_s));
-    sync_2ff #(.WIDTH(1), .RESET_VAL(1)) u_sync_arm (
+    tl_sync_2ff #(.WIDTH(1), .RESET_VAL(1)) u_sync_arm (
         .clk(clk), .rst(rst), .async_in(SW[0]), .sync_out(arm_sw_s));
-    sync_2ff #(.WIDTH(AXES), .RESET_VAL(1)) u_sync_fault (
+    tl_sync_2ff #(.WIDTH(AXES), .RESET_VAL(1)) u_sync_fault (
         .clk(clk), .rst(rst), .async_in(ibt2_fault_n_pin), .sync_out(fault_n_s));
 
-    drive_interlock #(.AXES(AXES), .FAULT_FILTER_CLKS(250)) u_interlock (
+    tl_drive_interlock #(.AXES(AXES), .FAULT_FILTER_CLKS(250)) u_interlock (
         .clk(clk),
         .rst(rst),
         .estop(~estop_n_s),

@@ -48,7 +48,7 @@ def main() -> int:
     top = load_pin_table().board.top
     cores = load_manifest()
     if top not in cores:
-        print(f"[bench_board] core {top} not in rtl/manifest.toml yet (waits for rtl/soc/soc.v)")
+        print(f"[bench_board] core {top} not in rtl/manifest.toml yet (waits for rtl/soc/tl_soc.v)")
         return 1
     t0 = time.monotonic()
     print(f"[bench_board] synthesising {top} (full-size RAM) with synth_intel_alm, about a minute ...", flush=True)

@@ -67,7 +67,7 @@ def logic_depth(netlist: Path, skip_prefix: str | None = None) -> int:
     src = netlist
     if skip_prefix:
         d = json.loads(netlist.read_text())
-        m = d["modules"]["cpu"]
+        m = d["modules"]["tl_cpu"]
         m["cells"] = {k: v for k, v in m["cells"].items() if not k.startswith(skip_prefix)}
         src = Path(tempfile.mkdtemp()) / "netlist.json"
         src.write_text(json.dumps(d))

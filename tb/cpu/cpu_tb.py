@@ -1,4 +1,4 @@
-"""cocotb driver of rtl/cpu/cpu_sim_top: load an ELF, run to tohost, read memory.
+"""cocotb driver of tb/cpu/cpu_sim_top: load an ELF, run to tohost, read memory.
 
 Shared by the CPU test bench (test_cpu.py) and the ELF runner
 (scripts/run_elf.py through elf_runner_tb.py).  All waiting happens in the

@@ -23,7 +23,7 @@ module cpu_bus_props (
     wire [31:0] ibus_addr, dbus_addr, dbus_wdata;
     wire [3:0]  dbus_be;
 
-    cpu u_cpu (
+    tl_cpu u_cpu (
         .clk(clk), .rst(rst),
         .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
         .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),

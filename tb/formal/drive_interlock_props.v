@@ -26,7 +26,7 @@ module drive_interlock_props #(
     wire [AXES-1:0] rpwm_out, lpwm_out, r_en_out, l_en_out, fault_latched;
     wire            armed, tripped;
 
-    drive_interlock #(.AXES(AXES), .FAULT_FILTER_CLKS(FAULT_FILTER_CLKS)) dut (
+    tl_drive_interlock #(.AXES(AXES), .FAULT_FILTER_CLKS(FAULT_FILTER_CLKS)) dut (
         .clk(clk), .rst(rst), .estop(estop), .arm_sw(arm_sw), .fault(fault),
         .rpwm_in(rpwm_in), .lpwm_in(lpwm_in), .r_en_in(r_en_in), .l_en_in(l_en_in),
         .rpwm_out(rpwm_out), .lpwm_out(lpwm_out), .r_en_out(r_en_out), .l_en_out(l_en_out),

@@ -23,7 +23,7 @@ module freq_div_props #(
     wire                tick;
 
     // the reset divisor is the register's largest value
-    freq_div #(.DIV_BITS(DIV_BITS), .DEFAULT_DIV(GAP_MAX)) dut (
+    tl_freq_div #(.DIV_BITS(DIV_BITS), .DEFAULT_DIV(GAP_MAX)) dut (
         .clk(clk), .rst(rst), .div_we(div_we), .div_in(div_in), .div(div), .tick(tick)
     );
 

@@ -33,7 +33,7 @@ module pwm_torque_props #(
     wire rpwm, lpwm, r_en, l_en, pwm_out, dir_out, period_start, dir_applied, active;
     wire [N-1:0] duty_applied;
 
-    pwm_torque #(.PWM_BITS(N)) dut (
+    tl_pwm_torque #(.PWM_BITS(N)) dut (
         .clk(clk), .rst(rst), .tick(tick), .cmd(cmd), .pw0(pw0), .pw_max(pw_max),
         .enable(enable), .fault(fault), .brake_on_fault(brake_on_fault), .dir_mode(dir_mode),
         .rpwm(rpwm), .lpwm(lpwm), .r_en(r_en), .l_en(l_en), .pwm_out(pwm_out), .dir_out(dir_out),

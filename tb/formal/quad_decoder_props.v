@@ -26,7 +26,7 @@ module quad_decoder_props #(
     wire [31:0] pos_any, pos_fix;
     wire [3:0]  ill_any;
 
-    quad_decoder #(.FILTER_BITS(2), .DIV_BITS(4), .TS_BITS(4), .ILLEGAL_BITS(4)) dut_any (
+    tl_quad_decoder #(.FILTER_BITS(2), .DIV_BITS(4), .TS_BITS(4), .ILLEGAL_BITS(4)) dut_any (
         .clk(clk), .rst(rst), .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z),
         .sample_div(sample_div), .filter_len(filter_len),
         .pos_load(pos_load), .pos_load_val(pos_load_val),
@@ -37,7 +37,7 @@ module quad_decoder_props #(
     );
 
     // Property 2 instance: fixed prescaler, no loads, free filter length.
-    quad_decoder #(.FILTER_BITS(2), .DIV_BITS(4), .TS_BITS(4), .ILLEGAL_BITS(4)) dut_fix (
+    tl_quad_decoder #(.FILTER_BITS(2), .DIV_BITS(4), .TS_BITS(4), .ILLEGAL_BITS(4)) dut_fix (
         .clk(clk), .rst(rst), .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z),
         .sample_div(SAMPLE_DIV[3:0]), .filter_len(filter_len),
         .pos_load(1'b0), .pos_load_val(32'd0),

@@ -11,7 +11,7 @@ module reset_sync_props #(
     input wire arst_n
 );
     wire rst_out;
-    reset_sync #(.STAGES(STAGES)) dut (.clk(clk), .arst_n(arst_n), .rst_out(rst_out));
+    tl_reset_sync #(.STAGES(STAGES)) dut (.clk(clk), .arst_n(arst_n), .rst_out(rst_out));
 
     // Count of consecutive edges with arst_n high, saturating at STAGES.
     reg [3:0] high_edges = 4'd0;

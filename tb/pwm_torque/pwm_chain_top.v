@@ -29,11 +29,11 @@ module pwm_chain_top #(
     wire [PWM_BITS-1:0] duty_applied;
     /* verilator lint_on UNUSEDSIGNAL */
 
-    freq_div #(.DIV_BITS(DIV_BITS), .DEFAULT_DIV(DEFAULT_DIV)) u_div (
+    tl_freq_div #(.DIV_BITS(DIV_BITS), .DEFAULT_DIV(DEFAULT_DIV)) u_div (
         .clk(clk), .rst(rst), .div_we(div_we), .div_in(div_in), .div(div), .tick(tick)
     );
 
-    pwm_torque #(.PWM_BITS(PWM_BITS)) u_pwm (
+    tl_pwm_torque #(.PWM_BITS(PWM_BITS)) u_pwm (
         .clk(clk), .rst(rst), .tick(tick), .cmd(cmd), .pw0(pw0), .pw_max(pw_max),
         .enable(enable), .fault(1'b0), .brake_on_fault(1'b1), .dir_mode(1'b0),
         .rpwm(rpwm), .lpwm(lpwm), .r_en(r_en), .l_en(l_en), .pwm_out(pwm_out), .dir_out(dir_out),

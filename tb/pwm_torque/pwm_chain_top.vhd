@@ -28,11 +28,11 @@ end entity pwm_chain_top;
 architecture rtl of pwm_chain_top is
     signal tick : std_logic;
 begin
-    u_div : entity work.freq_div
+    u_div : entity work.tl_freq_div
         generic map (DIV_BITS => DIV_BITS, DEFAULT_DIV => DEFAULT_DIV)
         port map (clk => clk, rst => rst, div_we => div_we, div_in => div_in, div => div, tick => tick);
 
-    u_pwm : entity work.pwm_torque
+    u_pwm : entity work.tl_pwm_torque
         generic map (PWM_BITS => PWM_BITS)
         port map (clk => clk, rst => rst, tick => tick, cmd => cmd, pw0 => pw0, pw_max => pw_max,
                   enable => enable, fault => '0', brake_on_fault => '1', dir_mode => '0',

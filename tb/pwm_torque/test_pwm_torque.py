@@ -390,6 +390,6 @@ def test_pwm_torque_chain(sim):
     """freq_div + pwm_torque together (Icarus and GHDL: a cheap build each)."""
     run("pwm_torque", sim, "test_pwm_torque", toplevel="pwm_chain_top",
         parameters={"PWM_BITS": 6, "DEFAULT_DIV": count_max(20_000, pwm_bits=6)},
-        extra_verilog=[REPO_ROOT / "rtl" / "motion" / "freq_div.v", CHAIN_DIR / "pwm_chain_top.v"],
-        extra_vhdl=[REPO_ROOT / "rtl" / "motion" / "freq_div.vhd", CHAIN_DIR / "pwm_chain_top.vhd"],
+        extra_verilog=[REPO_ROOT / "rtl" / "motion" / "tl_freq_div.v", CHAIN_DIR / "pwm_chain_top.v"],
+        extra_vhdl=[REPO_ROOT / "rtl" / "motion" / "tl_freq_div.vhd", CHAIN_DIR / "pwm_chain_top.vhd"],
         testcase="chain_carrier_matches_ref")

@@ -29,13 +29,13 @@ module soc_safety_props (
     wire [31:0] rdata;
     wire [1:0]  fault_s, rpwm, lpwm, pwm;
 
-    soc_sys dut (
+    tl_soc_sys dut (
         .clk(clk), .rst(rst), .req(req), .we(we), .be(be), .addr(addr), .wdata(wdata),
         .ack(ack), .err(err), .rdata(rdata), .estop(estop), .bridge_fault(bridge_fault),
         .bridge_fault_s(fault_s), .safe(safe), .safety_event(safety_event)
     );
 
-    soc_safety_gate #(.N_AXES(2)) gate (
+    tl_soc_safety_gate #(.N_AXES(2)) gate (
         .rst(rst), .safe(safe), .estop_pin(estop),
         .rpwm_in(rpwm_in), .lpwm_in(lpwm_in), .pwm_in(pwm_in),
         .rpwm(rpwm), .lpwm(lpwm), .pwm(pwm)

@@ -33,13 +33,13 @@ module char_bench_top #(
     wire [PWM_BITS-1:0] duty_applied;
     /* verilator lint_on UNUSEDSIGNAL */
 
-    freq_div #(
+    tl_freq_div #(
         .DIV_BITS(DIV_BITS)
     ) u_div (
         .clk(clk), .rst(rst), .div_we(div_we), .div_in(div_in), .div(div), .tick(tick)
     );
 
-    pwm_torque #(
+    tl_pwm_torque #(
         .PWM_BITS(PWM_BITS)
     ) u_pwm (
         .clk(clk), .rst(rst), .tick(tick), .cmd(cmd), .pw0(pw0), .pw_max(pw_max),

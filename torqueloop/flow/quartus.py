@@ -31,7 +31,7 @@ def top_sources(top: str) -> list[Path]:
     cores = load_manifest()
     if top not in cores:
         raise SystemExit(f"gen_quartus: core '{top}' is not in rtl/manifest.toml yet "
-                         "(it is added together with rtl/soc/soc.v); cannot list the project's sources")
+                         "(it is added together with rtl/soc/tl_soc.v); cannot list the project's sources")
     return list(cores[top].verilog)
 
 

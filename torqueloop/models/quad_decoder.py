@@ -1,4 +1,4 @@
-"""Reference model of the quadrature decoder (rtl/motion/quad_decoder.v).
+"""Reference model of the quadrature decoder (rtl/motion/tl_quad_decoder.v).
 
 Written from the specification in docs/quad_decoder.md, not from the RTL:
 

@@ -25,7 +25,7 @@ MIN_DIV = 15
 
 @dataclass(frozen=True)
 class UartParams:
-    """Build-time parameters of rtl/uart/uart.v."""
+    """Build-time parameters of rtl/uart/tl_uart.v."""
 
     clk_hz: int = SYSTEM.clk_hz
     default_baud: int = 115_200

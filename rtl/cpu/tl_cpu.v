@@ -1,0 +1,295 @@
+`default_nettype none
+// torqueloop CPU: RV32IM + Zicsr, machine mode only, multi-cycle with the
+// next instruction fetch overlapped with the completing cycle.
+//
+// Port contract (shared with the SoC in rtl/soc): instruction and data bus
+// with the same handshake.  The master holds *_req and the request fields
+// stable until the slave pulses *_ack for one cycle; *_rdata and *_err are
+// valid with *_ack.  A slave acks at the earliest in the cycle after it
+// first sees *_req and must not start a new transfer in its ack cycle
+// (the CPU may keep *_req high through the ack cycle and into the next
+// request).  Any number of wait states works.  Reset is synchronous, active
+// high; interrupt lines are levels synchronous to clk.
+//
+// Control (see docs/cpu.md for the cycle counts):
+//   FETCH  : hold the instruction request (address pc) until ack.
+//   EXEC   : decode the instruction register, read rs1/rs2, ALU / branch /
+//            CSR / trap decision.  Single-cycle instructions complete here
+//            and request the next instruction in the same cycle.
+//            Loads and stores raise dbus_req in this cycle already; loads,
+//            stores, multiplies and divides also prefetch pc+4 here.
+//   MEM    : wait for dbus_ack and the prefetch (load write-back, or access fault).
+//   MULDIV : wait for the multiply/divide unit and the prefetch.
+// With a zero-wait-state bus (ack in the cycle after the request) that is
+// 2 cycles per ALU/branch/jump/CSR instruction and per load/store, 4 per
+// multiply and 35 per divide.  The handshake itself sets the floor of 2:
+// a slave cannot accept a new request in its ack cycle.
+// Interrupts are taken in EXEC before the instruction executes (mepc = its
+// pc), or during a multiply/divide, which is then abandoned and re-executed
+// after mret; loads and stores always complete.
+//
+// Port contract unchanged since the first version (rtl/soc instantiates it).
+module tl_cpu #(
+    parameter [31:0] RESET_PC = 32'h0000_0000,
+    parameter [31:0] HART_ID  = 32'd0
+) (
+    input  wire        clk,
+    input  wire        rst,
+    output wire        ibus_req,
+    output wire [31:0] ibus_addr,
+    input  wire        ibus_ack,
+    input  wire [31:0] ibus_rdata,
+    input  wire        ibus_err,
+    output wire        dbus_req,
+    output wire [31:0] dbus_addr,
+    output wire        dbus_we,
+    output wire [3:0]  dbus_be,
+    output wire [31:0] dbus_wdata,
+    input  wire        dbus_ack,
+    input  wire [31:0] dbus_rdata,
+    input  wire        dbus_err,
+    input  wire        irq_timer,
+    input  wire        irq_external,
+    input  wire        irq_software,
+    input  wire [63:0] mtime,
+    output wire        retire
+);
+    localparam [1:0] S_FETCH = 2'd0, S_EXEC = 2'd1, S_MEM = 2'd2, S_MULDIV = 2'd3;
+    reg [1:0]  state;
+    reg [31:0] pc;
+
+    wire in_fetch = state == S_FETCH;
+    wire in_exec  = state == S_EXEC;
+    wire in_mem   = state == S_MEM;
+    wire in_md    = state == S_MULDIV;
+
+    // ---- fetch -------------------------------------------------------------
+    wire        complete, to_exec, fetch_start, prefetch;
+    reg  [31:0] next_pc;
+    wire [31:0] insn, pc_plus4;
+    wire [4:0]  next_rs1, next_rs2;
+    wire        insn_load;
+    wire        fetched, fetch_fault, fetch_pending, pf_done, pf_bad;
+    tl_cpu_fetch u_fetch (
+        .clk(clk), .rst(rst), .start(fetch_start),
+        .start_addr(prefetch ? pc_plus4 : (complete ? next_pc : pc)),
+        .waiting(in_fetch), .prefetching(in_mem || in_md), .take_prefetch(to_exec),
+        .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
+        .ibus_rdata(ibus_rdata), .ibus_err(ibus_err), .pending(fetch_pending),
+        .insn(insn), .insn_load(insn_load), .next_rs1(next_rs1), .next_rs2(next_rs2), .fetched(fetched), .fault(fetch_fault), .pf_done(pf_done), .pf_bad(pf_bad)
+    );
+
+    // ---- decode and register file --------------------------------------------
+    wire [4:0]  rd, rs1;
+    wire [2:0]  funct3;
+    wire [31:0] imm;
+    wire is_lui, is_auipc, is_jal, is_jalr, is_branch, is_load, is_store;
+    wire alu_use_imm, alu_alt, is_muldiv, is_csr, csr_writes, is_ecall, is_ebreak;
+    wire is_mret, writes_rd, dec_illegal;
+    tl_cpu_decode u_decode (
+        .insn(insn), .rd(rd), .rs1(rs1), .funct3(funct3), .imm(imm),
+        .is_lui(is_lui), .is_auipc(is_auipc), .is_jal(is_jal), .is_jalr(is_jalr),
+        .is_branch(is_branch), .is_load(is_load), .is_store(is_store),
+        .alu_use_imm(alu_use_imm), .alu_alt(alu_alt), .is_muldiv(is_muldiv),
+        .is_csr(is_csr), .csr_writes(csr_writes), .is_ecall(is_ecall),
+        .is_ebreak(is_ebreak), .is_mret(is_mret),
+        .writes_rd(writes_rd), .illegal(dec_illegal)
+    );
+
+    wire        rf_we;
+    reg  [31:0] rf_wdata;
+    wire [31:0] rs1_val, rs2_val;
+    // Read with the register numbers of the word entering the instruction
+    // register, so rs1/rs2 are ready in EXEC (block RAM, registered read).
+    tl_cpu_regfile u_regfile (
+        .clk(clk), .we(rf_we), .waddr(rd), .wdata(rf_wdata),
+        .re(insn_load), .raddr1(next_rs1), .raddr2(next_rs2),
+        .rdata1(rs1_val), .rdata2(rs2_val)
+    );
+
+    // ---- execute -------------------------------------------------------------
+    wire [31:0] alu_result;
+    wire        branch_taken;
+    tl_cpu_alu u_alu (
+        .funct3(funct3), .alt(alu_alt), .a(rs1_val), .b(alu_use_imm ? imm : rs2_val),
+        .result(alu_result), .cmp_a(rs1_val), .cmp_b(rs2_val), .branch_taken(branch_taken)
+    );
+
+    assign      pc_plus4 = pc + 32'd4;
+    wire [31:0] pc_imm   = pc + imm;          // JAL, branches, AUIPC
+    wire [31:0] eff_addr = rs1_val + imm;     // loads, stores (S-imm), JALR
+    wire        jumps    = is_jal || is_jalr || (is_branch && branch_taken);
+    wire [31:0] jump_target = is_jalr ? {eff_addr[31:1], 1'b0} : pc_imm;
+    // Without the C extension every target must be 4-byte aligned; bit 0 is
+    // already zero for all three kinds of jump.
+    wire        target_misaligned = jumps && jump_target[1];
+
+    // ---- load/store ------------------------------------------------------------
+    // The data access and the prefetch of pc+4 run in parallel; whichever
+    // answers first is remembered until the other one has answered too.
+    reg         d_done, d_err_q;
+    reg  [31:0] d_rdata_q;
+    wire        d_fin   = d_done || dbus_ack;
+    wire        d_error = d_done ? d_err_q : dbus_err;
+    wire [31:0] d_rdata = d_done ? d_rdata_q : dbus_rdata;
+    wire        mem_misaligned;
+    wire [31:0] load_data;
+    tl_cpu_lsu u_lsu (
+        .funct3(funct3), .off(eff_addr[1:0]), .store_data(rs2_val),
+        .misaligned(mem_misaligned), .be(dbus_be), .wdata(dbus_wdata),
+        .rdata(d_rdata), .load_data(load_data)
+    );
+
+    // ---- CSRs and traps -----------------------------------------------------------
+    wire [31:0] csr_rdata, trap_target, mepc;
+    wire        csr_illegal, irq_pending;
+    wire [3:0]  irq_code;
+    reg         trap, trap_irq;
+    reg  [3:0]  trap_code;
+    reg  [31:0] trap_tval;
+
+    wire ex_illegal = dec_illegal || (is_csr && csr_illegal);
+    always @(*) begin
+        trap      = 1'b0;
+        trap_irq  = 1'b0;
+        trap_code = 4'd0;
+        trap_tval = 32'd0;
+        case (state)
+            S_FETCH: if (fetch_fault) begin
+                trap = 1'b1; trap_code = 4'd1; trap_tval = pc;
+            end
+            S_EXEC: begin
+                trap = 1'b1;
+                if (irq_pending) begin
+                    trap_irq = 1'b1; trap_code = irq_code;
+                end else if (ex_illegal) begin
+                    trap_code = 4'd2; trap_tval = insn;
+                end else if (is_ecall) begin
+                    trap_code = 4'd11;
+                end else if (is_ebreak) begin
+                    trap_code = 4'd3; trap_tval = pc;
+                end else if (target_misaligned) begin
+                    trap_code = 4'd0; trap_tval = jump_target;
+                end else if ((is_load || is_store) && mem_misaligned) begin
+                    trap_code = is_store ? 4'd6 : 4'd4; trap_tval = eff_addr;
+                end else begin
+                    trap = 1'b0;
+                end
+            end
+            S_MEM: if (d_fin && pf_done && d_error) begin
+                trap = 1'b1; trap_code = is_store ? 4'd7 : 4'd5; trap_tval = eff_addr;
+            end
+            // An interrupt abandons a multiply/divide still in progress (it
+            // is re-executed after mret: mepc = its pc, rd not written), so
+            // the interrupt latency does not grow with the divider's 34
+            // cycles.  The prefetch must have answered first.
+            S_MULDIV: if (irq_pending && pf_done && !md_fin) begin
+                trap = 1'b1; trap_irq = 1'b1; trap_code = irq_code;
+            end
+            default: ;
+        endcase
+    end
+
+    wire exec_go  = in_exec && !trap;
+    wire exec_mem = exec_go && (is_load || is_store);
+    wire exec_md  = exec_go && is_muldiv;
+
+    tl_cpu_csr #(.HART_ID(HART_ID)) u_csr (
+        .clk(clk), .rst(rst),
+        .addr(insn[31:20]), .op(funct3[1:0]),
+        .src(funct3[2] ? {27'd0, rs1} : rs1_val),
+        .writes(csr_writes), .commit(exec_go && is_csr),
+        .rdata(csr_rdata), .illegal(csr_illegal),
+        .trap(trap && !rst), .trap_irq(trap_irq), .trap_code(trap_code), .trap_pc(pc),
+        .trap_tval(trap_tval), .trap_target(trap_target),
+        .mret(exec_go && is_mret), .mepc_out(mepc),
+        .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
+        .irq_pending(irq_pending), .irq_code(irq_code),
+        .retire(retire), .mtime(mtime)
+    );
+
+    // ---- multiply / divide ------------------------------------------------------
+    wire        md_done;
+    reg         md_done_q;
+    wire [31:0] md_result;
+    /* verilator lint_off PINCONNECTEMPTY */
+    tl_cpu_muldiv u_muldiv (
+        .clk(clk), .rst(rst), .start(exec_md && !rst), .abort(in_md && trap), .funct3(funct3),
+        .a(rs1_val), .b(rs2_val), .busy(), .done(md_done), .result(md_result)
+    );
+    /* verilator lint_on PINCONNECTEMPTY */
+    wire md_fin = md_done || md_done_q;
+
+    // ---- completion, write-back, next pc --------------------------------------------
+    assign prefetch = exec_mem || exec_md;
+    assign complete = trap || (exec_go && !prefetch) ||
+                      (in_mem && d_fin && pf_done) || (in_md && md_fin && pf_done);
+    assign retire   = complete && !trap && !rst;
+    assign rf_we    = retire && writes_rd;
+    // After a load/store/muldiv the prefetched pc+4 goes straight to EXEC;
+    // if that prefetch hit a bus error, FETCH asks again and takes the fault.
+    assign to_exec  = retire && (in_mem || in_md) && !pf_bad;
+    assign fetch_start = !rst && ((complete && !to_exec) || prefetch || (in_fetch && !fetch_pending));
+
+    always @(*) begin
+        if (trap)
+            next_pc = trap_target;
+        else if (in_exec && is_mret)
+            next_pc = mepc;
+        else if (in_exec && jumps)
+            next_pc = jump_target;
+        else
+            next_pc = pc_plus4;
+    end
+
+    always @(*) begin
+        if (in_mem)
+            rf_wdata = load_data;
+        else if (in_md)
+            rf_wdata = md_result;
+        else if (is_lui)
+            rf_wdata = imm;
+        else if (is_auipc)
+            rf_wdata = pc_imm;
+        else if (is_jal || is_jalr)
+            rf_wdata = pc_plus4;
+        else if (is_csr)
+            rf_wdata = csr_rdata;
+        else
+            rf_wdata = alu_result;
+    end
+
+    assign dbus_req  = !rst && (exec_mem || (in_mem && !d_done));
+    assign dbus_addr = eff_addr;
+    assign dbus_we   = is_store;
+
+    always @(posedge clk) begin
+        if (rst) begin
+            state     <= S_FETCH;
+            pc        <= RESET_PC;
+            d_done    <= 1'b0;
+            md_done_q <= 1'b0;
+        end else begin
+            // "answered" flags exist only inside MEM / MULDIV, so no stale
+            // flag can reach another instruction (and the bus proof in
+            // tb/formal/cpu_bus_props.v closes by induction).
+            d_done    <= in_mem && !complete && (d_done || dbus_ack);
+            md_done_q <= in_md && !complete && (md_done_q || md_done);
+            if (in_mem && dbus_ack && !d_done) begin
+                d_err_q   <= dbus_err;
+                d_rdata_q <= dbus_rdata;
+            end
+            if (complete) begin
+                state     <= to_exec ? S_EXEC : S_FETCH;
+                pc        <= next_pc;
+            end else begin
+                case (state)
+                    S_FETCH: if (fetched) state <= S_EXEC;
+                    S_EXEC:  state <= exec_mem ? S_MEM : S_MULDIV;
+                    default: ;
+                endcase
+            end
+        end
+    end
+endmodule
+`default_nettype wire

@@ -1,0 +1,80 @@
+// soc_ram: program/data RAM, true dual-port block RAM initialised from a hex file.
+//
+// Port A serves the CPU data bus (read/write with byte enables), port B the
+// instruction bus (read only), so a fetch never waits for a load/store.
+// Written in the inference template Quartus maps to M10K blocks in true
+// dual-port mode (one clock, registered read data, byte enables as per-byte
+// conditional writes); $readmemh initialises the blocks in the bitstream.
+// Read-during-write on the other port returns the old word (single clock).
+//
+// Bus slave contract (every soc_* slave): req is a one-cycle strobe from the
+// interconnect; the slave answers with exactly one ack pulse (here in the
+// next cycle), rdata valid with it; addr/we/be/wdata stay stable until ack.
+`default_nettype none
+
+module tl_soc_ram #(
+    parameter integer RAM_BYTES = 65536,          // power of two; 64 KiB = 64 M10K
+    parameter         INIT_FILE = "",             // $readmemh image, one 32-bit word per line
+    parameter integer ADDR_BITS = $clog2(RAM_BYTES)
+) (
+    input  wire        clk,
+    input  wire        rst,
+    // port A: data bus
+    input  wire        a_req,
+    input  wire        a_we,
+    input  wire [3:0]  a_be,
+    /* verilator lint_off UNUSEDSIGNAL */  // addr[1:0]: byte lanes come from be
+    input  wire [ADDR_BITS-1:0] a_addr,           // byte address inside the RAM
+    /* verilator lint_on UNUSEDSIGNAL */
+    input  wire [31:0] a_wdata,
+    output reg         a_ack,
+    output reg  [31:0] a_rdata,
+    // port B: instruction bus
+    input  wire        b_req,
+    /* verilator lint_off UNUSEDSIGNAL */
+    input  wire [ADDR_BITS-1:0] b_addr,
+    /* verilator lint_on UNUSEDSIGNAL */
+    output reg         b_ack,
+    output reg  [31:0] b_rdata
+);
+
+    localparam integer WORDS = RAM_BYTES / 4;
+
+    reg [31:0] mem [0:WORDS-1];
+
+    initial begin
+        if (INIT_FILE != "")
+            $readmemh(INIT_FILE, mem);
+    end
+
+    wire [ADDR_BITS-3:0] a_idx = a_addr[ADDR_BITS-1:2];
+    wire [ADDR_BITS-3:0] b_idx = b_addr[ADDR_BITS-1:2];
+
+    // Memory arrays have no reset (block RAM contents survive reset).
+    always @(posedge clk) begin
+        if (a_req && a_we) begin
+            if (a_be[0]) mem[a_idx][7:0]   <= a_wdata[7:0];
+            if (a_be[1]) mem[a_idx][15:8]  <= a_wdata[15:8];
+            if (a_be[2]) mem[a_idx][23:16] <= a_wdata[23:16];
+            if (a_be[3]) mem[a_idx][31:24] <= a_wdata[31:24];
+        end
+        a_rdata <= mem[a_idx];
+    end
+
+    always @(posedge clk) begin
+        b_rdata <= mem[b_idx];
+    end
+
+    always @(posedge clk) begin
+        if (rst) begin
+            a_ack <= 1'b0;
+            b_ack <= 1'b0;
+        end else begin
+            a_ack <= a_req;
+            b_ack <= b_req;
+        end
+    end
+
+endmodule
+
+`default_nettype wire
