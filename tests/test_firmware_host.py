@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Firmware C on the host: unit tests (gcc, ASan + UBSan), control.c against
 the Python reference torqueloop/models/servo.py on random inputs, the physical
 gain conversion against torqueloop/spec/protocol.py, a bounded libFuzzer run of the
@@ -30,8 +31,13 @@ FUZZ_SECONDS = int(os.environ.get("TL_FUZZ_SECONDS", "10"))
 def host_tests() -> Path:
     OUT.mkdir(parents=True, exist_ok=True)
     exe = OUT / "host_tests"
+    # Built under a per-process name and renamed into place: another xdist
+    # worker may be running the previous binary (writing it in place failed
+    # with "Text file busy").
+    tmp = OUT / f"host_tests.{os.getpid()}"
     subprocess.run(["gcc", "-std=c11", "-O1", "-g", "-Wall", "-Wextra", "-Werror", *SAN, *INC,
-                    str(FW / "tests" / "test_host.c"), *map(str, SRC), "-o", str(exe)], check=True)
+                    str(FW / "tests" / "test_host.c"), *map(str, SRC), "-o", str(tmp)], check=True)
+    os.replace(tmp, exe)
     return exe
 
 

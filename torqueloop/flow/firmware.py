@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Build the servo firmware: ELF, raw binary, RAM initialisation file for
 $readmemh (one 32-bit word per line, word 0 = RAM base) and a boot-ROM image
 whose stub jumps to the RAM base (until the bootloader issue lands).
@@ -12,6 +13,7 @@ The C sources are listed once here (SOURCES).
 from __future__ import annotations
 
 import argparse
+import os
 import shutil
 import subprocess
 import sys
@@ -109,11 +111,13 @@ def fuzz_binary() -> Path:
         raise FuzzerMissing("clang with libFuzzer not found: apt-get install clang libclang-rt-14-dev")
     exe = REPO / "build" / "firmware" / "fuzz" / "fuzz_link"
     exe.parent.mkdir(parents=True, exist_ok=True)
+    tmp = exe.with_name(f"{exe.name}.{os.getpid()}")   # renamed into place: another process may run the old one
     r = subprocess.run(["clang", "-std=c11", "-g", "-O1", "-fsanitize=fuzzer,address,undefined",
                         "-fno-sanitize-recover=all", *HOST_INCLUDES, str(FW / "tests" / "fuzz_link.c"),
-                        *map(str, HOST_SOURCES), "-o", str(exe)], capture_output=True, text=True)
+                        *map(str, HOST_SOURCES), "-o", str(tmp)], capture_output=True, text=True)
     if r.returncode:
         raise FuzzerMissing(f"clang could not build the fuzz target (libclang-rt-14-dev missing?):\n{r.stderr[-2000:]}")
+    os.replace(tmp, exe)
     return exe
 
 
