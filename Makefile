@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # torqueloop: every entry point.  `make help` lists the targets.
 # Each target sets itself up first (make setup is idempotent and fast when done).
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # Create (and optionally compile) the torqueloop Quartus project without Python:
 #
 #   quartus_sh -t constraints/create_project.tcl            ;# project only

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """make bench: run every benchmark in scripts/benches/ (bench_*.py, each with
 a main() that prints its numbers) in name order, or only those named."""
 

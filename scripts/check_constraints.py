@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Constraint consistency check of the DE0-CV Quartus project (no Quartus needed).
 
 Every top-level port has a pin and an I/O standard, no pin is used twice,

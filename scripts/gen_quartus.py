@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """The DE0-CV Quartus project from constraints/pins.toml and rtl/manifest.toml.
 
   gen_quartus.py --update     rewrite the committed products of the pin table:

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Pure-model P, PD and PID step responses (paper Figs 14-16, "simulation").
 
 Runs torqueloop.sim.model_loop.run_loop for each law with the Table 1 gains: both

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Run a linked RV32IM ELF on the torqueloop CPU in simulation.
 
     scripts/run_elf.py PROG.elf [--sim verilator|icarus] [--max-cycles N] [--signature FILE]

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """The project's main job: the paper's two-axis step experiment (sec. VI.B)
 with the board image running the real servo firmware in the loop
 (RTL in the loop, native Verilator harness) against the pure model, for P,

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # make setup: install every tool the project needs, idempotently.
 #
 #  1. Debian packages (simulators, synthesis, RISC-V compiler) with apt-get,

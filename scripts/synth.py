@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """make synth: Yosys synth_intel_alm -family cyclonev on every synthesisable
 core of rtl/manifest.toml; writes build/synth/resources.{md,json} and prints
 the table."""

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Upload a firmware image to the torqueloop boot ROM bootloader (docs/bootloader.md).
 
     python scripts/upload.py IMAGE --port URL [--baud 115200] [--enter] [--wait S]

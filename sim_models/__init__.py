@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Plant models of the torqueloop two-axis ball-screw stage (paper sec. III-IV).
 
 Modules:

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """One axis of the stage as a piecewise-affine hybrid system (paper eq 5-17).
 
 State vector (SI), ``N_STATE`` = 13 entries::

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """BTS7960 / IBT-2 H-bridge: pin states in, armature voltage and IS current out.
 
 Each BTS7960 is a half-bridge: with its enable (INH, the module's R_EN/L_EN)

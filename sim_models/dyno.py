@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Dynamometer bench of the characterisation method (paper sec. II.A-B, VI.A).
 
 The motor's output shaft carries a wheel of radius r; a rope from the wheel

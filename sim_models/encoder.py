@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Quadrature encoder on the motor shaft: angle -> A/B/Z states and edges.
 
 Default resolution 64 counts per motor revolution (16 lines, both edges of

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Parameter sets as data: dataclasses filled from a TOML file.
 
 The default file is ``params/table2.toml`` (the paper's Table 2 with its unit

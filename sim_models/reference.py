@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Reference integration: scipy's stiff Radau solver at tight tolerance.
 
 Advances one axis through a schedule of bridge pin states with the same

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Fast plant stepper for co-simulation: exact zero-order-hold flow per mode.
 
 Between mode switches each axis is linear time-invariant with a constant

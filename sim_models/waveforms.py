@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Input waveforms for the plant's own tests and benchmarks: a carrier of
 any frequency with any duty fraction, on the FPGA clock grid, and the fast
 stepper run through one.  (What the board's PWM block makes is modelled by

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """pytest configuration shared by the cocotb test benches under tb/."""
 
 import sys

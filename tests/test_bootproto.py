@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """torqueloop.spec.bootproto: frame layout, CRC-32 (host and the bootloader's C
 code), reply parsing, ROM layout, ELF conversion, and upload() over a TCP
 socket to a fake bootloader (the RN-XV path: socket://host:port)."""

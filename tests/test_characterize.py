@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The characterisation method (torqueloop.characterize) on synthetic bench
 data with known answers: a linear motor with a known dead zone, frequency
 curves with known crossings, and the edge cases of steps 5 and 7."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The characterisation command as a lab uses it: a data folder per axis,
 the loop (record a duty sweep where the tool says, run again), the written
 configuration, the plots, and bad files refused with line and reason."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The simulated bench's session logic (torqueloop.characterize.simbench) on
 a dynamometer whose answers are known in closed form, with the pin
 waveforms the cores produce (source "model"; the RTL source is checked

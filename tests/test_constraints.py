@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """DE0-CV constraints: the repo's files are consistent, and the checks catch
 the mistakes they exist for (a pin twice, a wrong ball, a missing I/O
 standard, an .sdc naming a port that does not exist, a SoC file left out)."""

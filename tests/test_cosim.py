@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Unit tests of the co-simulation pieces that do not need the RTL
 (torqueloop.sim): plant snapshot/rollback, the speculative plant-on-pins
 scheme against a direct plant run, the eq. (26)-(27) RMSE."""

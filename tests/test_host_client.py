@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The host tool's protocol client against scripted fake links: timeouts,
 retries, lost and damaged frames, RN-XV text (``*HELLO*``, ``CMD``), seq
 resynchronisation, telemetry between replies, and a seeded random lossy

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """End to end: the ``torqueloop`` command against the simulated board over TCP.
 
 ``torqueloop sim`` runs in its own process (the servo firmware's C and the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """A lab installs the host tool alone: ``pip install .[host]`` in a clean
 virtual environment gives a working ``torqueloop`` client, without cocotb,
 Verilator or scipy.  The client in that environment talks to a simulated

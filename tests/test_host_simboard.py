@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The simulated board's boot ROM (docs/bootloader.md state machine) on every
 path a host can meet: accepted, header, length, CRC, gap and garbage errors,
 silence, and that the firmware answers afterwards with the right build id.

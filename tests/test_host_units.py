@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Host tool pieces without a board: position units, PWM frequency, step
 figures against closed-form first- and second-order responses, CSV round
 trip, and the config file's validation and write order."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The Python side's layers import in one direction only (torqueloop.flow.layers)."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """One definition of each equation: the host tool and the characterisation
 export choose the same divider (eq. 4), and the host's step-test and the
 experiment report measure a trajectory the same way."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """BTS7960 bridge truth table, IS pin, and the dynamometer bench model."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Pure-model closed loop (torqueloop.sim.model_loop)."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Encoder model: exact counts, no skipped states, edge spacing, glitches."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Physical invariants of the plant model (sim_models.axis)."""
 
 from __future__ import annotations

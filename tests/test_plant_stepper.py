@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The fast exact-ZOH stepper against the stiff Radau reference, and its
 matrix exponential against scipy's."""
 

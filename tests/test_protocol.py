@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The Python side of the link protocol (torqueloop/spec/protocol.py) against the
 protocol's own rules: CRC check value, COBS properties, frame round trips,
 resynchronisation after noise and the RN-XV's *HELLO*, every single-bit error

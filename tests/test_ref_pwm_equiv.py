@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The proofs that guard freq_div and pwm_torque can fail: a deliberately
 broken VHDL twin must fail the VHDL/Verilog equivalence proof, and a
 deliberately broken Verilog core must fail the SAT safety properties."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Count_max (eq. 4) and the frequency error of the integer divider: the
 numbers docs/freq_div.md quotes and the characterisation flow relies on."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The pwm_torque reference mapping (eq. 1 with eq. 19/25 saturation) against
 its definition in docs/pwm_torque.md, and the divide-by-(2^N - 1) identity
 the RTL relies on, exhaustively."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The quadrature-decoder reference model against its own spec: the encoder
 generator's count (an oracle that knows nothing of the filter), the glitch
 bounds, and the stated maximum count rate - including that it is tight."""

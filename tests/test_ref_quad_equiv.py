@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The VHDL/Verilog equivalence proof of quad_decoder rejects broken twins."""
 
 import pytest

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The UART reference model against the 8N1 spec: baud arithmetic, the
 three-sample line decoder with rate mismatch, framing errors, breaks and
 glitches, and the RX FIFO's overrun and RTS accounting."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The VHDL/Verilog equivalence proofs of the UART cores reject broken twins:
 one mutant per file, each checked on its own core, including a FIFO mutant
 that only shows once the FIFO is full."""

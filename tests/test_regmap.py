@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The register map (torqueloop/spec/regmap.toml) and its generated views."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The RV32IM ISS (torqueloop/models/rv32.py), the CPU's oracle, checked on its own:
 spec tables for the M extension, numpy as an independent integer model,
 trap and interrupt rules of the privileged spec, and a C program whose

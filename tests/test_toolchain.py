@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The tools make setup installs are the ones the flows need."""
 
 import os

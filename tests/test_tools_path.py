@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The same Verilator however the tests are started (torqueloop/flow/tools.py):
 `make test`, `.venv/bin/python -m pytest`, or `pytest` in an activated
 environment whose PATH finds Debian's Verilator 5.006 first."""

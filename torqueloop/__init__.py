@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """torqueloop: FPGA servo controller for DC-motor ball-screw stages.
 
 Python side of the project: the HDL manifest and simulation runner used by

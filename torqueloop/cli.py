@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """``torqueloop``: tune, move, plot and upload firmware over serial, WiFi
 or the simulated board.  docs/host.md is the user's guide.
 

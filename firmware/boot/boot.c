@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* torqueloop boot ROM bootloader (docs/bootloader.md).
  *
  * After reset (or a jump to the reset vector) it quiesces the peripherals,

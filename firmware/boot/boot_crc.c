@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* CRC-32/ISO-HDLC, reflected polynomial 0xEDB88320, one nibble at a time:
  * a 64-byte table instead of 1 KiB keeps the bootloader inside its 2 KiB ROM
  * slot, and two table steps per byte (about 20 instructions, ~100 cycles at

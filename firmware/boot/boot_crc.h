@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* CRC-32/ISO-HDLC (zlib, Ethernet) of the upload protocol, docs/bootloader.md. */
 #ifndef BOOT_CRC_H
 #define BOOT_CRC_H

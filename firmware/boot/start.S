@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Boot ROM entry, at the reset vector (RESET_PC = TL_BOOT_ROM_BASE).  Also the
  * bootloader's entry from firmware (docs/bootloader.md, 'Entry convention'):
  * nothing is assumed about registers, CSRs or RAM.  Interrupts go off first;

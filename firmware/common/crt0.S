@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Start-up of every torqueloop firmware image (firmware/common/link.ld):
    the image is loaded into RAM (RAM_INIT, or by a bootloader), so no .data
    copy is needed; set gp and sp, clear .bss, call main, spin if it returns. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The three functions GCC may call on its own for struct copies and
  * initialisers even in freestanding code (C11 freestanding provides no libc). */
 #include <stddef.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Generated from torqueloop/spec/regmap.toml by torqueloop.flow.generate - do not edit. */
 #ifndef TORQUELOOP_REGS_H
 #define TORQUELOOP_REGS_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* COBS framing, CRC and replay guard of the link (docs/protocol.md). */
 #include "tl_link.h"
 

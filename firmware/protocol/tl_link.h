@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Link layer of the torqueloop protocol (docs/protocol.md): COBS framing,
  * CRC-16/CCITT-FALSE, length and sequence checks.  Plain C11 with no
  * hardware access, so the same file runs on the soft CPU, in the host unit

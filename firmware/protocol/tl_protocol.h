@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Generated from torqueloop/spec/protocol.toml by torqueloop.flow.generate - do not edit. */
 #ifndef TL_PROTOCOL_H
 #define TL_PROTOCOL_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Position control of one axis (control.h).  Why the choices:
  *  - derivative of the measured velocity, not of the error (eq. 21-22 with
  *    e' = x_d' - x' and x_d' = 0 between set-point changes): a set-point step

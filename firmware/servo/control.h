@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Fixed-point position control of one axis: the paper's P, PD and PID laws
  * (eq. 20-22), velocity estimation, trapezoidal set-points, output scaling
  * and saturation (eq. 19, 23-25).  No hardware access: the caller passes the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* What the servo core needs from the hardware.  servo/hal_soc.c implements
  * it on the torqueloop SoC registers; firmware/tests/hal_fake.c on the host. */
 #ifndef TL_HAL_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal.h on the torqueloop SoC: every address from the generated register header. */
 #include "hal.h"
 

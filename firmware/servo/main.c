@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Servo firmware entry: the machine-timer interrupt runs one control
  * iteration of both axes every PERIOD_US (servo.c, tl_servo_tick); the main
  * loop moves bytes between the UART and the link layer and sends telemetry.

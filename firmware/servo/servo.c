@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Servo application core (servo.h): parameters, safety and the command
  * handler.  The safety rules (docs/firmware.md, "Safety"):
  *  - power-up: both axes disabled; the SoC's reset-time ESTOP latch bit is

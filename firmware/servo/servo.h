@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The servo application without its hardware: parameters, two axes under
  * control.c, the safety state machine and the command handler of the link
  * protocol.  servo/main.c calls tl_servo_tick() from the machine-timer

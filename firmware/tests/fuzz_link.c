@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* libFuzzer target: arbitrary bytes into the servo's receive path (link
  * layer + command handler) on the fake HAL, with ASan/UBSan.  Beyond memory
  * safety it checks the protocol's promise: unless a frame was accepted

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal.h on the host: registers are fields of hal_fake (hal_fake.h). */
 #include "hal_fake.h"
 

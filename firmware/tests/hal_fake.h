@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* A fake of hal.h for host tests and the fuzzer: the "hardware" is this struct. */
 #ifndef TL_HAL_FAKE_H
 #define TL_HAL_FAKE_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Host unit tests of the firmware's plain C: link layer, control law,
  * trapezoid profile and the servo core's safety and command handling (on the
  * fake HAL).  Run by tests/test_firmware_host.py.

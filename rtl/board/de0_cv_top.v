@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // de0_cv_top: the torqueloop SoC on the Terasic DE0-CV (Cyclone V 5CEBA4F23C7N).
 //
 // Port names are Terasic's, so constraints/de0_cv_top.qsf assigns each bit

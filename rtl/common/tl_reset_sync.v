@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // reset_sync: asynchronous assertion, synchronous release of reset.
 //
 // The board's reset button (RESET_N) and the PLL-locked signal are

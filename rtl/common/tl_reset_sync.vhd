@@ -1,3 +1,4 @@
+-- SPDX-License-Identifier: MIT
 -- reset_sync: asynchronous assertion, synchronous release of reset.
 -- VHDL twin of rtl/common/tl_reset_sync.v; see that file for the reasoning.
 library ieee;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // sync_2ff: WIDTH independent two-flop synchronisers for asynchronous inputs.
 //
 // Every board input (encoder channels, UART RX, keys, switches, bridge fault

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 `default_nettype none
 // torqueloop CPU: RV32IM + Zicsr, machine mode only, multi-cycle with the
 // next instruction fetch overlapped with the completing cycle.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 `default_nettype none
 // Integer ALU of RV32I (OP and OP-IMM) and the branch comparator.
 // The comparator is separate from the adder so that branches resolve in the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 `default_nettype none
 // Machine-mode CSRs (privileged spec, M-mode only), trap entry and mret.
 //

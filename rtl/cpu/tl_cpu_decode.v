@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 `default_nettype none
 // Instruction decoder: register numbers, immediate and instruction class of
 // one 32-bit RV32IM/Zicsr instruction word.  Purely combinational.

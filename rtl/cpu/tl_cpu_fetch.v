@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 `default_nettype none
 // Instruction fetch: the instruction bus master, the instruction register
 // and a one-word prefetch buffer.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 `default_nettype none
 // Load/store unit: data-bus byte lanes for a store, alignment check, and
 // the extraction and sign/zero extension of loaded bytes.  Combinational.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 `default_nettype none
 // Integer register file x0..x31 in block RAM: one write port, two read
 // ports with registered (synchronous) reads, as Cyclone V M10K/MLAB blocks

@@ -1,3 +1,4 @@
+-- SPDX-License-Identifier: MIT
 -- pwm_torque: the PWM torque block of the paper's PWM module (section II.C,
 -- Fig. 6): dead-zone compensation (eq. 1), saturation (eq. 19/25),
 -- double-buffered duty and direction, registered bridge pins with a safe

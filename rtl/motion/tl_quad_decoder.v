@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // quad_decoder: 4x quadrature decoder for one optical encoder (A, B, index Z).
 //
 // The paper's decoder block (Sec. V.A, Fig. 8) counts encoder pulses into

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Generated from torqueloop/spec/regmap.toml by torqueloop.flow.generate - do not edit.
 // Listed first in every SoC core's source list (macros are global).
 `ifndef TL_REGMAP_VH

@@ -1,3 +1,4 @@
+-- SPDX-License-Identifier: MIT
 -- Generated from torqueloop/spec/regmap.toml by torqueloop.flow.generate - do not edit.
 library ieee;
 use ieee.std_logic_1164.all;

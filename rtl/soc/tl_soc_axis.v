@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // soc_axis: one motor axis as a register page (AXIS layout of
 // torqueloop/spec/regmap.toml): the paper's PWM module - frequency generator
 // (freq_div, eq. 2-4) and PWM torque block (pwm_torque, eq. 1) - driving one

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // soc_fabric: everything of the SoC except the CPU - the interconnect of the
 // CPU's two bus masters, boot ROM, RAM and the peripheral pages - with the
 // CPU's bus and interrupt signals as ports, so bus-master test benches can

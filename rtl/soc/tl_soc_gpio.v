@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // soc_gpio: the DE0-CV's LEDs, slide switches, push buttons and six
 // 7-segment digits as registers (GPIO block of torqueloop/spec/regmap.toml).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // soc_intc: interrupt controller for the peripherals -> the CPU's irq_external.
 //
 // Sources are pulses or levels; a rising edge sets the source's PENDING bit,

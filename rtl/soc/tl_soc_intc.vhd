@@ -1,3 +1,4 @@
+-- SPDX-License-Identifier: MIT
 -- soc_intc: interrupt controller for the peripherals -> irq_external.
 -- VHDL twin of rtl/soc/tl_soc_intc.v (same entity, ports and register names;
 -- proven equivalent by make lint); see that file for the reasoning.

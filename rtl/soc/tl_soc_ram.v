@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // soc_ram: program/data RAM, true dual-port block RAM initialised from a hex file.
 //
 // Port A serves the CPU data bus (read/write with byte enables), port B the

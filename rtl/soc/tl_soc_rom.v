@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // soc_rom: boot ROM (reset vector at 0), block RAM without a write port,
 // initialised from a hex file, readable by both buses in the same cycle.
 //

@@ -1,3 +1,4 @@
+-- SPDX-License-Identifier: MIT
 -- soc_safety_gate: forces every PWM pin low in reset, while `safe`, or while
 -- the raw e-stop pin is high (combinationally, no clock needed).
 -- VHDL twin of rtl/soc/tl_soc_safety_gate.v (proven equivalent by make lint);

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // soc_sys: identification registers, watchdog and the safety latch.
 //
 // A stage that moves unasked is the worst failure of this machine, so the

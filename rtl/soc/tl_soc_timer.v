@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // soc_timer: RISC-V machine timer (mtime, mtimecmp) and software interrupt (msip).
 //
 // mtime counts clock cycles (CLOCK_50: 20 ns), so control-loop periods and

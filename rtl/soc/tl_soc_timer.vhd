@@ -1,3 +1,4 @@
+-- SPDX-License-Identifier: MIT
 -- soc_timer: RISC-V machine timer (mtime, mtimecmp) and software interrupt.
 -- VHDL twin of rtl/soc/tl_soc_timer.v (same entity, ports and register names;
 -- proven equivalent by make lint); see that file for the reasoning.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // soc_uart: the RN-XV WiFi link (paper section V.A) as a register page
 // (UART layout of torqueloop/spec/regmap.toml) around rtl/uart/uart.
 //

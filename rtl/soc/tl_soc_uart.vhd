@@ -1,3 +1,4 @@
+-- SPDX-License-Identifier: MIT
 -- soc_uart: the RN-XV WiFi link as a register page around rtl/uart/uart.
 -- VHDL twin of rtl/soc/tl_soc_uart.v (same entity, generics, ports and register
 -- names; proven equivalent by make lint); see that file for the reasoning.

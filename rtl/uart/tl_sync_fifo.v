@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // sync_fifo: single-clock first-word-fall-through FIFO with valid/ready on
 // both sides (the UART's RX and TX buffers).
 //

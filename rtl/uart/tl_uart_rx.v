@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // uart_rx: 8N1 receiver with a run-time bit period, three-sample majority
 // vote, framing-error and break detection.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // uart_tx: 8N1 transmitter with a run-time bit period.
 //
 // One bit lasts baud_div + 1 clocks (baud = CLK_HZ / (baud_div + 1)); a new

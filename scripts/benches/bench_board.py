@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Cyclone V resources of the whole board top (SoC + board logic) against the
 DE0-CV's 5CEBA4: Yosys synth_intel_alm, with sanity bounds asserted.
 

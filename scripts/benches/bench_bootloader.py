@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Bootloader: ROM budget (code, factory slot, servo image), boot and upload
 times at 50 MHz / 115 200 baud by calculation, and the real servo firmware as
 the factory image on the simulated SoC (Verilator): time from the window

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The characterisation method on the simulated bench, end to end: both
 motors of Table 2 on the plant's dynamometer, pins from the RTL (freq_div +
 pwm_torque under Verilator) and, for comparison, from the cores' documented

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The CPU core: CPI on a small integer benchmark (tb/cpu/progs/bench.c, -O2),
 cycles per instruction class, Cyclone V resources and logic depth."""
 

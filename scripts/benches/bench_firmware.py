@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Servo firmware figures: image size, worst cycles per control iteration and
 interrupt lateness at the fastest period on the simulated SoC (Verilator,
 worst-case load), and a long libFuzzer run of the receive path."""

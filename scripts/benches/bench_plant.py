@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Plant (sim_models): fast stepper cost per simulated second for two axes
 with PWM at the paper's 450 Hz / 200 Hz carriers, and its error against the
 stiff Radau reference over PWM-driven runs (and through backlash).

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """freq_div + pwm_torque: frequency error of the integer divider (eq. 4) over
 the paper's 50-500 Hz sweep and at 20 kHz, and the Cyclone V cost and logic
 depth of both cores at the DE0-CV defaults (PWM_BITS = 10, DIV_BITS = 16)."""

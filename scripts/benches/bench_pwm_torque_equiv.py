@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """pwm_torque: the VHDL/Verilog equivalence proof at the default PWM_BITS = 10.
 
 make lint proves the twins equivalent at PWM_BITS = 6 (core pwm_torque_equiv,

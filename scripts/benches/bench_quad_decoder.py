@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Quadrature decoder: maximum count rate and glitch rejection per filter
 setting (from the reference model's formulas, checked tight in
 tests/test_ref_quad_decoder.py), the default setting's margin over the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """RTL in the loop: simulated clock cycles per second of the full closed loop
 (servo firmware on the board image, two axes, plant on the pins, host link),
 on the native Verilator harness and on the cocotb harness (Verilator and

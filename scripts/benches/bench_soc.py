@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Cyclone V resources of the SoC at full size (Yosys synth_intel_alm):
 the fabric (everything but the CPU) and the whole SoC, both with the
 default 64 KiB RAM, against the 5CEBA4's budget.  make lint/synth use a

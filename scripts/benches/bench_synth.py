@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Cyclone V resources of every synthesisable core (Yosys synth_intel_alm)."""
 
 from torqueloop.flow import eda

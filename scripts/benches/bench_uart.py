@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """UART: divisor and rate error for the RN-XV's rates at 50 MHz, the
 receiver's rate tolerance (reference decoder swept), Cyclone V resources per
 FIFO depth, and how long the VHDL/Verilog equivalence proof takes per depth."""

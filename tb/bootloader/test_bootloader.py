@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """bootloader: the boot ROM bootloader (firmware/boot) on the whole SoC.
 
 The boot ROM holds the real bootloader (built with a short window and gap and

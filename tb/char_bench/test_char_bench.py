@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The simulated characterisation bench end to end (pytest): a written
 characterisation configuration reproduces the chosen frequency and the dead
 zone on the PWM pins of freq_div + pwm_torque (torqueloop/characterize/

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Build test programs for the CPU and run them on the ISS oracle.
 
 Programs are compiled at test time with Debian's riscv64-unknown-elf-gcc

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 `default_nettype none
 // Test harness of the CPU (simulation only, not part of the SoC): the core,
 // a two-port RAM, a boot ROM stub, the machine timer, a test interrupt

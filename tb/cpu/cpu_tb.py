@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """cocotb driver of tb/cpu/cpu_sim_top: load an ELF, run to tohost, read memory.
 
 Shared by the CPU test bench (test_cpu.py) and the ELF runner

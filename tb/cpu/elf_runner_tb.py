@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """cocotb side of scripts/run_elf.py: run one ELF on cpu_sim_top.
 
 Inputs and outputs through the environment (set by run_elf.py):

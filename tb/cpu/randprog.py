@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Seeded random RV32IM instruction streams for the CPU-vs-ISS comparison.
 
 The stream mixes every RV32I ALU and M-extension operation (with operands

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """CPU core (rtl/cpu) against the ISS oracle (torqueloop/models/rv32.py).
 
 Every program is compiled at test time, run on cpu_sim_top and on the ISS,

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The ELF runner's contract (scripts/run_elf.py): exit codes, counts, signature, memory map."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test harness of the board top: the cable harness of docs/hardware.md in
 // Verilog.  It drives the board's input pins and the header pins the
 // IBT-2s, encoders and RN-XV would drive, and brings every FPGA output out

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """de0_cv_top: the whole board image with the bridges, encoders and RN-XV on
 its header pins (tb/de0_cv_top/de0_cv_top_tb.v is the cable harness), and
 the plant model (sim_models) on the bridge pins.

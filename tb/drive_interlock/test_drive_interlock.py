@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """drive_interlock: no bridge input passes unless armed; stop and faults disarm."""
 
 import random

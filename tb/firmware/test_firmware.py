@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """firmware: the servo firmware (firmware/servo) on the whole simulated SoC.
 
 The image is built by torqueloop.flow.firmware with test defaults (1 Mbaud

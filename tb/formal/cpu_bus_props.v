@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 `default_nettype none
 // Bus-contract properties of the CPU, proven by Yosys SAT (k-induction) for
 // every input sequence: any wait states, any instruction words, acks and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Safety properties of drive_interlock, proven by Yosys SAT (make lint),
 // for every input sequence:
 //  - nothing reaches a bridge pin unless the drives were armed the clock

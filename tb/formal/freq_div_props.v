@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Properties of freq_div, proven by Yosys SAT (make lint):
 //  - two ticks on consecutive clocks only when the divisor is 0 or 1
 //    (otherwise the PWM would run faster than the divisor says);

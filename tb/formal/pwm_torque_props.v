@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Safety properties of pwm_torque, proven by Yosys SAT (make lint), from any
 // state (no reset needed: every property is about one clock edge):
 //  - the clock after enable low or fault high the pins are in the safe state

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Safety properties of quad_decoder, proven by Yosys SAT (make lint):
 //  1. for any run-time sample_div and filter_len, the position changes by at
 //     most one count per clock unless pos_load was given (the 32-bit wrap

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Safety properties of reset_sync, proven by Yosys SAT (make lint):
 //  - while arst_n is low, rst_out is high (no clock needed: async2sync keeps
 //    the asynchronous path combinational);

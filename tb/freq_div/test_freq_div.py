@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """freq_div: tick period measured on the pin for divisors 0, 1, 2 .. large,
 the reset default (eq. 4 Count_max), and a seeded random stream of divisor
 writes at random times compared with the reference model every clock."""

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test top: freq_div ticks driving pwm_torque, as the SoC wires them, so the
 // bench can check the carrier on the pins against torqueloop/models/freq_div.py:
 // carrier_hz() (what the characterisation flow and firmware rely on).

@@ -1,3 +1,4 @@
+-- SPDX-License-Identifier: MIT
 -- Test top: freq_div ticks driving pwm_torque (VHDL twin of pwm_chain_top.v).
 library ieee;
 use ieee.std_logic_1164.all;

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """pwm_torque: period and duty measured on the bridge pins for divisor/duty
 pairs (0, dead zone, mid, full scale), direction change only at a period
 boundary, fault/enable response within one clock and resumption only at a

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """quad_decoder: every output compared with the clock-level reference model
 on every clock, plus the end-to-end count of the encoder waveform generator
 (torqueloop/models/quad_decoder.py).  Directed cases first, then seeded random

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """reset_sync: assertion with no clock running, release after STAGES edges."""
 
 import random

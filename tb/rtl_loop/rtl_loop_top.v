@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // rtl_loop_top: the board image (rtl/board/de0_cv_top.v) as the co-simulation
 // sees it - only the pins a bench of the real machine would touch, as plain
 // ports (no inouts), so the same wrapper serves the cocotb harness and the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """RTL in the loop, short version of the paper's step experiment (make test).
 
 The board image runs the real servo firmware (firmware/servo) on the native

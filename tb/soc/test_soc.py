@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """soc: the CPU running a real program from the boot ROM on the whole SoC.
 
 tb/soc/prog/blink.c (compiled here with riscv64-unknown-elf-gcc, using only

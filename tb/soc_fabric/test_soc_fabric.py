@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """soc_fabric: the SoC without its CPU, driven through the CPU's two bus
 ports by bus-master models that follow the CPU's contract (req held until
 the one-cycle ack; rdata/err with ack).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Safety properties of the SoC's stop path (soc_sys latch + soc_safety_gate),
 // proven by Yosys SAT k-induction (make lint), for every input sequence:
 // any bus traffic, any e-stop/fault waveform, any PWM request.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """sync_2ff: random asynchronous input against the two-flop reference model,
 with inputs changing at random times within the clock period."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """uart (top: rx, tx, FIFOs, flow control) against cocotbext-uart, an
 independent bus model, and the reference model in torqueloop/models/uart.py.
 

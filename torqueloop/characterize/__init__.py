@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The characterisation method (paper II.B): bench sweeps in, the PWM
 frequency and dead zone of each motor out, as the build's configuration.
 

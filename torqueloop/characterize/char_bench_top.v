@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // char_bench_top: the paper's PWM module as the characterisation bench
 // drives a motor (section II.B with II.C): freq_div makes the tick (eq. 2-4),
 // pwm_torque turns a command into IBT-2 pins (eq. 1).  Simulation only: the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The characterisation command (scripts/characterize.py).
 
     characterize.py run DATA_DIR [--out CONFIG] [--plots DIR] [--set NAME=VALUE ...]

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Step 8: a passing method result as the build's configuration (the file
 format and its reader are torqueloop.spec.charconfig's), and the C / Verilog
 headers that bake it into a firmware or RTL build."""

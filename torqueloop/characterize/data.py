@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The bench data format: the two sweeps of the characterisation method.
 
 A lab records, per motor, one *frequency sweep* at a fixed 50 % duty

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The characterisation method of Lopez-Gomez et al. (2020), section II.B.
 
 Steps as the paper numbers them (1, 3, 4 are bench work; their data arrive

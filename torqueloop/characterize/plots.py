@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Figures like the paper's Fig. 10 (torque vs frequency, step 5) and
 Fig. 11 (torque vs duty, steps 6-7), as PNG files."""
 

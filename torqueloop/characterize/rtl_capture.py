@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The simulated characterisation bench, RTL side (a cocotb module, run by
 :func:`torqueloop.characterize.simbench.rtl_waveforms`): freq_div +
 pwm_torque (char_bench_top.v, this folder) driven with Count_max and duty

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The simulated characterisation bench: the lab's sweeps with no hardware.
 
 Two pin sources feed the same measurement:

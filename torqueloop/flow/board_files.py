@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The DE0-CV pin table (constraints/pins.toml) and what is generated from it.
 
 One source, several products: the Quartus settings (.qsf), the timing

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Build the boot ROM: the bootloader (firmware/boot/) + a factory firmware image,
 as the $readmemh file soc_rom's ROM_INIT loads (docs/bootloader.md, 'ROM layout').
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Consistency checks of the DE0-CV constraints (scripts/check_constraints.py).
 
 Quartus is not available where the project is built and tested, so the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Lint, synthesis and formal-equivalence flows over the HDL manifest.
 
 Used by scripts/lint.py (make lint) and scripts/synth.py (make synth).  Each

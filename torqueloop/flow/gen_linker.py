@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """firmware/common/link.ld from the memory map (torqueloop/spec/regmap.toml),
 written and checked by ``python -m torqueloop.flow.generate [--check]``.
 

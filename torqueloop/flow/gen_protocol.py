@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Generated views of the link protocol (torqueloop/spec/protocol.toml): the
 firmware's C header and docs/protocol.md.  torqueloop.spec.protocol reads
 the TOML itself (no generated Python to go stale)."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Generated views of the register map (torqueloop/spec/regmap.toml):
 
 * ``rtl/soc/regmap.vh``                  Verilog `defines (listed first in the SoC cores' sources)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Every file generated from a single source, written or checked in one place.
 
     python -m torqueloop.flow.generate           # write the stale ones
@@ -20,6 +21,7 @@ import argparse
 import sys
 from typing import Callable
 
+from torqueloop.flow.licence import with_licence
 from torqueloop.spec.repo import REPO_ROOT
 
 
@@ -32,7 +34,7 @@ def products() -> dict[str, str]:
     out.update({path: fn() for path, fn in gen_linker.OUTPUTS.items()})
     out.update({path: fn() for path, fn in gen_protocol.OUTPUTS.items()})
     out.update({str(p.path.relative_to(REPO_ROOT)): p.text for p in quartus.products()})
-    return out
+    return {rel: with_licence(rel, text) for rel, text in out.items()}
 
 
 def stale(prods: dict[str, str]) -> list[str]:

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The layers of the Python side and the one direction their imports may go.
 
     spec                               the single sources, one definition of each equation

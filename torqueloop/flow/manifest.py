@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The HDL manifest (rtl/manifest.toml): which cores exist and their sources.
 
 Every flow (lint, sim, synth, equivalence, Quartus project) reads the core

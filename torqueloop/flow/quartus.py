@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The DE0-CV Quartus project: generated files and the project folder.
 
 ``python -m torqueloop.flow.generate`` writes the generated files (and
@@ -15,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from torqueloop.flow import board_files as board
+from torqueloop.flow.licence import with_licence
 from torqueloop.flow.manifest import REPO_ROOT, load_manifest
 
 PROJECT = "de0_cv_top"
@@ -46,8 +48,8 @@ def products(table: board.PinTable | None = None,
         raise SystemExit("gen_quartus: constraints/pins.toml is inconsistent:\n  " + "\n  ".join(problems))
     sources = sources if sources is not None else top_sources(table.board.top)
     out = [
-        Product(board.QSF, board.gen_qsf(table, board_pins, sources)),
-        Product(board.SDC, board.gen_sdc(table)),
+        Product(board.QSF, with_licence(board.QSF.name, board.gen_qsf(table, board_pins, sources))),
+        Product(board.SDC, with_licence(board.SDC.name, board.gen_sdc(table))),
     ]
     top_text = board.TOP_V.read_text()
     out.append(Product(board.TOP_V, board.replace_between(

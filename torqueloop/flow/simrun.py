@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Build and run one core's cocotb test bench on one simulator.
 
 The pytest entry of every test bench calls :func:`run`.  Verilog cores run

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Which tool binaries the flows run, found the same way however they are started.
 
 cocotb 2 needs Verilator 5.036 or newer; Debian's is 5.006 and sits on PATH.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The host tool behind the ``torqueloop`` command (torqueloop/cli.py).
 
 - :mod:`.transport`: open a link by URL (serial port, RN-XV ``socket://``).

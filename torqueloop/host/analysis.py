@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Telemetry records -> arrays, step-response figures, CSV and plots.
 
 A record is what :func:`torqueloop.spec.protocol.decode_telemetry` returns:

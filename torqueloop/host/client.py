@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The protocol client: one command, one reply, over any :class:`Link`.
 
 All framing, CRC, payload layouts and codes come from the generated

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """``config save`` / ``config load``: the board's parameters as a JSON file.
 
 Schema ``torqueloop-host-config`` version 1::

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Links by URL: everything goes through pyserial's ``serial_for_url``.
 
 ``/dev/ttyUSB0`` (or ``COM3``) opens a serial port at ``baud``;

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """``torqueloop upload``: the servo firmware's BOOTLOADER command, then the
 boot ROM's upload protocol (docs/bootloader.md), then a check that the new
 firmware answers.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Reference model of the board-level drive interlock (rtl/board/drive_interlock).
 
 Written from the behaviour the board needs (docs/hardware.md), not from the

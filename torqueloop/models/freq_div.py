@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Frequency divider: a clock-accurate model of rtl/motion/freq_div, the
 test-bench oracle.  Written from docs/freq_div.md, not from the RTL.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The PWM block at event level: which IBT-2 pins an axis shows, and when.
 
 One model of freq_div + pwm_torque (docs/freq_div.md, docs/pwm_torque.md) for

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """PWM torque block: dead-zone compensated torque command to H-bridge pins.
 
 The mapping (paper eq. 1 as intended, eq. 19/25 saturation) and a

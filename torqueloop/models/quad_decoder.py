@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Reference model of the quadrature decoder (rtl/motion/tl_quad_decoder.v).
 
 Written from the specification in docs/quad_decoder.md, not from the RTL:

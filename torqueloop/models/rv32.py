@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """RV32IM + Zicsr instruction-set simulator, machine mode only: the oracle of the CPU core.
 
 Written from the RISC-V unprivileged spec (RV32I, M) and the privileged

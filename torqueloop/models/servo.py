@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Reference model of one servo axis (docs/firmware.md, "Control"), in Python
 integers: the oracle for firmware/servo/control.c (host tests drive both with
 the same random inputs) and for the on-SoC firmware bench.

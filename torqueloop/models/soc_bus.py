@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Reference model of the SoC bus as software sees it, written from the
 memory map (torqueloop/spec/regs.py, generated from torqueloop/spec/regmap.toml), not
 from the RTL: which addresses answer, and what RAM holds."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Reference models of the synchronisers (rtl/common)."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Reference model of the UART (rtl/uart), written from docs/uart.md.
 
 Three pieces, each an oracle for one part of the core:

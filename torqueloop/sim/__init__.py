@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """RTL-in-the-loop co-simulation: the board image (firmware on the SoC)
 closing the loop through its pins with the sim_models plant.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Run the step experiment on the cocotb harness (torqueloop/sim/cocotb_board.py)
 on Icarus or Verilator, through the project's simrun flow; returns the same
 :class:`~torqueloop.sim.experiment.RtlRun` as the native harness."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The paper's experiment (sec. VI.B, Figs 14-16, Table 3) as RTL in the loop.
 
 From rest, a step of 6.28 rad (one screw turn, 4 mm) on both axes with P, PD

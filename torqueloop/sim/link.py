@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Host side of the servo link over a simulated UART: the frames of
 torqueloop.spec.protocol (the same code the host tool uses), with the board and
 the plant advancing while the host waits for a reply."""

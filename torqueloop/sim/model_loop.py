@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Pure-model closed loop: the paper's P, PD and PID laws (eq 20-22) with the
 Table 1 gains, sampled like the firmware, driving the plant through PWM.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Build and drive the native Verilator harness (torqueloop/sim/native/harness.cpp).
 
 The board image is verilated once into a shared library (build/rtl_loop/native/)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The plant on the board's pins: the loop closes only through them.
 
 The board (any :class:`BoardPort`: the native Verilator harness or the cocotb

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Report of the step experiment: RTL in the loop against the pure model,
 the analogue of the paper's Figs 14-16 and Table 3 (build/report/).
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The RTL board image as a :class:`~torqueloop.sim.simboard.BytePipe`, so
 ``torqueloop sim --rtl`` serves the co-simulated SoC (issue 7,
 torqueloop/sim: the Verilator model of the whole board image running the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """A simulated board's UART on a local TCP port, like the RN-XV's bridge.
 
 One client at a time (the RN-XV takes one); the board keeps running between

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The simulated board: the servo firmware's own C, compiled for this
 machine, closing the loop around the plant model.
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The servo firmware on the host, for the simulated board of `torqueloop sim`
  * (torqueloop/sim/simboard.py).  servo.c, tl_link.c and control.c run
  * unchanged; this file is their hal.h (the "registers" are the statics

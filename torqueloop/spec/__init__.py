@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Layer 0, the specification: the single sources of the system and the one
 definition of every equation the project implements in more than one place.
 

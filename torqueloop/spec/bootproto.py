@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Host side of the boot-ROM upload (docs/bootloader.md): frame, CRC-32,
 replies, ROM layout, and sending an image over pyserial ``serial_for_url``
 (a serial port such as ``/dev/ttyUSB0`` or the RN-XV's ``socket://host:2000``).

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The IBT-2 (two BTS7960 half-bridges) logic interface of one axis: the pin
 tuple every model of the board drives and the plant reads (board README).
 

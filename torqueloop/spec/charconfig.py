@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The characterisation configuration file: the one reader and writer.
 
 Step 8 of the method writes it (torqueloop.characterize); the host tool's

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Step-response metrics and the RMSE of eq. (26)-(27), defined once.
 
 ``torqueloop step-test`` (the host tool), the experiment report (make run)

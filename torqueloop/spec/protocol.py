@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The torqueloop link protocol, Python side (host tool, cocotb tests).
 
 Everything comes from the single definition torqueloop/spec/protocol.toml,

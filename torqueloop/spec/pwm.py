@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The PWM equations of the paper, defined once (sec. II.C, eq. 1-4).
 
 Frequency divider (eq. 2-4).  The paper writes f_pwm = f_motor * gamma with

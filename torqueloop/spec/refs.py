@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """References from the other single sources to the system constants.
 
 regmap.toml and protocol.toml write ``"system:<name>"`` where a value is a

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The SoC memory and register map: load ``regmap.toml`` (this folder, the
 one source) and check it.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The register map's constants by name (``regs.AXIS0_CTRL``,
 ``regs.RAM_BASE``, ``regs.CLK_HZ`` ...), read from regmap.toml at import:
 :meth:`torqueloop.spec.regmap.RegMap.constants` defines the names, the same

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Where the source checkout is.  Only the flows, simulations and tests use
 it: an installed host tool never reads files outside the package."""
 

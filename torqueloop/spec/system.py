@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The system constants (``system.toml`` beside this module), loaded once.
 
 ``SYSTEM`` holds them as frozen dataclasses; everything else reads them from

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Physical units on the command line, integers on the wire.
 
 Positions: ``6.28rad``, ``4mm``, ``1rev``, ``8400`` or ``8400counts``; the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The uploaded program of the bootloader bench: shows APP_LEDS, says "APP\n",
  * and on a received 'B' hands back to the bootloader the documented way
  * (docs/bootloader.md: jump to TL_BOOT_ROM_BASE), as the servo firmware's

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Stand-in factory firmware for the bootloader bench (RAM-linked with
  * firmware/common/crt0.S + link.ld, like the servo firmware).  It proves it
  * started from a pristine copy: an initialised .data word and a .bss word are

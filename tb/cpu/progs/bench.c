@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 // Small integer benchmark and C-level test: CRC-32 of a pseudo-random
 // buffer, a sort of 256 words, a 12x12 matrix product and integer
 // formatting (division by 10).  Results go into the signature, which the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 # Start-up of the C test programs: stack at the top of RAM, call main,
 # report through tohost: 1 if main returned 0, else (main << 1) | 1
 # (riscv-tests convention: the failing check's number).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 // Compiled-code coverage beyond bench.c: recursion, a switch compiled to a
 // jump table (JALR through a loaded address), byte/halfword struct fields,
 // 64-bit division and remainder from libgcc, signed/unsigned conversions and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 // Never writes tohost: run_elf.py must stop at --max-cycles.
 int main(void) {
     for (;;)

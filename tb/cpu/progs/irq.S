@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 # Interrupts on cpu_sim_top (machine timer at 0x4000_0000, test interrupt
 # device at 0x4000_1000).  Self-checking: tohost = 1 on success, else
 # (n << 1) | 1 with n the failed check.  Every trap's mcause is appended to

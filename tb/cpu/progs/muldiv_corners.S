@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 # Every M-extension operation on every pair of corner operands
 # (0, 1, -1, 2, -2, 2^31-1, -2^31, 0x55555555, 0xAAAAAAAB, 7, -7), results
 # in the signature: division by zero, -2^31 / -1 and the MULH sign cases.

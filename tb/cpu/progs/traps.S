@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 # Exceptions, CSRs and mret, compared word for word with the ISS.
 # The handler logs (mcause, mepc - _start, mtval, mstatus) of every trap into
 # the signature and resumes after the faulting instruction (or at ra for an

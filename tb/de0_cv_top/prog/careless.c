@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Board-top test program: a deliberately careless firmware.
  *
  * It asks both axes for torque at once, acknowledges every cause of the

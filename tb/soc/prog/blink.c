@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* SoC integration program: everything through the generated register header.
  *  - acknowledges the reset-time safety latch (SYS.SAFETY.ESTOP);
  *  - toggles LEDR[0] from the machine-timer interrupt every HALF_PERIOD cycles

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Boot code at the reset vector: stack, gp, .data copied from ROM, .bss
    cleared, then main(); if main returns, spin. */
     .section .text.start, "ax"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Native Verilator harness of the co-simulation: the board image
 // (tb/rtl_loop/rtl_loop_top.v) with its clock, its encoder pins and its
 // UART line driven from C++, behind a narrow C interface that Python
