@@ -61,8 +61,10 @@ T ?=
 run: $(STAMP) ## the main job: paper's step experiment, RTL in the loop vs pure model, P/PD/PID -> build/report/
 	$(PY) scripts/run_experiment.py $(if $(T),--t-end $(T),)
 
-bench: $(STAMP) ## benchmarks that print numbers
-	$(PY) scripts/bench.py
+# make bench QUICK=1: shortened runs for a first look.
+QUICK ?=
+bench: $(STAMP) ## benchmarks that print numbers (QUICK=1: shortened)
+	$(PY) scripts/bench.py $(if $(filter 1,$(QUICK)),--quick,)
 
 characterize: $(STAMP) ## the characterisation method (steps 1-8) on the simulated bench: build/characterize/
 	$(PY) scripts/characterize.py sim --out-dir build/characterize

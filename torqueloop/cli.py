@@ -404,8 +404,8 @@ def cmd_step_test(ctx: Ctx) -> int:
 
 def cmd_config(ctx: Ctx) -> int:
     a = ctx.args
-    c = ctx.client
     if a.action == "save":
+        c = ctx.client
         ident = c.identity or c.identify()
         glob = {k: c.get_param(k) for k in hconfig.GLOBAL_PARAMS}
         axes = tuple({k: c.get_param(k, i) for k in hconfig.AXIS_PARAMS} for i in range(P.AXIS_COUNT))
@@ -419,7 +419,8 @@ def cmd_config(ctx: Ctx) -> int:
         ctx.out({"file": a.file, "build_id": f"0x{ident['build_id']:08x}"},
                 f"saved {len(glob) + sum(map(len, axes))} parameters to {a.file} (build id 0x{ident['build_id']:08x})")
         return 0
-    cfg = hconfig.load_file(a.file)
+    cfg = hconfig.load_file(a.file)   # the file first: a bad one needs no board
+    c = ctx.client
     ident = c.identity or c.identify()
     warn = []
     if cfg.proto_version is not None and cfg.proto_version != ident["proto_version"]:

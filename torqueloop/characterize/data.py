@@ -310,6 +310,8 @@ def read_sweep(path: str | Path) -> Sweep:
         text = p.read_text(encoding="utf-8")
     except UnicodeDecodeError as e:
         raise DataError(str(p), None, f"not UTF-8 text ({e.reason})") from None
+    except OSError as e:
+        raise DataError(str(p), None, f"cannot read ({e.strerror})") from None
     return parse_sweep(text, source=str(p))
 
 
