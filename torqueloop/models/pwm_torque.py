@@ -21,26 +21,19 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass
 
+from torqueloop.spec.pwm import duty_ticks, full_scale
+
 #: clocks from the command/pw0/pw_max inputs to the mapped duty being ready
 #: to latch: inputs present at rising edge k are used by a period that starts
 #: at edge k + PIPE_CLOCKS or later.
 PIPE_CLOCKS = 3
 
 
-def full_scale(pwm_bits: int) -> int:
-    """M: the largest duty (constant high) and the largest command magnitude."""
-    return (1 << pwm_bits) - 1
-
-
 def map_duty(cmd: int, pw0: int, pw_max: int, pwm_bits: int = 10) -> int:
-    """Duty (in ticks of an M-tick period) for a signed command, eq. (1) with saturation."""
-    m = full_scale(pwm_bits)
-    if cmd == 0:
-        return 0
-    mag = min(abs(cmd), m)
-    base = min(pw0, pw_max)
-    span = max(pw_max - pw0, 0)
-    return base + (2 * mag * span + m) // (2 * m)
+    """Duty (in ticks of an M-tick period) for a signed command: eq. (1) with
+    saturation, the project's one definition (torqueloop/spec/pwm.py), which
+    this oracle holds the RTL to."""
+    return duty_ticks(cmd, pw0, pw_max, pwm_bits)
 
 
 def map_direction(cmd: int) -> int:
