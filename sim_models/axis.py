@@ -13,7 +13,7 @@ State vector (SI), ``N_STATE`` = 13 entries::
     7..12    the six velocities, same order
 
 Within one *mode* the right-hand side is affine, dx/dt = A x + b.  A mode is
-``(se, cg, cn, sl)``:
+``(se, cg, cn, sl, sm, gd)``:
 
 - ``se`` electrical: +1 / -1 = conducting with that current sign (decides which
   diode conducts while a bridge side floats), 0 = current held at zero
@@ -23,7 +23,23 @@ Within one *mode* the right-hand side is affine, dx/dt = A x + b.  A mode is
 - ``cn`` nut (eq 11): the same for the axial clearance psi;
 - ``sl`` table: +1 / -1 = sliding in that direction with Coulomb friction
   opposing, 0 = stuck (velocity held at zero while the force needed to hold it
-  stays within the static limit).
+  stays within the static limit);
+- ``sm`` rotor (brush and bearing friction, the ``lab`` variant): the same
+  stick-slip logic on the motor shaft, with a breakaway torque above the
+  sliding one; always +1 (no friction, no guards) when the axis has none;
+- ``gd`` sign of the mesh torque, which with ``sm`` says whether the motor
+  drives the load or the load back-drives the motor (asymmetric gear
+  efficiency, ``lab``); always +1 when the efficiency is symmetric.
+
+Two loads share the motor, brush, rotor friction and gear mesh: ``stage``,
+the paper's coupling, screw, nut and table (eq 8-17); and ``dyno``, the
+characterisation bench of sec. II.A: a wheel of radius r on the gearbox
+output, held by a rope (a spring with damping, the force gauge in series)
+to the frame; DOFs 2-5 carry no mass (the positions of 2 and 3 integrate
+the current and the rope force, so the bench's instruments read exact means).  The rope is modelled two-sided: it
+could only push if the rim came back past the slack point, which the
+rotor's friction prevents outside transients near zero force (the bench's
+gauge reads the tension, clamped at zero, and counts such moments).
 
 Each mode has *guards*, affine functions g(x) that stay >= 0 while the mode is
 valid; :func:`next_mode` says what comes after a guard crosses zero.  The
@@ -34,6 +50,7 @@ reference solver integrate the same equations by different methods.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -52,6 +69,8 @@ class Mode(NamedTuple):
     cg: int
     cn: int
     sl: int
+    sm: int = 1
+    gd: int = 1
 
 
 @dataclass(frozen=True)
@@ -78,6 +97,28 @@ class AxisConsts:
     fc: float            # table Coulomb force (= static limit)
     grav: float          # m_l g, acting towards negative chi_l
     inertia: np.ndarray  # diagonal of the mass matrix, 6 entries
+    tc_m: float = 0.0    # rotor Coulomb friction (motor shaft)
+    ts_m: float = 0.0    # rotor breakaway torque
+    vb: float = 0.0      # brush drop
+    xi_b: float | None = None   # back-driving efficiency (None: the paper's symmetric form)
+    load: str = "stage"  # "stage" or "dyno"
+    r_w: float = 0.0     # dyno: wheel radius
+    k_rope: float = 0.0  # dyno: rope + gauge stiffness (N/m)
+    b_rope: float = 0.0  # dyno: rope + gauge damping (N s/m)
+
+    @property
+    def rotor_friction(self) -> bool:
+        return self.ts_m > 0.0 or self.tc_m > 0.0
+
+    @classmethod
+    def build_dyno(cls, a: AxisParams, bridge: BridgeParams, wheel_radius_m: float,
+                   wheel_inertia_kg_m2: float, rope_N_per_m: float, rope_N_s_per_m: float) -> "AxisConsts":
+        """The motor and gearbox of ``a`` on the dynamometer: gearbox output and
+        wheel as one inertia, the rope to the frame; DOFs 2-5 unused."""
+        c = cls.build(a, bridge)
+        inertia = np.array([a.rotor_inertia_kg_m2, wheel_inertia_kg_m2, 1.0, 1.0, 1.0, 1.0])
+        return dataclasses.replace(c, inertia=inertia, load="dyno", r_w=wheel_radius_m, k_rope=rope_N_per_m,
+                                   b_rope=rope_N_s_per_m, fc=0.0, grav=0.0)
 
     @classmethod
     def build(cls, a: AxisParams, bridge: BridgeParams) -> "AxisConsts":
@@ -100,7 +141,8 @@ class AxisConsts:
                    rn=a.screw_m_per_rad, kn=a.nut_stiffness_N_per_m,
                    bn=a.nut_damping_N_s_per_m, psi=a.nut_clearance_m,
                    fc=a.table_coulomb_N, grav=a.table_mass_kg * a.gravity_m_s2,
-                   inertia=inertia)
+                   inertia=inertia, tc_m=a.motor_coulomb_N_m, ts_m=a.motor_static_N_m,
+                   vb=a.brush_drop_V, xi_b=a.gear_efficiency_back)
 
 
 def gear_slip(c: AxisConsts, x: np.ndarray) -> tuple[float, float]:
@@ -114,17 +156,43 @@ def nut_slip(c: AxisConsts, x: np.ndarray) -> tuple[float, float]:
             x[V_L] - c.rn * x[W_S] - x[V_S])
 
 
-def forces(c: AxisConsts, x: np.ndarray, mode: Mode) -> np.ndarray:
-    """Generalised forces on the six mechanical DOF, table friction excluded."""
-    f = np.zeros(NPOS)
+def mesh_torque(c: AxisConsts, x: np.ndarray, mode: Mode) -> float:
+    """Mesh torque T_g at the output side (eq 10 with the dead zone of
+    half-width delta; 0 in the gap).  b_g acts on the motor-side slip
+    phi_m' - G phi_g' = G d' (paper's D_f), so on the output side it is
+    b_g G^2 d'."""
+    if mode.cg == 0:
+        return 0.0
     d, dd = gear_slip(c, x)
+    return c.kg * (d - mode.cg * c.delta) + c.bg * c.G**2 * dd
+
+
+def efficiency_form(c: AxisConsts, mode: Mode) -> tuple[float, float]:
+    """(a_m, a_o): the motor feels -a_m T_g / G, the gearbox output +a_o T_g.
+    The paper's form is (1, xi) whichever way power flows.  With a
+    back-driving efficiency (``lab``): driving (the rotor turns the way its
+    mesh torque pushes) (1, xi); back-driven (xi_b, 1), so the motor
+    receives only xi_b of what the load delivers; a stuck rotor passes the
+    paper's (1, xi) to the output (its hold torques take each direction's
+    form: :func:`rotor_hold_torque`)."""
+    if c.xi_b is None or mode.sm == 0 or mode.sm == mode.gd:
+        return 1.0, c.xi
+    return c.xi_b, 1.0
+
+
+def forces(c: AxisConsts, x: np.ndarray, mode: Mode) -> np.ndarray:
+    """Generalised forces on the six mechanical DOF, table and rotor
+    Coulomb friction excluded."""
+    f = np.zeros(NPOS)
     if mode.cg != 0:
-        # eq (10) with the dead zone of half-width delta; b_g acts on the
-        # motor-side slip phi_m' - G phi_g' = G d' (paper's D_f), so on the
-        # output side it is b_g G^2 d'.
-        tg = c.kg * (d - mode.cg * c.delta) + c.bg * c.G**2 * dd
-        f[0] -= tg / c.G
-        f[1] += c.xi * tg            # efficiency: only xi of the mesh torque arrives
+        tg = mesh_torque(c, x, mode)
+        a_m, a_o = efficiency_form(c, mode)
+        f[0] -= a_m * tg / c.G
+        f[1] += a_o * tg             # efficiency: only xi of the mesh torque arrives
+    f[0] += c.kt * x[I_]             # eq (5)
+    if c.load == "dyno":
+        f[1] -= c.r_w * rope_tension(c, x)
+        return f
     tc = c.kc * (x[PHI_G] - x[PHI_C])
     f[1] -= tc
     f[2] += tc
@@ -139,8 +207,13 @@ def forces(c: AxisConsts, x: np.ndarray, mode: Mode) -> np.ndarray:
         f[5] -= fn
     f[4] -= c.kr * x[CHI_S] + c.br * x[V_S]
     f[5] -= c.grav
-    f[0] += c.kt * x[I_]             # eq (5)
     return f
+
+
+def rope_tension(c: AxisConsts, x: np.ndarray) -> float:
+    """Dyno: the force in the rope, what the gauge's spring carries
+    (negative: the rim came back past the slack point)."""
+    return c.k_rope * c.r_w * x[PHI_G] + c.b_rope * c.r_w * x[W_G]
 
 
 def rhs(c: AxisConsts, x: np.ndarray, mode: Mode, e_pos: float, e_neg: float) -> np.ndarray:
@@ -151,8 +224,18 @@ def rhs(c: AxisConsts, x: np.ndarray, mode: Mode, e_pos: float, e_neg: float) ->
         f[5] = 0.0                   # stuck: held by static friction
     else:
         f[5] -= mode.sl * c.fc       # sliding: Coulomb force opposes the motion
+    if c.rotor_friction:
+        if mode.sm == 0:
+            f[0] = 0.0               # rotor stuck: brushes and bearings hold it
+        else:
+            f[0] -= mode.sm * c.tc_m
     dx[1:7] = x[7:13]
     dx[7:13] = f / c.inertia
+    if c.load == "dyno":
+        # the instruments' exact means: DOFs 2 and 3 are unused on the dyno,
+        # their positions integrate the current and the rope force
+        dx[PHI_C] = x[I_]
+        dx[PHI_S] = rope_tension(c, x)
     if mode.se == 0:
         dx[0] = 0.0                  # no diode conducts: i stays 0
     else:
@@ -164,6 +247,36 @@ def rhs(c: AxisConsts, x: np.ndarray, mode: Mode, e_pos: float, e_neg: float) ->
 def table_hold_force(c: AxisConsts, x: np.ndarray, mode: Mode) -> float:
     """Force the static friction must supply to keep the table at rest."""
     return float(forces(c, x, mode)[5])
+
+
+def rotor_hold_torque(c: AxisConsts, x: np.ndarray, mode: Mode, direction: int) -> float:
+    """Net torque on the rotor (its Coulomb friction excluded) were it to
+    move in ``direction`` (+1 / -1): what its static friction must hold.  The
+    two directions differ only with the asymmetric efficiency: moving against
+    the mesh torque the load back-drives the gearbox, which passes only xi_b
+    of it, so the gearbox's own friction helps hold the rotor."""
+    return float(forces(c, x, mode._replace(sm=direction))[0])
+
+
+def rotor_stick_or_slide(c: AxisConsts, x: np.ndarray, mode: Mode) -> int:
+    """sm for a rotor at rest: +1 / -1 if the net torque towards that side
+    breaks away, else 0 (stuck).  At most one side can break away."""
+    if rotor_hold_torque(c, x, mode, 1) > c.ts_m:
+        return 1
+    if rotor_hold_torque(c, x, mode, -1) < -c.ts_m:
+        return -1
+    return 0
+
+
+def terminal_levels(c: AxisConsts, e_pos: float, e_neg: float) -> tuple[float, float]:
+    """The bridge's armature voltages (while i > 0, while i < 0) less the
+    brush drop, which opposes the current while it flows: every function of
+    this module takes these levels.  With a drop the current can stop at zero
+    even with both bridge sides driven (discontinuous conduction), exactly as
+    while a side floats."""
+    if c.vb == 0.0:
+        return e_pos, e_neg
+    return e_pos - c.vb, e_neg + c.vb
 
 
 def affine(c: AxisConsts, mode: Mode, e_pos: float, e_neg: float) -> tuple[np.ndarray, np.ndarray]:
@@ -218,7 +331,9 @@ def guards(c: AxisConsts, mode: Mode, e_pos: float, e_neg: float) -> list[Guard]
         else:
             out.append(Guard(part, 0, _linear_row(lambda z, v=val, h=half: h - v(z), c), 1e-13))
             out.append(Guard(part, 1, _linear_row(lambda z, v=val, h=half: v(z) + h, c), 1e-13))
-    if mode.sl > 0:
+    if c.load == "dyno":
+        pass                         # the rope is a two-sided spring: no mode
+    elif mode.sl > 0:
         out.append(Guard("table", 0, _linear_row(lambda z: z[V_L], c), 1e-9))
     elif mode.sl < 0:
         out.append(Guard("table", 0, _linear_row(lambda z: -z[V_L], c), 1e-9))
@@ -226,6 +341,17 @@ def guards(c: AxisConsts, mode: Mode, e_pos: float, e_neg: float) -> list[Guard]
         hold = lambda z: table_hold_force(c, z, mode)  # noqa: E731
         out.append(Guard("table", 0, _linear_row(lambda z: c.fc - hold(z), c), 1e-6))
         out.append(Guard("table", 1, _linear_row(lambda z: c.fc + hold(z), c), 1e-6))
+    if c.rotor_friction:
+        if mode.sm > 0:
+            out.append(Guard("rotor", 0, _linear_row(lambda z: z[W_M], c), 1e-9))
+        elif mode.sm < 0:
+            out.append(Guard("rotor", 0, _linear_row(lambda z: -z[W_M], c), 1e-9))
+        else:
+            out.append(Guard("rotor", 0, _linear_row(lambda z: c.ts_m - rotor_hold_torque(c, z, mode, 1), c), 1e-12))
+            out.append(Guard("rotor", 1, _linear_row(lambda z: c.ts_m + rotor_hold_torque(c, z, mode, -1), c), 1e-12))
+    if c.xi_b is not None and mode.cg != 0:
+        # the mesh torque changing sign turns driving into back-driving
+        out.append(Guard("mesh", 0, _linear_row(lambda z: mode.gd * mesh_torque(c, z, mode), c), 1e-12))
     return out
 
 
@@ -255,10 +381,22 @@ def initial_mode(c: AxisConsts, x: np.ndarray, e_pos: float, e_neg: float) -> Mo
     cg = 1 if c.delta == 0 else (1 if d > c.delta else (-1 if d < -c.delta else 0))
     cn = 1 if c.psi == 0 else (1 if e > c.psi else (-1 if e < -c.psi else 0))
     m = Mode(elec_mode(c, x, e_pos, e_neg), cg, cn, 0)
+    m = m._replace(gd=_mesh_sign(c, x, m))
+    if c.rotor_friction:
+        m = m._replace(sm=_sign(x[W_M]) if x[W_M] != 0.0 else rotor_stick_or_slide(c, x, m))
+    if c.load == "dyno":
+        return m
     if x[V_L] != 0.0:
         return m._replace(sl=_sign(x[V_L]))
     h = table_hold_force(c, x, m)
     return m._replace(sl=0 if abs(h) <= c.fc else _sign(h))
+
+
+def _mesh_sign(c: AxisConsts, x: np.ndarray, mode: Mode) -> int:
+    """gd for a state: the mesh torque's sign (1 at zero), when it matters."""
+    if c.xi_b is None:
+        return 1
+    return -1 if mesh_torque(c, x, mode) < 0 else 1
 
 
 def next_mode(c: AxisConsts, x: np.ndarray, mode: Mode, g: Guard,
@@ -274,7 +412,16 @@ def next_mode(c: AxisConsts, x: np.ndarray, mode: Mode, g: Guard,
     if g.part in ("gear", "nut"):
         cur = mode.cg if g.part == "gear" else mode.cn
         new = 0 if cur != 0 else (1 if g.index == 0 else -1)
-        return mode._replace(cg=new) if g.part == "gear" else mode._replace(cn=new)
+        m = mode._replace(cg=new) if g.part == "gear" else mode._replace(cn=new)
+        return m._replace(gd=_mesh_sign(c, x, m))
+    if g.part == "mesh":
+        return mode._replace(gd=-mode.gd)   # the mesh torque changed sign
+    if g.part == "rotor":
+        x[W_M] = 0.0
+        if mode.sm == 0:             # broke away: guard 0 forwards, guard 1 backwards
+            return mode._replace(sm=1 if g.index == 0 else -1)
+        # speed reached zero: the brushes hold it, or it turns back
+        return mode._replace(sm=rotor_stick_or_slide(c, x, mode))
     # table
     x[V_L] = 0.0
     h = table_hold_force(c, x, mode)

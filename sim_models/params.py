@@ -18,6 +18,10 @@ from pathlib import Path
 DEFAULT_FILE = Path(__file__).resolve().parent / "params" / "table2.toml"
 
 
+class PlantParamError(ValueError):
+    """A parameter file or variant with a missing, unknown or non-physical value."""
+
+
 @dataclass(frozen=True)
 class BridgeParams:
     supply_V: float = 12.0
@@ -68,6 +72,14 @@ class AxisParams:
     table_mass_kg: float
     table_coulomb_N: float
     gravity_m_s2: float
+    # --- what a real bench has and Table 2 leaves out (the ``lab`` variant,
+    # sim_models/variants.py; all off in the paper's variants) ---
+    motor_coulomb_N_m: float = 0.0       # brush and bearing Coulomb friction, motor shaft
+    motor_static_N_m: float = 0.0        # breakaway (stiction) at the motor shaft, >= coulomb
+    brush_drop_V: float = 0.0            # brush contact drop, opposes the current while it flows
+    gear_efficiency_back: float | None = None
+    """Efficiency while the load back-drives the motor; None is the paper's
+    symmetric form (xi on the output side in both directions of power flow)."""
 
     # --- derived quantities (one place for model, tests and docs) ---
     @property
@@ -104,8 +116,45 @@ class AxisParams:
                + 1 / (rn2 * self.screw_axial_N_per_m))
         return 1.0 / inv
 
+    def motor_stall_torque_N_m(self, bridge: "BridgeParams") -> float:
+        """k_t V / R with the bridge's supply and path: the rotor torque at
+        stall (the scale the lab variant's friction is stated against)."""
+        return self.kt_motor_N_m_per_A * bridge.supply_V / (self.resistance_ohm + 2 * bridge.r_on_ohm)
+
     def replace(self, **changes: float) -> "AxisParams":
         return dataclasses.replace(self, **changes)
+
+    def validate(self, bridge: "BridgeParams", where: str = "") -> None:
+        """Refuse a non-physical value with one line naming the key and the rule."""
+        w = f"{where}{self.name}." if where or self.name else ""
+        positive = ("resistance_ohm", "inductance_H", "ke_V_s_per_rad", "km_N_m_per_A", "rotor_inertia_kg_m2",
+                    "gear_ratio", "gear_efficiency", "gear_stiffness_N_m_per_rad", "coupling_inertia_kg_m2",
+                    "coupling_stiffness_N_m_per_rad", "screw_inertia_kg_m2", "screw_torsion_N_m_per_rad",
+                    "screw_axial_N_per_m", "screw_mass_kg", "lead_m", "nut_stiffness_N_per_m", "table_mass_kg")
+        non_negative = ("gear_damping_N_m_s_per_rad", "gear_backlash_rad", "screw_axial_damping_N_s_per_m",
+                        "nut_damping_N_s_per_m", "nut_clearance_m", "table_coulomb_N", "gravity_m_s2",
+                        "motor_coulomb_N_m", "motor_static_N_m", "brush_drop_V")
+        for k in positive + non_negative:
+            v = getattr(self, k)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise PlantParamError(f"{w}{k} = {v!r}: must be a finite number")
+            if k in positive and not v > 0:
+                raise PlantParamError(f"{w}{k} = {v}: must be positive")
+            if k in non_negative and v < 0:
+                raise PlantParamError(f"{w}{k} = {v}: must not be negative")
+        for k in ("gear_efficiency", "gear_efficiency_back"):
+            v = getattr(self, k)
+            if v is not None and not 0 < v <= 1:
+                raise PlantParamError(f"{w}{k} = {v}: an efficiency must be in (0, 1]")
+        if self.motor_static_N_m < self.motor_coulomb_N_m:
+            raise PlantParamError(f"{w}motor_static_N_m = {self.motor_static_N_m}: breakaway below the "
+                                  f"Coulomb level {self.motor_coulomb_N_m} (static friction is at least sliding)")
+        stall = self.motor_stall_torque_N_m(bridge)
+        if self.motor_static_N_m >= stall:
+            raise PlantParamError(f"{w}motor_static_N_m = {self.motor_static_N_m}: friction at or above the "
+                                  f"stall torque {stall:.4g} N m (the motor could never turn)")
+        if self.brush_drop_V >= bridge.supply_V:
+            raise PlantParamError(f"{w}brush_drop_V = {self.brush_drop_V}: at or above the {bridge.supply_V} V supply")
 
 
 @dataclass(frozen=True)
@@ -115,11 +164,49 @@ class PlantParams:
     encoder: EncoderParams = field(default_factory=EncoderParams)
 
 
-def load_params(path: Path | str | None = None) -> PlantParams:
-    """Load a plant parameter file (default: the paper's Table 2)."""
-    with open(path or DEFAULT_FILE, "rb") as f:
-        d = tomllib.load(f)
-    axes = tuple(AxisParams(**d[k]) for k in ("axis1", "axis2"))
+def _make(cls: type, d: dict, where: str) -> object:
+    names = {f.name for f in dataclasses.fields(cls)}
+    required = {f.name for f in dataclasses.fields(cls)
+                if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING}
+    for k in d:
+        if k not in names:
+            raise PlantParamError(f"{where}{k}: unknown parameter")
+    for k in sorted(required - set(d)):
+        raise PlantParamError(f"{where}{k}: missing")
+    return cls(**d)
+
+
+def params_from_dict(d: dict, source: str = "") -> PlantParams:
+    """A PlantParams from the parsed TOML layout (sections bridge, encoder,
+    axis1, axis2), every value checked (:meth:`AxisParams.validate`)."""
+    where = f"{source}: " if source else ""
+    for k in ("axis1", "axis2"):
+        if not isinstance(d.get(k), dict):
+            raise PlantParamError(f"{where}[{k}]: missing")
+    bridge: BridgeParams = _make(BridgeParams, d.get("bridge", {}), f"{where}bridge.")  # type: ignore[assignment]
+    for k in ("supply_V", "k_ilis"):
+        if not getattr(bridge, k) > 0:
+            raise PlantParamError(f"{where}bridge.{k} = {getattr(bridge, k)}: must be positive")
+    axes = tuple(_make(AxisParams, d[k], f"{where}{k}.") for k in ("axis1", "axis2"))
+    for a in axes:
+        a.validate(bridge, where)  # type: ignore[attr-defined]
     return PlantParams(axes=axes,  # type: ignore[arg-type]
-                       bridge=BridgeParams(**d.get("bridge", {})),
-                       encoder=EncoderParams(**d.get("encoder", {})))
+                       bridge=bridge,
+                       encoder=_make(EncoderParams, d.get("encoder", {}), f"{where}encoder."))  # type: ignore[arg-type]
+
+
+def read_toml(path: Path | str) -> dict:
+    try:
+        with open(path, "rb") as f:
+            return tomllib.load(f)
+    except OSError as e:
+        raise PlantParamError(f"{path}: cannot read ({e.strerror})") from None
+    except tomllib.TOMLDecodeError as e:
+        raise PlantParamError(f"{path}: not valid TOML ({e})") from None
+
+
+def load_params(path: Path | str | None = None) -> PlantParams:
+    """Load a plant parameter file (default: the paper's Table 2 as printed;
+    sim_models.variants names the readings built on it)."""
+    p = path or DEFAULT_FILE
+    return params_from_dict(read_toml(p), str(p))

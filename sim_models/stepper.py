@@ -79,20 +79,26 @@ class FastAxis:
 
     def __init__(self, a: AxisParams, plant: PlantParams, axis_index: int = 0,
                  h_max_s: float = 1e-3, tick_s: float = 1e-8,
-                 h_contact_s: float = 1e-5) -> None:
+                 h_contact_s: float = 1e-5, h_mesh_s: float = 5e-5, consts: ax.AxisConsts | None = None,
+                 encoder: bool = True) -> None:
         self.params = a
         self.bridge = plant.bridge
         self.enc = plant.encoder
         self.index = axis_index
-        self.c = ax.AxisConsts.build(a, plant.bridge)
+        # consts: another load for the same motor (AxisConsts.build_dyno)
+        self.c = consts or ax.AxisConsts.build(a, plant.bridge)
+        self.encoder = encoder
         self.tick = tick_s
         self.h_max_ticks = max(1, round(h_max_s / tick_s))
         # backlash and clearance contacts bounce at kHz rates: check them often
         self.h_contact_ticks = max(1, min(self.h_max_ticks, round(h_contact_s / tick_s)))
+        # the mesh torque's sign (asymmetric efficiency) flips with the
+        # drivetrain's kHz modes near zero load: check it every 50 us
+        self.h_mesh_ticks = max(1, min(self.h_max_ticks, round(h_mesh_s / tick_s)))
         self.z = np.zeros(NZ)
         self.z[ax.N_STATE] = 1.0
         self.pins = COAST
-        self.e_pos, self.e_neg = armature_voltages(COAST, self.bridge)
+        self.e_pos, self.e_neg = ax.terminal_levels(self.c, *armature_voltages(COAST, self.bridge))
         self.mode = ax.initial_mode(self.c, self.z[:ax.N_STATE], self.e_pos, self.e_neg)
         self.count = count_of(0.0, self.enc)
         self._systems: dict[tuple[ax.Mode, float, float], _ModeSystem] = {}
@@ -115,7 +121,7 @@ class FastAxis:
         if pins == self.pins:
             return
         self.pins = pins
-        self.e_pos, self.e_neg = armature_voltages(pins, self.bridge)
+        self.e_pos, self.e_neg = ax.terminal_levels(self.c, *armature_voltages(pins, self.bridge))
         self.mode = self.mode._replace(
             se=ax.elec_mode(self.c, self.z[:ax.N_STATE], self.e_pos, self.e_neg))
 
@@ -136,6 +142,7 @@ class FastAxis:
                             None if g is None else np.array([x.tol for x in gl]), {},
                             bal, m * bal[None, :] / bal[:, None],
                             self.h_contact_ticks if any(x.part in ("gear", "nut") for x in gl)
+                            else self.h_mesh_ticks if any(x.part == "mesh" for x in gl)
                             else self.h_max_ticks)
             self._systems[key] = s
         return s
@@ -170,34 +177,35 @@ class FastAxis:
         n = len(s.tol_list)
         v0 = (s.gg @ z0).tolist()    # guards and their time derivatives
         v1 = (s.gg @ z1).tolist()
-        brackets: list[tuple[int, float]] = []
+        brackets: list[tuple[int, float, float]] = []   # guard, bracket end, first guess
         for j in range(n):
             tol = s.tol_list[j]
             g1 = v1[j]
-            if g1 < -tol:
-                brackets.append((j, tau))
-                continue
             d0, d1 = v0[n + j] * tau, v1[n + j] * tau
+            if g1 < -tol:
+                brackets.append((j, tau, tau * _hermite_root(v0[j], d0, g1, d1, 1.0)))
+                continue
             if d0 < 0 < d1:          # a minimum inside: does it dip below zero?
                 sm = _hermite_min(v0[j], d0, g1, d1)
                 if sm is not None:
                     tm = sm * tau
                     if float(s.g[j] @ (s.expm(tm) @ z0)) < -tol:  # type: ignore[index]
-                        brackets.append((j, tm))
+                        brackets.append((j, tm, tau * _hermite_root(v0[j], d0, g1, d1, sm)))
         if not brackets:
             return None
         best: tuple[float, int, np.ndarray] | None = None
-        for j, hi in brackets:
-            t, z = self._locate(s, j, z0, hi)
+        for j, hi, guess in brackets:
+            t, z = self._locate(s, j, z0, hi, guess)
             if best is None or t < best[0]:
                 best = (t, j, z)
         return best
 
     def _locate(self, s: _ModeSystem, j: int, z0: np.ndarray,
-                hi: float) -> tuple[float, np.ndarray]:
+                hi: float, guess: float | None = None) -> tuple[float, np.ndarray]:
         """Crossing time of guard j in (0, hi]: Newton on the exact flow
         (the guard's time derivative is exact, row @ m @ z), kept inside the
-        bracket and alternated with bisection.  Stops when the guard is
+        bracket and alternated with bisection, from ``guess`` (the root of
+        the guard's cubic Hermite fit) when given.  Stops when the guard is
         within its tolerance below zero or the bracket is below 1 ps; returns
         the time and the state there."""
         row = s.g[j]  # type: ignore[index]
@@ -217,10 +225,17 @@ class FastAxis:
                 lo *= 4.0
             else:
                 return hi, s.expm(hi) @ z0
-        zhi = s.expm(hi) @ z0
-        ghi = float(row @ zhi)
-        t = (lo * ghi - hi * glo) / (ghi - glo) if ghi != glo else 0.5 * hi
-        for it in range(80):
+        if guess is not None and lo < guess < hi:
+            # the Hermite root is close: bracket it from above by a hair so
+            # Newton lands on the guard's negative side in one or two steps
+            zhi, ghi = None, -math.inf
+            t = guess
+        else:
+            zhi = s.expm(hi) @ z0
+            ghi = float(row @ zhi)
+            t = (lo * ghi - hi * glo) / (ghi - glo) if ghi != glo else 0.5 * hi
+        g_prev = math.inf
+        for _ in range(80):
             if not (lo < t < hi):
                 t = 0.5 * (lo + hi)
             zt = s.expm(t) @ z0
@@ -234,13 +249,25 @@ class FastAxis:
             if hi - lo <= 1e-12:
                 break
             dg = float(drow @ zt)
-            t = t - gt / dg if dg != 0.0 and it % 4 != 3 else 0.5 * (lo + hi)
+            if dg != 0.0 and abs(gt) < 0.5 * g_prev:
+                # Newton while it converges; aim a hair past the root, onto
+                # the negative side, when coming from above
+                t = t - gt / dg
+                if gt > 0:
+                    t += 1e-3 * abs(gt / dg) + 1e-14
+            else:
+                t = 0.5 * (lo + hi)      # no progress: bisect the bracket
+            g_prev = abs(gt)
+        if zhi is None:
+            zhi = s.expm(hi) @ z0
         return hi, zhi
 
     def _encode(self, z0: np.ndarray, z1: np.ndarray, t0: float, tau: float,
                 out: list[Edge]) -> None:
         """Encoder edges along the cubic Hermite path of the motor angle
         (exact angle and speed at both ends of the step)."""
+        if not self.encoder:
+            return
         phi0, phi1 = float(z0[ax.PHI_M]), float(z1[ax.PHI_M])
         w0, w1 = float(z0[ax.W_M]), float(z1[ax.W_M])
         enc = self.enc
@@ -350,6 +377,22 @@ def expm_balanced(mb: np.ndarray, bal: np.ndarray, tau: float) -> np.ndarray:
 
 
 _EYE = np.eye(NZ)
+
+
+def _hermite_root(g0: float, d0: float, g1: float, d1: float, s_hi: float) -> float:
+    """First zero in (0, s_hi] of the cubic Hermite through (g0, d0), (g1, d1)
+    (derivatives scaled by the step), with g0 > 0 and the cubic negative at
+    s_hi: bisection, then Newton polishing.  A first guess for _locate."""
+    a = 2 * g0 + d0 - 2 * g1 + d1
+    b = -3 * g0 - 2 * d0 + 3 * g1 - d1
+    lo, hi = 0.0, s_hi
+    for _ in range(30):
+        m = 0.5 * (lo + hi)
+        if ((a * m + b) * m + d0) * m + g0 > 0:
+            lo = m
+        else:
+            hi = m
+    return 0.5 * (lo + hi)
 
 
 def _hermite_min(g0: float, d0: float, g1: float, d1: float) -> float | None:

@@ -1,0 +1,153 @@
+# SPDX-License-Identifier: MIT
+"""Named plant variants: ``paper-printed``, ``paper`` (the default) and ``lab``.
+
+Each variant is the paper's Table 2 (params/table2.toml) with overlays
+(params/variants.toml): ``paper`` reads I_m2 as a misprint, ``lab`` adds what
+a real bench has and Table 2 leaves out, one switchable effect at a time
+(docs/plant.md argues every value)::
+
+    from sim_models.variants import load_variant
+    p = load_variant("lab")                               # every effect on
+    p = load_variant("lab", off=("brush_drop",))          # one effect off
+    p = load_variant("lab", off=EFFECTS)                  # == load_variant("paper")
+
+An unknown name, an unknown effect or a non-physical value raises
+:class:`PlantVariantError` with one line naming the key and the rule.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+from typing import Iterable
+
+from sim_models.params import (DEFAULT_FILE, AxisParams, PlantParamError, PlantParams, params_from_dict,
+                               read_toml)
+
+VARIANTS_FILE = Path(__file__).resolve().parent / "params" / "variants.toml"
+DEFAULT_VARIANT = "paper"
+#: the lab variant's effects, in the order they are applied
+EFFECTS = ("motor_friction", "brush_drop", "gear_efficiency", "energy_consistent")
+
+
+class PlantVariantError(PlantParamError):
+    """An unknown variant or effect, or an overlay that breaks a rule."""
+
+
+def _table() -> dict:
+    return read_toml(VARIANTS_FILE)
+
+
+def names() -> tuple[str, ...]:
+    return tuple(_table())
+
+
+def describe(name: str) -> str:
+    return str(_spec(name).get("description", ""))
+
+
+def _spec(name: str) -> dict:
+    t = _table()
+    if name not in t:
+        raise PlantVariantError(f"unknown plant variant {name!r} (known: {', '.join(t)})")
+    return t[name]
+
+
+def _base_dict(name: str, seen: tuple[str, ...] = ()) -> dict:
+    """The parameter layout of a variant before its effects: Table 2 and the
+    axis overlays of the variant and its bases."""
+    if name in seen:
+        raise PlantVariantError(f"variants.toml: base cycle {' -> '.join((*seen, name))}")
+    spec = _spec(name)
+    d = _base_dict(spec["base"], (*seen, name)) if "base" in spec else read_toml(DEFAULT_FILE)
+    d = {k: dict(v) if isinstance(v, dict) else v for k, v in d.items()}
+    for sec in ("bridge", "encoder", "axis1", "axis2"):
+        for k, v in spec.get(sec, {}).items():
+            d.setdefault(sec, {})[k] = v
+    return d
+
+
+def _effects(name: str) -> dict[str, dict]:
+    """The effects of a variant (its own and its bases'), by name."""
+    spec = _spec(name)
+    out = _effects(spec["base"]) if "base" in spec else {}
+    for k, v in spec.get("effect", {}).items():
+        if k not in EFFECTS:
+            raise PlantVariantError(f"variants.toml: {name}.effect.{k}: unknown effect (known: {', '.join(EFFECTS)})")
+        out[k] = v
+    return out
+
+
+def _num(eff: str, cfg: dict, key: str, lo: float, hi: float, *, lo_open: bool = False) -> float:
+    v = cfg.get(key)
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise PlantVariantError(f"effect.{eff}.{key} = {v!r}: must be a finite number")
+    if v < lo or (lo_open and v == lo) or v > hi:
+        raise PlantVariantError(f"effect.{eff}.{key} = {v}: must be in {'(' if lo_open else '['}{lo}, {hi}]")
+    return float(v)
+
+
+def back_efficiency(forward: float, stages: int) -> float:
+    """Back-driving efficiency of a gear train whose tooth friction is
+    proportional to the transmitted load: per stage forward 1 / (1 + e),
+    back-driving 1 - e."""
+    per = forward ** (1.0 / stages)
+    e = 1.0 / per - 1.0
+    return (1.0 - e) ** stages
+
+
+def apply_effect(a: AxisParams, eff: str, cfg: dict, supply_V: float, r_path_ohm: float) -> AxisParams:
+    """One lab effect on one axis's parameters."""
+    if eff == "motor_friction":
+        stall = a.kt_motor_N_m_per_A * supply_V / (a.resistance_ohm + r_path_ohm)
+        cf = _num(eff, cfg, "coulomb_frac", 0.0, 1.0)
+        sf = _num(eff, cfg, "static_frac", 0.0, 1.0)
+        return a.replace(motor_coulomb_N_m=cf * stall, motor_static_N_m=sf * stall)
+    if eff == "brush_drop":
+        return a.replace(brush_drop_V=_num(eff, cfg, "volts", 0.0, supply_V))
+    if eff == "gear_efficiency":
+        stages = cfg.get("stages")
+        if isinstance(stages, bool) or not isinstance(stages, int) or stages < 1:
+            raise PlantVariantError(f"effect.{eff}.stages = {stages!r}: must be a whole number >= 1")
+        if "back" in cfg:
+            back = _num(eff, cfg, "back", 0.0, 1.0, lo_open=True)
+        else:
+            back = back_efficiency(a.gear_efficiency, stages)
+        return a.replace(gear_efficiency_back=back)
+    if eff == "energy_consistent":
+        return a.replace(ke_V_s_per_rad=a.kt_motor_N_m_per_A)
+    raise PlantVariantError(f"unknown effect {eff!r} (known: {', '.join(EFFECTS)})")
+
+
+def load_variant(name: str = DEFAULT_VARIANT, off: Iterable[str] = ()) -> PlantParams:
+    """The plant parameters of a named variant, with the named effects off."""
+    off = tuple(off)
+    for e in off:
+        if e not in EFFECTS:
+            raise PlantVariantError(f"unknown effect {e!r} (known: {', '.join(EFFECTS)})")
+    base = params_from_dict(_base_dict(name), f"variant {name}")
+    axes = list(base.axes)
+    for eff, cfg in _effects(name).items():
+        enabled = cfg.get("enabled", True)
+        if not isinstance(enabled, bool):
+            raise PlantVariantError(f"effect.{eff}.enabled = {enabled!r}: must be true or false")
+        if not enabled or eff in off:
+            continue
+        axes = [apply_effect(a, eff, cfg, base.bridge.supply_V, 2 * base.bridge.r_on_ohm) for a in axes]
+    for a in axes:
+        a.validate(base.bridge, f"variant {name}: ")
+    return dataclasses.replace(base, axes=tuple(axes))
+
+
+def effects_of(name: str) -> tuple[str, ...]:
+    """The effects a variant switches on (lab: all of EFFECTS)."""
+    return tuple(k for k, v in _effects(name).items() if v.get("enabled", True))
+
+
+def parse_plant(text: str) -> tuple[str, tuple[str, ...]]:
+    """A command-line plant choice: ``NAME`` or ``NAME-no-EFFECT[-no-EFFECT...]``
+    (``lab-no-brush_drop``), checked."""
+    name, *offs = text.split("-no-")
+    load_variant(name, offs)   # refuses an unknown name or effect
+    return name, tuple(offs)
