@@ -110,6 +110,12 @@ class AxisConsts:
     def rotor_friction(self) -> bool:
         return self.ts_m > 0.0 or self.tc_m > 0.0
 
+    @property
+    def rotor_modes(self) -> bool:
+        """Whether ``sm`` is tracked: with rotor friction (stick-slip), or with
+        the asymmetric efficiency (which needs the direction of rotation)."""
+        return self.rotor_friction or self.xi_b is not None
+
     @classmethod
     def build_dyno(cls, a: AxisParams, bridge: BridgeParams, wheel_radius_m: float,
                    wheel_inertia_kg_m2: float, rope_N_per_m: float, rope_N_s_per_m: float) -> "AxisConsts":
@@ -224,7 +230,7 @@ def rhs(c: AxisConsts, x: np.ndarray, mode: Mode, e_pos: float, e_neg: float) ->
         f[5] = 0.0                   # stuck: held by static friction
     else:
         f[5] -= mode.sl * c.fc       # sliding: Coulomb force opposes the motion
-    if c.rotor_friction:
+    if c.rotor_modes:
         if mode.sm == 0:
             f[0] = 0.0               # rotor stuck: brushes and bearings hold it
         else:
@@ -260,7 +266,9 @@ def rotor_hold_torque(c: AxisConsts, x: np.ndarray, mode: Mode, direction: int) 
 
 def rotor_stick_or_slide(c: AxisConsts, x: np.ndarray, mode: Mode) -> int:
     """sm for a rotor at rest: +1 / -1 if the net torque towards that side
-    breaks away, else 0 (stuck).  At most one side can break away."""
+    breaks away, else 0 (stuck).  At most one side can break away.  Without
+    rotor friction (ts = 0) the band is the gearbox's own: with the
+    asymmetric efficiency a load can be held between xi_b T_g and T_g."""
     if rotor_hold_torque(c, x, mode, 1) > c.ts_m:
         return 1
     if rotor_hold_torque(c, x, mode, -1) < -c.ts_m:
@@ -341,7 +349,7 @@ def guards(c: AxisConsts, mode: Mode, e_pos: float, e_neg: float) -> list[Guard]
         hold = lambda z: table_hold_force(c, z, mode)  # noqa: E731
         out.append(Guard("table", 0, _linear_row(lambda z: c.fc - hold(z), c), 1e-6))
         out.append(Guard("table", 1, _linear_row(lambda z: c.fc + hold(z), c), 1e-6))
-    if c.rotor_friction:
+    if c.rotor_modes:
         if mode.sm > 0:
             out.append(Guard("rotor", 0, _linear_row(lambda z: z[W_M], c), 1e-9))
         elif mode.sm < 0:
@@ -382,7 +390,7 @@ def initial_mode(c: AxisConsts, x: np.ndarray, e_pos: float, e_neg: float) -> Mo
     cn = 1 if c.psi == 0 else (1 if e > c.psi else (-1 if e < -c.psi else 0))
     m = Mode(elec_mode(c, x, e_pos, e_neg), cg, cn, 0)
     m = m._replace(gd=_mesh_sign(c, x, m))
-    if c.rotor_friction:
+    if c.rotor_modes:
         m = m._replace(sm=_sign(x[W_M]) if x[W_M] != 0.0 else rotor_stick_or_slide(c, x, m))
     if c.load == "dyno":
         return m

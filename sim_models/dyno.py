@@ -1,6 +1,19 @@
 # SPDX-License-Identifier: MIT
 """Dynamometer bench of the characterisation method (paper sec. II.A-B, VI.A).
 
+Two models of the bench:
+
+* :class:`RopeDynamometer` - the bench the method runs on: the motor, its
+  brushes, rotor friction and gearbox (sim_models.axis, the plant variant's
+  parameters) turning a wheel held by a rope and force gauge (a spring with
+  damping), driven by the pin waveform of one PWM period repeated, and read
+  through instruments: a gauge that shows the mean (or the peak) of the
+  rope force over its window, an ammeter in the motor lead showing the mean
+  current, each with resolution and seeded noise.
+* :class:`DynamometerBench` (below) - the closed form: rotor rigidly held,
+  the armature a plain R-L load.  It is the oracle the rope bench is checked
+  against where they must agree (stiff rope, no friction, no brush drop).
+
 The motor's output shaft carries a wheel of radius r; a rope from the wheel
 to a force meter holds it still, so the meter reads F = tau / (r sin theta)
 (paper: tau = r F sin theta).  With the rotor held, the back-EMF is zero and
@@ -39,10 +52,182 @@ below tau_max / 2 at every frequency and approaches it only as f -> 0.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import random
+from dataclasses import dataclass, field
+from typing import Sequence
 
+import numpy as np
+
+from sim_models import axis as ax
 from sim_models.bridge import Pins, armature_voltages, path_resistance
-from sim_models.params import AxisParams, BridgeParams
+from sim_models.params import AxisParams, BridgeParams, PlantParams
+
+
+@dataclass(frozen=True)
+class GaugeConfig:
+    """The force gauge's display: the mean of the rope force over its window
+    (an integrating load-cell gauge) or its peak (peak-hold mode), rounded to
+    its resolution, with seeded Gaussian noise per reading."""
+
+    reading: str = "mean"            # "mean" or "peak"
+    resolution_N: float = 0.1        # a 500 N digital gauge
+    noise_N: float = 0.05            # rms per reading (half a digit)
+    peak_sample_hz: float = 2000.0   # the peak-hold's sampling
+
+
+@dataclass(frozen=True)
+class AmmeterConfig:
+    """A meter in the motor lead: the mean armature current over the window."""
+
+    resolution_A: float = 0.001
+    noise_A: float = 0.0005
+
+
+@dataclass(frozen=True)
+class RopeBenchConfig:
+    """The bench of Fig. 1 / Fig. 12: wheel, rope, gauge and how a reading is
+    taken.  Values not in the paper are assumptions (docs/plant.md)."""
+
+    wheel_radius_m: float = 0.025
+    rope_angle_deg: float = 90.0              # theta of tau = r F sin(theta)
+    wheel_inertia_kg_m2: float = 2e-4         # wheel and gearbox output stage
+    rope_N_per_m: float = 1.7e5               # rope in series with the gauge's load cell
+    # A damped gauge (a dashpot or a damped spring scale): about 0.3 of critical
+    # on motor 2's rope mode (4 Hz), so a reading settles within the settle time;
+    # an undamped bench (150 N s/m, 0.04) is a row of the sensitivity table.
+    rope_N_s_per_m: float = 4000.0
+    ramp_s: float = 0.3                       # soft start: the on-time rises from 0 over this
+    settle_s: float = 0.3                     # then held this long before the reading
+    window_s: float = 0.1                     # the gauge's and ammeter's averaging window (10 Hz display)
+    gauge: GaugeConfig = field(default_factory=GaugeConfig)
+    ammeter: AmmeterConfig = field(default_factory=AmmeterConfig)
+
+
+@dataclass(frozen=True)
+class Trace:
+    """What the physics gave over the reading window of one setting (exact,
+    before the instruments): means of the rope force and the current, the
+    peak force, and how the rotor spent the window."""
+
+    force_mean_N: float
+    force_peak_N: float
+    force_min_N: float
+    current_mean_A: float
+    periods: int
+    events: int
+    stuck_frac: float        # of the window's samples with the rotor held by its friction
+
+
+@dataclass(frozen=True)
+class RopeReading:
+    force_N: float           # what the gauge shows
+    torque_N_m: float        # r F sin(theta)
+    current_A: float         # what the ammeter shows
+    trace: Trace
+
+
+def soft_start(pins: Sequence[Pins], lengths: Sequence[float], frac: float) -> list[tuple[Pins, float]]:
+    """One period of the soft start: the period's driving phases (a bridge
+    side switched high) shortened to ``frac`` of their length, the time moved
+    to the phase that follows (the off-phase).  A waveform with no off-phase
+    (constantly on) gets one: the bridge's braking state."""
+    out: list[tuple[Pins, float]] = []
+    for k, (p, dt) in enumerate(zip(pins, lengths)):
+        driving = (p.rpwm and p.r_en) or (p.lpwm and p.l_en)
+        if not driving:
+            out.append((p, dt))
+            continue
+        nxt = pins[(k + 1) % len(pins)]
+        rest = nxt if nxt != p else Pins(0, 0, 1, 1)
+        out += [(p, dt * frac), (rest, dt * (1.0 - frac))]
+    return [(p, dt) for p, dt in out if dt > 0]
+
+
+class RopeDynamometer:
+    """The motor of one plant axis on the rope bench (module docstring).
+
+    ``measure(segments, period_s, rng)``: from rest (rope slack, rotor at
+    rest) the drive is brought up softly - the waveform's on-time rising
+    from zero over ``ramp_s``, as a lab turns up its drive - so the motor
+    winds the rope quasi-statically instead of overshooting into the
+    stiction band; the pin waveform is then repeated for ``settle_s`` and
+    read over whole periods spanning ``window_s``.  The physics of a
+    setting is simulated once and cached; each call draws new instrument
+    noise from ``rng``, so repeated readings (and seeds) cost nothing."""
+
+    def __init__(self, axis: AxisParams, plant: PlantParams, config: RopeBenchConfig | None = None) -> None:
+        from sim_models.stepper import FastAxis
+
+        self.axis = axis
+        self.plant = plant
+        self.config = cfg = config or RopeBenchConfig()
+        self._make = lambda: FastAxis(axis, plant, 0, consts=self.consts, encoder=False)
+        self.consts = ax.AxisConsts.build_dyno(axis, plant.bridge, cfg.wheel_radius_m, cfg.wheel_inertia_kg_m2,
+                                               cfg.rope_N_per_m, cfg.rope_N_s_per_m)
+        self._cache: dict[tuple, Trace] = {}
+
+    def torque_per_newton(self) -> float:
+        return self.config.wheel_radius_m * math.sin(math.radians(self.config.rope_angle_deg))
+
+    def trace(self, segments: Sequence[tuple[float, Pins]], period_s: float) -> Trace:
+        """The exact physics of one setting (cached)."""
+        key = (tuple((round(t, 12), tuple(p)) for t, p in segments), round(period_s, 12))
+        hit = self._cache.get(key)
+        if hit is not None:
+            return hit
+        cfg = self.config
+        fa = self._make()
+        c = self.consts
+        n_ramp = max(1, math.ceil(cfg.ramp_s / period_s))
+        n_settle = max(1, math.ceil(cfg.settle_s / period_s))
+        n_win = max(1, math.ceil(cfg.window_s / period_s))
+        lengths = [(segments[k + 1][0] if k + 1 < len(segments) else period_s) - segments[k][0]
+                   for k in range(len(segments))]
+        pins = [Pins(*p) for _, p in segments]
+        for k in range(n_ramp):
+            for p, dt in soft_start(pins, lengths, (k + 1) / n_ramp):
+                fa.set_pins(p)
+                fa.advance(dt, [])
+        for _ in range(n_settle):
+            for p, dt in zip(pins, lengths):
+                fa.set_pins(p)
+                fa.advance(dt, [])
+        x0 = fa.x.copy()
+        ev0 = fa.events
+        sub = max(1, math.ceil(period_s * cfg.gauge.peak_sample_hz / max(1, len(pins))))
+        peak, low, stuck, samples = -math.inf, math.inf, 0, 0
+        for _ in range(n_win):
+            for p, dt in zip(pins, lengths):
+                fa.set_pins(p)
+                for _k in range(sub):
+                    fa.advance(dt / sub, [])
+                    f = ax.rope_tension(c, fa.x)
+                    peak, low = max(peak, f), min(low, f)
+                    stuck += fa.mode.sm == 0
+                    samples += 1
+        x1 = fa.x
+        t_win = n_win * period_s
+        tr = Trace(force_mean_N=float((x1[ax.PHI_S] - x0[ax.PHI_S]) / t_win),
+                   force_peak_N=float(peak), force_min_N=float(low),
+                   current_mean_A=float((x1[ax.PHI_C] - x0[ax.PHI_C]) / t_win),
+                   periods=n_ramp + n_settle + n_win, events=fa.events - ev0, stuck_frac=stuck / samples)
+        self._cache[key] = tr
+        return tr
+
+    def measure(self, segments: Sequence[tuple[float, Pins]], period_s: float,
+                rng: random.Random | None = None) -> RopeReading:
+        """One reading of the instruments (noise from ``rng``; none without)."""
+        tr = self.trace(segments, period_s)
+        g, am = self.config.gauge, self.config.ammeter
+        f = tr.force_mean_N if g.reading == "mean" else tr.force_peak_N
+        i = tr.current_mean_A
+        if rng is not None:
+            f += rng.gauss(0.0, g.noise_N)
+            i += rng.gauss(0.0, am.noise_A)
+        # a rope cannot push: the gauge shows no negative force
+        f = max(0.0, round(f / g.resolution_N) * g.resolution_N) if g.resolution_N > 0 else max(0.0, f)
+        i = max(0.0, round(i / am.resolution_A) * am.resolution_A) if am.resolution_A > 0 else max(0.0, i)
+        return RopeReading(force_N=f, torque_N_m=f * self.torque_per_newton(), current_A=i, trace=tr)
 
 
 @dataclass(frozen=True)
