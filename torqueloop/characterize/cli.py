@@ -2,16 +2,21 @@
 """The characterisation command (scripts/characterize.py).
 
     characterize.py run DATA_DIR [--out CONFIG] [--plots DIR] [--set NAME=VALUE ...]
-    characterize.py sim [--out-dir DIR] [--source rtl|model] [--drive brake|coast] [--axes x z]
+    characterize.py sim [--plant lab] [--seeds 10] [--out-dir DIR] [--source rtl|model] [--axes x z]
+                        [--no-ablation] [--no-linearity]
     characterize.py step5 FREQ_SWEEP.csv
     characterize.py check FILE.csv ...
     characterize.py show CONFIG.json [--registers]
     characterize.py export CONFIG.json --format c|verilog --out FILE
 
-``sim`` records the sweeps on the simulated bench (the plant's
-dynamometer, driven by the RTL's pins or their documented waveform) into
-``DIR/data/<axis>/`` and then does exactly what ``run`` does with them,
-writing ``DIR/characterization.json`` and the plots in ``DIR/plots``.
+``sim`` records the sweeps on the simulated bench (the plant variant's
+motor on the rope dynamometer, driven by the RTL's pins or their documented
+waveform, read through seeded instruments) into ``DIR/data/<axis>/`` and
+then does exactly what ``run`` does with them, writing
+``DIR/characterization.json`` and the plots in ``DIR/plots``; then the
+study: the session with other instrument seeds, linearity at other
+frequencies and each plant effect off (``DIR/results.{json,md}``,
+torqueloop/characterize/study.py).
 
 ``run`` takes one folder per axis (``DATA_DIR/<axis>/*.csv``: one frequency
 sweep and any number of duty sweeps, recognised by their ``# sweep =``
@@ -138,16 +143,25 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_sim(args: argparse.Namespace) -> int:
-    from .simbench import simulate_lab
+    from sim_models.params import PlantParamError
+    from sim_models.variants import parse_plant
 
-    out = Path(args.out_dir)
-    th = _thresholds(args.set)
-    simulate_lab(out / "data", axes=args.axes, source=args.source, sim=args.simulator, drive=args.drive, th=th)
-    run_args = argparse.Namespace(
-        data_dir=str(out / "data"), out=str(out / "characterization.json"), plots=str(out / "plots"),
-        axis=None, set=args.set, clk_hz=CLK_HZ, pwm_bits=PWM_BITS,
-    )
-    return cmd_run(run_args)
+    from .simbench import Plant
+    from .study import run_study
+
+    try:
+        name, off = parse_plant(args.plant)
+    except PlantParamError as e:
+        print(f"error: --plant: {e}", file=sys.stderr)
+        return EXIT_ERROR
+    if args.seeds < 1:
+        print("error: --seeds must be at least 1", file=sys.stderr)
+        return EXIT_ERROR
+    from .study import LINEARITY_FREQS_HZ
+
+    return run_study(Path(args.out_dir), Plant(name, off), seeds=args.seeds, axes=args.axes,
+                     source=args.source, sim=args.simulator, th=_thresholds(args.set), ablation=args.ablation,
+                     linearity_freqs=LINEARITY_FREQS_HZ if args.linearity else ())
 
 
 def cmd_step5(args: argparse.Namespace) -> int:
@@ -232,13 +246,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--axis", default=None, help="axis name when DATA_DIR holds one axis's CSVs")
     common(p)
     p.set_defaults(fn=cmd_run)
-    p = sub.add_parser("sim", help="the whole method on the simulated bench (no hardware)")
+    p = sub.add_parser("sim", help="the whole method on the simulated bench (no hardware), and the study around it")
     p.add_argument("--out-dir", default="build/characterize")
+    p.add_argument("--plant", default="lab",
+                   help="plant variant: paper-printed, paper or lab; lab-no-EFFECT[-no-EFFECT] switches "
+                        "lab effects off (sim_models/params/variants.toml) [lab]")
+    p.add_argument("--seeds", type=int, default=10, help="sessions with different instrument noise [10]")
+    p.add_argument("--no-ablation", dest="ablation", action="store_false",
+                   help="skip the runs with each plant effect off")
+    p.add_argument("--no-linearity", dest="linearity", action="store_false",
+                   help="skip the duty sweeps at other frequencies than the chosen one")
     p.add_argument("--source", choices=("rtl", "model"), default="rtl",
                    help="pins from the RTL in simulation (default) or from the cores' documented waveform")
     p.add_argument("--simulator", default="verilator", choices=("verilator", "icarus"))
-    p.add_argument("--drive", choices=("brake", "coast"), default="brake",
-                   help="IBT-2 off-phase: brake (what pwm_torque drives) or coast (model pins only)")
     p.add_argument("--axes", nargs="+", default=["x", "z"])
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
     p.set_defaults(fn=cmd_sim)

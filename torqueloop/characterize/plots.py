@@ -37,17 +37,14 @@ def plot_frequency(result: MotorResult, path: str | Path, title: str = "") -> Pa
     # magnified into the plot's height.
     ax.set_ylim(0, 1.15 * max(float(fs.torque_nm.max()), s5.target_nm))
     ax2.set_ylim(0, 1.15 * max(float(fs.current_a.max()), 1e-9))
+    if fs.x.max() > 20 * fs.x.min():
+        ax.set_xscale("log")   # a sweep over decades (the simulated bench: 50 Hz - 24 kHz)
     ax.set_xlabel("PWM frequency (Hz)")
     ax.set_ylabel("torque (N m)")
     ax.set_title(title or f"step 5: {fs.motor or fs.source}")
     ax.grid(alpha=0.3)
     ax.legend(loc="best", fontsize=8)
-    fig.tight_layout()
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p)
-    plt.close(fig)
-    return p
+    return _save(fig, path)
 
 
 def plot_duty(result: MotorResult, lin: Linearity, path: str | Path, title: str = "") -> Path:
@@ -74,6 +71,10 @@ def plot_duty(result: MotorResult, lin: Linearity, path: str | Path, title: str 
     ax.set_xlim(0, 100)
     ax.grid(alpha=0.3)
     ax.legend(loc="upper left", fontsize=8)
+    return _save(fig, path)
+
+
+def _save(fig: "plt.Figure", path: str | Path) -> Path:
     fig.tight_layout()
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)

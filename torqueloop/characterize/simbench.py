@@ -11,14 +11,18 @@ Two pin sources feed the same measurement:
   behaviour (a period of Count_max x (2^N - 1) clocks, RPWM high for
   duty x Count_max clocks), for quick runs; the RTL source checks it.
 
-The RTL part lives here; the dynamometer part (pin waveform in, force and
-current out) comes from the plant (sim_models).
+The RTL part lives here; the dynamometer (pin waveform in, force and
+current out) is the plant's rope bench (sim_models.dyno.RopeDynamometer) on
+a named plant variant (sim_models.variants), read through its instruments
+with seeded noise.  Pin waveforms are cached per setting, and the bench
+caches the physics of each setting, so a session repeated with other seeds
+(other instrument noise) costs only the settings it has not seen.
 """
 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Literal, Sequence
 
@@ -27,7 +31,7 @@ import numpy as np
 from torqueloop.flow.manifest import REPO_ROOT, core
 
 from torqueloop.spec.charconfig import Config
-from torqueloop.spec.pwm import full_scale as pwm_full_scale
+from torqueloop.spec.pwm import divider_for, full_scale as pwm_full_scale
 
 from .config import CLK_HZ, PWM_BITS
 from .data import BenchConstants, Sweep, read_sweep, write_sweep
@@ -167,11 +171,29 @@ class Reading:
     current_std_a: float | None = None
 
 
+def log_frequencies(lo: float = 50.0, hi: float = 24_500.0, n: int = 25) -> tuple[float, ...]:
+    """The sweep's frequencies: ``n`` log-spaced from ``lo`` to ``hi`` (4
+    significant digits), less those whose nearest board carrier (eq. 4) an
+    earlier one already has: above a few kHz the divider reaches only a few
+    carriers (Count_max 3, 2: 16.3, 24.4 kHz).  The top, 24.4 kHz, is the
+    highest carrier within the IBT-2's 25 kHz rating."""
+    out: list[float] = []
+    seen: set[int] = set()
+    for f in np.geomspace(lo, hi, n):
+        d = divider_for(float(f), CLK_HZ, PWM_BITS)
+        if d not in seen:
+            seen.add(d)
+            out.append(float(f"{f:.4g}"))
+    return tuple(out)
+
+
 @dataclass(frozen=True)
 class SweepPlan:
-    """The paper's sweeps (section VI: 50-500 Hz at 12 V; duty 1-99 %)."""
+    """The sweeps.  The paper swept 50-500 Hz at 12 V; this bench sweeps
+    50 Hz - 20 kHz log-spaced (the IBT-2's rating is 25 kHz), to see where a
+    frequency dependence lives; duty 1-99 %."""
 
-    freqs_hz: tuple[float, ...] = tuple(float(f) for f in range(50, 501, 25))
+    freqs_hz: tuple[float, ...] = field(default_factory=log_frequencies)
     duty_pcts: tuple[float, ...] = (1.0, *(float(d) for d in range(3, 100, 3)))
     wheel_radius_m: float = 0.025
     theta_deg: float = 90.0
@@ -181,13 +203,30 @@ class SweepPlan:
 Measure = Callable[[PinWaveform], Reading]
 
 
-def _waveforms(settings: list[tuple[int, int]], source: PinSource, sim: str, work: Path,
-               drive: Drive = "brake") -> list[PinWaveform]:
-    if source == "rtl":
-        if drive != "brake":
+class Waveforms:
+    """Pin waveforms per (count_max, duty) setting, from the RTL or the
+    model, each computed once (a session and its seeds ask for the same
+    settings again)."""
+
+    def __init__(self, source: PinSource = "model", sim: str = "verilator", work: Path | None = None,
+                 drive: Drive = "brake") -> None:
+        if source == "rtl" and drive != "brake":
             raise ValueError("the RTL drives the IBT-2 with a braking off-phase only (pwm_torque dir_mode 0)")
-        return rtl_waveforms(settings, sim=sim, work=work)
-    return [model_waveform(n, c, drive=drive) for n, c in settings]
+        self.source, self.sim, self.drive = source, sim, drive
+        self.work = work or (REPO_ROOT / "build" / "char_bench" / sim)
+        self._cache: dict[tuple[int, int], PinWaveform] = {}
+        self.rtl_runs = 0
+
+    def get(self, settings: Sequence[tuple[int, int]]) -> list[PinWaveform]:
+        todo = sorted({s for s in settings if s not in self._cache})
+        if todo:
+            if self.source == "rtl":
+                got = rtl_waveforms(todo, sim=self.sim, work=self.work / f"run{self.rtl_runs}")
+                self.rtl_runs += 1
+            else:
+                got = [model_waveform(n, c, drive=self.drive) for n, c in todo]
+            self._cache.update(zip(todo, got))
+        return [self._cache[s] for s in settings]
 
 
 def _std(rd: Sequence[Reading]) -> np.ndarray | None:
@@ -200,19 +239,15 @@ def _progress(msg: str) -> None:
     print(f"[simbench] {msg}", flush=True)
 
 
-def record_frequency_sweep(measure: Measure, plan: SweepPlan, motor: str, source: PinSource = "model",
-                           sim: str = "verilator", work: Path | None = None, drive: Drive = "brake") -> Sweep:
+def record_frequency_sweep(measure: Measure, plan: SweepPlan, motor: str, wf: Waveforms) -> Sweep:
     """Steps 2-4 on the simulated bench: the stall reading (duty M, constantly
     on) and the 50 % sweep.  50 % of the 1023-count period is not a whole
     count: 512 counts (50.05 %) is used and written as the sweep's duty."""
-    from torqueloop.models import freq_div
-
     m = pwm_full_scale(PWM_BITS)
     half = (m + 1) // 2
-    counts = [freq_div.count_max(f, CLK_HZ, PWM_BITS) for f in plan.freqs_hz]
+    counts = [divider_for(f, CLK_HZ, PWM_BITS) for f in plan.freqs_hz]
     settings = [(counts[0], m)] + [(n, half) for n in counts]
-    _progress(f"{motor}: frequency sweep, {len(counts)} frequencies + stall, pins from {source}")
-    wfs = _waveforms(settings, source, sim, (work or REPO_ROOT / "build" / "char_bench") / f"{motor}_freq", drive)
+    wfs = wf.get(settings)
     rd = [measure(w) for w in wfs]
     bench = BenchConstants(plan.wheel_radius_m, plan.theta_deg, plan.supply_v)
     k = float(bench.torque_nm(1.0))
@@ -228,18 +263,12 @@ def record_frequency_sweep(measure: Measure, plan: SweepPlan, motor: str, source
     )
 
 
-def record_duty_sweep(measure: Measure, plan: SweepPlan, motor: str, freq_hz: float,
-                      source: PinSource = "model", sim: str = "verilator", work: Path | None = None,
-                      drive: Drive = "brake") -> Sweep:
+def record_duty_sweep(measure: Measure, plan: SweepPlan, motor: str, freq_hz: float, wf: Waveforms) -> Sweep:
     """Step 6 on the simulated bench at the board frequency nearest ``freq_hz``."""
-    from torqueloop.models import freq_div
-
     m = pwm_full_scale(PWM_BITS)
-    n = freq_div.count_max(freq_hz, CLK_HZ, PWM_BITS)
+    n = divider_for(freq_hz, CLK_HZ, PWM_BITS)
     duties = sorted({max(1, min(m - 1, int(round(d / 100.0 * m)))) for d in plan.duty_pcts})
-    _progress(f"{motor}: duty sweep at {freq_hz:.4g} Hz (count_max {n}), {len(duties)} duties, pins from {source}")
-    wfs = _waveforms([(n, d) for d in duties], source, sim,
-                     (work or REPO_ROOT / "build" / "char_bench") / f"{motor}_duty_{n}", drive)
+    wfs = wf.get([(n, d) for d in duties])
     rd = [measure(w) for w in wfs]
     bench = BenchConstants(plan.wheel_radius_m, plan.theta_deg, plan.supply_v)
     k = float(bench.torque_nm(1.0))
@@ -255,16 +284,17 @@ def record_duty_sweep(measure: Measure, plan: SweepPlan, motor: str, freq_hz: fl
 
 
 def run_bench(measure: Measure, out_dir: Path, motor: str, plan: SweepPlan = SweepPlan(),
-              th: Thresholds = Thresholds(), source: PinSource = "model", sim: str = "verilator",
-              max_duty_sweeps: int = 4, drive: Drive = "brake") -> MotorResult:
+              th: Thresholds = Thresholds(), wf: Waveforms | None = None, max_duty_sweeps: int = 4,
+              tag: str = "") -> MotorResult:
     """A lab's session on the simulated bench: record the frequency sweep,
     ask the method where to record a duty sweep, record it, repeat until the
     method passes, fails, or ``max_duty_sweeps`` were recorded.  Every sweep
     is written to ``out_dir`` as the lab's CSV files."""
+    wf = wf or Waveforms()
     out_dir.mkdir(parents=True, exist_ok=True)
-    fs = record_frequency_sweep(measure, plan, motor, source, sim, drive=drive)
+    fs = record_frequency_sweep(measure, plan, motor, wf)
     fpath = out_dir / "freq_sweep.csv"
-    tag = f"simulated bench: {source} pins, {drive} off-phase, motor {motor}"
+    tag = tag or f"simulated bench: {wf.source} pins, {wf.drive} off-phase, motor {motor}"
     write_sweep(fpath, fs, comment=tag)
     fs = read_sweep(fpath)  # the method reads what a lab would hand it
     duty: list[Sweep] = []
@@ -273,49 +303,73 @@ def run_bench(measure: Measure, out_dir: Path, motor: str, plan: SweepPlan = Swe
         if r.status != "need_duty_sweep" or len(duty) >= max_duty_sweeps:
             return r
         assert r.next_freq_hz is not None
-        ds = record_duty_sweep(measure, plan, motor, r.next_freq_hz, source, sim, drive=drive)
+        ds = record_duty_sweep(measure, plan, motor, r.next_freq_hz, wf)
         dpath = out_dir / f"duty_sweep_{ds.freq_hz:.0f}hz.csv"
         write_sweep(dpath, ds, comment=tag)
         duty.append(read_sweep(dpath))
 
 
-# ---------------------------------------------------------------- the plant's dynamometer
+# ---------------------------------------------------------------- the plant's rope dynamometer
 
 
-def dyno_bench(axis: str, drive: Drive = "brake") -> tuple[Measure, SweepPlan]:
-    """The plant's dynamometer (sim_models.dyno) for one axis of Table 2 as a
-    :data:`Measure`, and the sweep plan with its bench constants.  The pin
-    waveform is read (:func:`drive_and_duty`) and handed to the model as its
-    frequency, duty and off-phase."""
-    from sim_models.params import load_params
-    from sim_models.dyno import DynamometerBench, DynoConfig
+@dataclass(frozen=True)
+class Plant:
+    """A named plant variant with effects switched off (sim_models.variants)."""
 
-    p = load_params()
-    names = [a.name for a in p.axes]
-    if axis not in names:
-        raise ValueError(f"axis {axis!r}: the plant has {names}")
-    dcfg = DynoConfig(drive=drive)
-    bench = DynamometerBench(p.axes[names.index(axis)], p.bridge, dcfg)
+    name: str = "lab"
+    off: tuple[str, ...] = ()
 
-    def measure(w: PinWaveform) -> Reading:
-        seen, duty = drive_and_duty(w)
-        m = bench.measure(w.freq_hz, duty, direction=1, drive=seen)
-        # The bench's ammeter reads the mean; the model's current does not
-        # wander, so no current_std_a column (PWM ripple is not "wandering").
-        return Reading(force_n=m.force_N, current_a=m.current_A)
-
-    plan = SweepPlan(wheel_radius_m=dcfg.wheel_radius_m, theta_deg=dcfg.rope_angle_deg,
-                     supply_v=p.bridge.supply_V)
-    return measure, plan
+    @property
+    def label(self) -> str:
+        return self.name + "".join(f"-no-{e}" for e in self.off)
 
 
-def simulate_lab(out_dir: Path, axes: Sequence[str] = ("x", "z"), source: PinSource = "model",
-                 sim: str = "verilator", drive: Drive = "brake", th: Thresholds = Thresholds()) -> dict[str, MotorResult]:
+class LabBench:
+    """The rope dynamometer (sim_models.dyno) for each axis of a plant
+    variant, its physics cached across sessions; ``measure(axis, seed)``
+    gives a :data:`Measure` whose instrument noise comes from ``seed``."""
+
+    def __init__(self, plant: Plant = Plant(), config: "object | None" = None) -> None:
+        from sim_models.dyno import RopeBenchConfig, RopeDynamometer
+        from sim_models.variants import load_variant
+
+        self.plant = plant
+        p = load_variant(plant.name, plant.off)
+        cfg = config or RopeBenchConfig()
+        self.config = cfg
+        self.dyno = {a.name: RopeDynamometer(a, p, cfg) for a in p.axes}
+        self.plan = SweepPlan(wheel_radius_m=cfg.wheel_radius_m, theta_deg=cfg.rope_angle_deg,
+                              supply_v=p.bridge.supply_V)
+
+    def axes(self) -> tuple[str, ...]:
+        return tuple(self.dyno)
+
+    def measure(self, axis: str, seed: int | None) -> Measure:
+        import random
+
+        if axis not in self.dyno:
+            raise ValueError(f"axis {axis!r}: the plant has {list(self.dyno)}")
+        d = self.dyno[axis]
+        rng = None if seed is None else random.Random(f"{axis}:{seed}")
+
+        def measure(w: PinWaveform) -> Reading:
+            r = d.measure(w.segments, w.period_s, rng)
+            # the ammeter shows a mean; PWM ripple is not "wandering", so no current_std_a column
+            return Reading(force_n=r.force_N, current_a=r.current_A)
+
+        return measure
+
+
+def simulate_lab(out_dir: Path, bench: LabBench, axes: Sequence[str] = ("x", "z"), seed: int | None = 0,
+                 wf: Waveforms | None = None, th: Thresholds = Thresholds(), quiet: bool = False) -> dict[str, MotorResult]:
     """Every axis through the simulated bench: ``out_dir/<axis>/*.csv`` as a
     lab would hand them to ``characterize.py run``."""
+    wf = wf or Waveforms()
     out = {}
     for a in axes:
-        measure, plan = dyno_bench(a, drive)
-        out[a] = run_bench(measure, out_dir / a, a, plan, th, source=source, sim=sim, drive=drive)
-        _progress(f"{a}: {out[a].status}: {out[a].message}")
+        tag = (f"simulated bench: plant {bench.plant.label}, {wf.source} pins, {wf.drive} off-phase, "
+               f"motor {a}, instrument seed {seed}")
+        out[a] = run_bench(bench.measure(a, seed), out_dir / a, a, bench.plan, th, wf=wf, tag=tag)
+        if not quiet:
+            _progress(f"{a} (seed {seed}): {out[a].status}: {out[a].message}")
     return out
