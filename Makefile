@@ -56,18 +56,17 @@ synth: $(STAMP) ## Yosys synth_intel_alm (Cyclone V): per-core table in build/sy
 	$(PY) scripts/synth.py
 	$(PY) scripts/bench.py bench_board
 
-# make run T=40 runs the paper's full T (default 10 s: see docs/experiment.md).
-T ?=
-run: $(STAMP) ## the main job: paper's step experiment, RTL in the loop vs pure model, P/PD/PID -> build/report/
-	$(PY) scripts/run_experiment.py $(if $(T),--t-end $(T),)
+# make run QUICK=1: a short version (T = 2 s, a small sweep) for a first look.
+run: $(STAMP) ## the main job: characterisation, model arm vs experiment arm (RTL in the loop), P/PD/PID, the PWM-frequency sweep -> build/report/
+	$(PY) scripts/run_experiment.py $(if $(filter 1,$(QUICK)),--quick,)
 
-# make bench QUICK=1: shortened runs for a first look.
-QUICK ?=
 bench: $(STAMP) ## benchmarks that print numbers (QUICK=1: shortened)
 	$(PY) scripts/bench.py $(if $(filter 1,$(QUICK)),--quick,)
 
-characterize: $(STAMP) ## the characterisation method (steps 1-8) on the simulated bench: build/characterize/
-	$(PY) scripts/characterize.py sim --out-dir build/characterize
+# make characterize PLANT=paper (default lab; lab-no-EFFECT switches one off)
+PLANT ?=
+characterize: $(STAMP) ## the characterisation method (steps 1-8) on the simulated lab bench, 10 seeds, each effect off: build/characterize/
+	$(PY) scripts/characterize.py sim --out-dir build/characterize $(if $(PLANT),--plant $(PLANT),)
 
 firmware: $(STAMP) ## servo firmware: build/firmware/servo/{servo.elf,.bin,_ram.hex,_rom.hex}
 	$(PY) -m torqueloop.flow.generate --check

@@ -126,6 +126,33 @@ class FastAxis:
         self.mode = ax.initial_mode(self.c, self.z[:ax.N_STATE], self.e_pos, self.e_neg)
         self.count = count_of(float(x[ax.PHI_M]), self.enc)
 
+    #: what advance() changes besides the state vector (snapshot / restore)
+    _STATE_FIELDS = ("pins", "e_pos", "e_neg", "mode", "count", "events", "_t_req", "_ticks", "q_i", "q_i2")
+
+    def snapshot(self) -> tuple:
+        """Everything :meth:`advance` changes, to undo a speculative step."""
+        return self.z.copy(), tuple(getattr(self, f) for f in self._STATE_FIELDS)
+
+    def restore(self, snap: tuple) -> None:
+        z, vals = snap
+        self.z = z.copy()
+        for f, v in zip(self._STATE_FIELDS, vals):
+            setattr(self, f, v)
+
+    def set_voltage(self, volts: float) -> None:
+        """Drive the armature from an ideal voltage source instead of the bridge
+        (the paper's simulation: the PWM averaged over its period, eq. 23-25).
+        Both terminals are driven, so only a brush drop can stop the current."""
+        key = ("V", volts)
+        if self.pins == key:
+            return
+        self.pins = key  # type: ignore[assignment]
+        self.e_pos, self.e_neg = ax.terminal_levels(self.c, volts, volts)
+        self.mode = self.mode._replace(
+            se=ax.elec_mode(self.c, self.z[:ax.N_STATE], self.e_pos, self.e_neg))
+        if len(self._systems) > 512:     # every sample brings a new voltage
+            self._systems.clear()
+
     def set_pins(self, pins: Pins) -> None:
         if pins == self.pins:
             return
@@ -595,6 +622,26 @@ class TwoAxisPlant:
         self.t += dt
         return out
 
+    def snapshot(self) -> tuple:
+        """The plant's whole state (both axes, clock, glitch generator), for a
+        co-simulation that advances speculatively and may have to undo."""
+        return self.t, dict(self._pin_state), self._rng.getstate(), tuple(a.snapshot() for a in self.axes)
+
+    def restore(self, snap: tuple) -> None:
+        self.t, pin_state, rng, axes = snap
+        self._pin_state = dict(pin_state)
+        self._rng.setstate(rng)
+        for a, s in zip(self.axes, axes):
+            a.restore(s)
+
+    def advance_volts(self, dt: float, volts: Sequence[float]) -> None:
+        """Hold ideal armature voltages (one per axis) for ``dt`` seconds (the
+        averaged model; no encoder edges are produced)."""
+        for a, v in zip(self.axes, volts):
+            a.set_voltage(v)
+            a.advance(dt, [])
+        self.t += dt
+
     # ---- accessors (SI unless the name says otherwise) -------------------
     def motor_angle(self, axis: int) -> float:
         return float(self.axes[axis].z[ax.PHI_M])
@@ -619,6 +666,8 @@ class TwoAxisPlant:
 
     def is_currents(self, axis: int) -> tuple[float, float]:
         a = self.axes[axis]
+        if not isinstance(a.pins, Pins):
+            return 0.0, 0.0          # an ideal voltage source: no bridge to sense
         return is_currents(a.pins, float(a.z[ax.I_]), self.params.bridge)
 
     def count(self, axis: int) -> int:

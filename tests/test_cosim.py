@@ -82,19 +82,24 @@ class FakeBoard:
 
 
 def test_snapshot_restore_is_exact() -> None:
-    a, b = TwoAxisPlant(seed=0), TwoAxisPlant(seed=0)
+    from sim_models.variants import load_variant
+
+    p = load_variant("lab")     # every mode: rotor stick-slip, brush drop, mesh sign
+    a, b = TwoAxisPlant(p, seed=0, energy=True, glitch_rate_hz=200.0), \
+        TwoAxisPlant(p, seed=0, energy=True, glitch_rate_hz=200.0)
     fwd = (Pins(1, 0, 1, 1), Pins(0, 1, 1, 1))
-    for p in (a, b):
-        p.advance(0.02, fwd)
-    snap = cp.snapshot(b)
+    for pl in (a, b):
+        pl.advance(0.02, fwd)
+    snap = b.snapshot()
     b.advance(0.013, (Pins(0, 0, 1, 1), Pins(0, 0, 0, 0)))
-    cp.restore(b, snap)
+    b.restore(snap)
     ea = a.advance(0.004, fwd)
     eb = b.advance(0.004, fwd)
     assert ea == eb
     for ax in (0, 1):
         assert np.array_equal(a.state(ax), b.state(ax))
         assert a.count(ax) == b.count(ax)
+        assert a.charge(ax) == b.charge(ax) and a.current_sq_integral(ax) == b.current_sq_integral(ax)
 
 
 def test_plant_on_pins_matches_direct_run(seed: int) -> None:

@@ -14,6 +14,7 @@ from torqueloop.characterize import Sweep, axis_config, characterize_motor
 from torqueloop.characterize.data import BenchConstants
 from torqueloop.host import analysis
 from torqueloop.sim import report
+from torqueloop.sim.experiment import Trajectory
 from torqueloop.spec import units
 from torqueloop.spec.pwm import carrier_hz, divider_for
 from torqueloop.spec.system import SYSTEM
@@ -58,10 +59,13 @@ def test_step_test_and_the_experiment_report_measure_alike() -> None:
     x_counts = np.round((target - 3) * y)
     host = analysis.step_figures(t, x_counts, np.full_like(t, target), 0, target, band_min_counts=0.0)
     rad = 2 * math.pi / cpr
-    rep = report._metrics(t, x_counts * rad, target * rad)
+    zeros = np.zeros((len(t), 2))
+    pos = np.stack([x_counts * rad, x_counts * rad], axis=1)
+    tr = Trajectory(t, pos, zeros, zeros, zeros, pos)
+    rep = report.axis_metrics(tr, target * rad, 0)
     assert host.overshoot_pct == pytest.approx(rep["overshoot_pct"], rel=1e-9)
     assert host.rise_time_s == pytest.approx(rep["rise_time_s"], rel=1e-9)
     assert host.settling_time_s == pytest.approx(rep["settling_time_s"], rel=1e-9)
     assert host.steady_state_error == pytest.approx(rep["steady_state_error_counts"], rel=1e-9)
     assert host.steady_state_error == pytest.approx(3.0, abs=0.5)
-    assert host.rmse * rad == pytest.approx(rep["rmse"], rel=1e-9)
+    assert host.rmse * rad == pytest.approx(rep["tracking_rmse_rad"], rel=1e-9)

@@ -43,6 +43,26 @@ from .simbench import LabBench, Plant, Waveforms, record_duty_sweep, simulate_la
 LINEARITY_FREQS_HZ = (50.0, 200.0, 450.0, 2000.0, 24_400.0)
 
 
+def inputs_digest(plant: Plant, source: str) -> str:
+    """A digest of everything the lab's session depends on (the plant, the
+    bench, the method, the PWM cores and eq. 4): make run reuses a written
+    configuration whose digest still matches."""
+    import hashlib
+
+    from torqueloop.spec.repo import REPO_ROOT
+
+    files = sorted([*(REPO_ROOT / "sim_models").rglob("*.py"), *(REPO_ROOT / "sim_models" / "params").glob("*.toml"),
+                    *(REPO_ROOT / "torqueloop" / "characterize").glob("*.py"),
+                    *(REPO_ROOT / "torqueloop" / "characterize").glob("*.v"),
+                    REPO_ROOT / "torqueloop" / "spec" / "pwm.py", REPO_ROOT / "torqueloop" / "spec" / "system.toml",
+                    REPO_ROOT / "rtl" / "motion" / "tl_freq_div.v", REPO_ROOT / "rtl" / "motion" / "tl_pwm_torque.v"])
+    h = hashlib.sha256(f"{plant.label}|{source}".encode())
+    for f in files:
+        h.update(str(f.relative_to(REPO_ROOT)).encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()
+
+
 def _say(msg: str) -> None:
     print(f"[characterize] {msg}", flush=True)
 
@@ -111,6 +131,8 @@ def run_study(out: Path, plant: Plant, seeds: int = 10, axes: Sequence[str] = ("
     for a, r in first.items():
         studies[a].sessions.append(r)
     status = _write_configuration(out, first, th)
+    if status == 0:
+        (out / "inputs.sha256").write_text(inputs_digest(plant, source) + "\n")
 
     # 2. repeatability over the instrument noise
     for seed in range(1, seeds):

@@ -1,35 +1,47 @@
 # SPDX-License-Identifier: MIT
-"""The paper's experiment (sec. VI.B, Figs 14-16, Table 3) as RTL in the loop.
+"""The paper's experiment (sec. VI.B, Figs 14-16, Table 3): two arms, as the paper has them.
 
 From rest, a step of 6.28 rad (one screw turn, 4 mm) on both axes with P, PD
-or PID and the Table 1 gains, PWM carriers 450 Hz / 200 Hz, for T seconds:
-  - RTL: the board image running the real servo firmware, configured and
-    commanded over its UART with the host's protocol code, closing the loop
-    only through its pins with the sim_models plant (:mod:`.pins`);
-  - pure model: torqueloop.sim.model_loop.run_loop with the same law, gains, sample
-    period, scaling, saturation and PWM period as the firmware is given.
+or PID and the Table 1 gains, for T seconds (the paper's 40 s):
 
-Time origin of both: the control sample at which the step set-point is first
-used (RTL: the first telemetry frame whose set-point is the target; model:
-sample 0).  Sample j of one is compared with sample j of the other.
+* **model arm** (:func:`run_paper_model`): the paper's simulation - eq. (7)
+  and (17) on the ``paper`` plant, the armature voltage averaged over the PWM
+  period, no encoder quantisation (torqueloop.sim.model_loop.run_averaged);
+* **experiment arm** (:func:`run_rtl`): the board image running the real servo
+  firmware, configured over its UART the way a user configures the board
+  (the characterisation file through the host tool's ``config load`` code
+  path, then the law and gains), closing the loop only through its pins with
+  a plant it does not know (``lab``) (:mod:`.pins`);
+* **fast path** (:func:`run_fast`): the same board settings and plant with the
+  firmware's law in Python (torqueloop/models/servo.py, the oracle of
+  control.c) and the PWM block's event model; checked against the RTL arm
+  law by law (the implementation check) before the variants and the
+  frequency sweep run on it.
+
+Time origin of every arm: the control sample at which the step set-point is
+first used (RTL: the first telemetry frame whose set-point is the target;
+the models: sample 0).  Sample j of one is compared with sample j of the other.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 
-from torqueloop.sim.model_loop import TABLE1, LoopConfig, run_loop
-from sim_models.params import load_params
+from sim_models.params import PlantParams
 from sim_models.stepper import TwoAxisPlant
+from sim_models.variants import load_variant, parse_plant
 from torqueloop.flow import firmware
-from torqueloop.spec import protocol as tp
 from torqueloop.flow.manifest import REPO_ROOT
+from torqueloop.host import config as hconfig
 from torqueloop.sim.link import Link
+from torqueloop.sim.model_loop import TABLE1, LoopConfig, run_averaged
 from torqueloop.sim.pins import PlantOnPins
+from torqueloop.spec import protocol as tp
 from torqueloop.spec.pwm import carrier_hz, divider_for
 from torqueloop.spec.system import SYSTEM
 
@@ -38,6 +50,7 @@ CLK_HZ = SYSTEM.clk_hz
 COUNTS_PER_REV = SYSTEM.counts_per_turn
 #: the paper's tau_max (twice tau_max/2 of sec. VI.A), milli N m: the torque at full PWM command
 TAU_MAX_MNM = tuple(a.tau_max_mnm for a in SYSTEM.axes)
+BOARD_KEYS = ("FDIV", "PW0", "PWMAX", "TAU_MAX_MNM")
 
 
 @dataclass(frozen=True)
@@ -46,37 +59,68 @@ class ExperimentConfig:
     t_end_s: float = SYSTEM.t_end_s     # the paper's T
     step_rad: float = SYSTEM.step_rad   # one screw turn, 4 mm (sec. VI.B)
     period_us: int = SYSTEM.period_us   # control period: the paper's 25 ms speed sample period
-    pwm_hz: tuple[float, ...] = SYSTEM.pwm_hz   # the paper's optimal carriers (sec. VI.A)
+    plant: str = "paper"                # plant variant (sim_models.variants; lab-no-EFFECT ...)
+    char_config: str | None = None      # characterisation file, loaded as `torqueloop config load` does
+    pwm_hz: tuple[float, ...] | None = None   # carriers set after the file (None: the file's, else the paper's)
+    pw0_off: bool = False               # PW0 set to 0 after the file: no dead-zone compensation
     record_s: float = 0.002             # grid of the plant trace (plots)
     heartbeat_s: float = 0.25           # STATUS poll, as the host tool keeps the link alive
-    brake: bool = True                  # off-phase: brake (slow decay), as sim_models' default
+    brake: bool = True                  # off-phase: brake (slow decay), as pwm_torque drives the IBT-2
     baud_div: int | None = None         # UART clocks per bit - 1 after IDENTIFY (None: keep 115200,
                                         # the RN-XV's rate); short control periods need a faster link
     progress: bool = True
 
     @property
+    def target_counts(self) -> int:
+        return round(self.step_rad * COUNTS_PER_REV / (2 * math.pi))
+
+    def plant_params(self) -> PlantParams:
+        return load_variant(*parse_plant(self.plant))
+
+    def loaded_settings(self) -> tuple[dict[str, int], ...]:
+        """What ``config load`` of the characterisation file writes (per axis
+        FDIV, PW0, PWMAX, TAU_MAX_MNM), through the host tool's own reader;
+        without a file the board's defaults (the paper's carriers and tau_max)."""
+        if self.char_config is not None:
+            hc = hconfig.load_file(self.char_config)
+            return tuple({k: ax[k] for k in BOARD_KEYS} for ax in hc.axes)
+        return tuple({"FDIV": divider_for(f), "PW0": 0, "PWMAX": SYSTEM.pwm_full, "TAU_MAX_MNM": t}
+                     for f, t in zip(SYSTEM.pwm_hz, TAU_MAX_MNM))
+
+    def overrides(self) -> tuple[dict[str, int], ...]:
+        """What the user sets after loading (``torqueloop set pwm_freq F``, ``set pw0 0``)."""
+        out: list[dict[str, int]] = [{}, {}]
+        for ax in (0, 1):
+            if self.pwm_hz is not None:
+                out[ax]["FDIV"] = divider_for(self.pwm_hz[ax])
+            if self.pw0_off:
+                out[ax]["PW0"] = 0
+        return tuple(out)
+
+    def board(self) -> tuple[dict[str, int], ...]:
+        """The settings the board runs with, per axis."""
+        return tuple(l | o for l, o in zip(self.loaded_settings(), self.overrides()))
+
+    @property
     def fdiv(self) -> tuple[int, ...]:
-        """Count_max of eq. (4) for each carrier (torqueloop.spec.pwm)."""
-        return tuple(divider_for(f) for f in self.pwm_hz)
+        return tuple(b["FDIV"] for b in self.board())
 
     @property
     def pwm_hz_actual(self) -> tuple[float, ...]:
         return tuple(carrier_hz(d) for d in self.fdiv)
-
-    @property
-    def target_counts(self) -> int:
-        return round(self.step_rad * COUNTS_PER_REV / (2 * math.pi))
 
 
 @dataclass
 class Trajectory:
     """Samples at the control instants, j = 0 at the step; SI units (rad, rad/s)."""
     t: np.ndarray              # (n,)
-    pos: np.ndarray            # (n, 2) encoder position
+    pos: np.ndarray            # (n, 2) measured position (encoder; the model arm: unquantised)
     vel: np.ndarray            # (n, 2) the controller's velocity estimate
     cmd: np.ndarray            # (n, 2) PWM command, -1023..1023
     err: np.ndarray            # (n, 2) tracking error
     true_pos: np.ndarray       # (n, 2) plant screw angle at the sample
+    charge: np.ndarray | None = None   # (n, 2) integral of the armature current since the step, A s
+    i2: np.ndarray | None = None       # (n, 2) integral of its square, A^2 s
 
 
 @dataclass
@@ -97,6 +141,8 @@ class RtlRun:
     config_faults: list[int] = field(default_factory=list)   # latched by the configuration, cleared
     link_errors: int = 0
     uart_errors: int = 0
+    board: tuple = ()          # the settings read back from the board after configuring
+    resistance_ohm: tuple = () # winding resistance per axis (copper loss)
 
 
 def firmware_image() -> firmware.Image:
@@ -104,26 +150,36 @@ def firmware_image() -> firmware.Image:
     return firmware.build("servo", out=REPO_ROOT / "build" / "rtl_loop" / "firmware")
 
 
-def configure(link: Link, cfg: ExperimentConfig) -> None:
-    """Load the experiment into the firmware over the link, physical gains
-    in the protocol's micro N m units (the firmware converts them)."""
+def configure(link: Link, cfg: ExperimentConfig) -> list[dict[str, int]]:
+    """Configure the board as a user does: ``torqueloop config load`` of the
+    characterisation file (the host tool's reader and write order), then
+    ``set`` for any override, the law and the Table 1 gains in the protocol's
+    physical units (the firmware converts them with the loaded tau_max).
+    Returns the board settings read back."""
+    if cfg.char_config is not None:
+        for axis, name, value in hconfig.apply_order(hconfig.load_file(cfg.char_config)):
+            link.set_param(tp.GLOBAL_AXIS if axis == tp.GLOBAL_AXIS else axis, name, value)
+    else:
+        for ax, b in enumerate(cfg.loaded_settings()):
+            for k, v in b.items():
+                link.set_param(ax, k, v)
+    for ax, o in enumerate(cfg.overrides()):
+        for k, v in o.items():
+            link.set_param(ax, k, v)
     link.set_param(tp.GLOBAL_AXIS, "PERIOD_US", cfg.period_us)
     link.set_param(tp.GLOBAL_AXIS, "LINK_TIMEOUT_MS", 2000)
     for ax in (0, 1):
         g = TABLE1[cfg.law][ax]
         link.set_param(ax, "LAW", LAWS[cfg.law])
-        link.set_param(ax, "TAU_MAX_MNM", TAU_MAX_MNM[ax])
         link.set_param(ax, "COUNTS_PER_REV", COUNTS_PER_REV)
         link.set_param(ax, "KP_UNM_RAD", round(g.kp * 1e6))
         link.set_param(ax, "KD_UNMS_RAD", round(g.kd * 1e6))
         link.set_param(ax, "KI_UNM_RADS", round(g.ki * 1e6))
-        link.set_param(ax, "FDIV", cfg.fdiv[ax])
-        link.set_param(ax, "PW0", 0)
-        link.set_param(ax, "PWMAX", SYSTEM.pwm_full)
         link.set_param(ax, "CMD_LIMIT", SYSTEM.pwm_full)
         link.set_param(ax, "VEL_MODE", 0)          # the paper's filtered Euler difference
         link.set_param(ax, "BRAKE", int(cfg.brake))
         link.set_param(ax, "FOLLOW_LIMIT", 10 * COUNTS_PER_REV)   # axis z overshoots by most of a turn
+    return [{k: link.get_param(ax, k) for k in BOARD_KEYS} for ax in (0, 1)]
 
 
 def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
@@ -132,7 +188,8 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
     from torqueloop.sim.native import NativeBoard
     img = firmware_image()
     board = (board_factory or NativeBoard.create)(img.rom_hex, img.ram_hex)
-    plant = TwoAxisPlant(seed=0)
+    params = cfg.plant_params()
+    plant = TwoAxisPlant(params, seed=0, energy=True)
     bridge = PlantOnPins(plant, board)
     w0, c0 = time.monotonic(), time.process_time()
     try:
@@ -148,7 +205,7 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
         if cfg.baud_div is not None:
             link.set_param(tp.GLOBAL_AXIS, "BAUD_DIV", cfg.baud_div)   # replied at the old rate
             board.set_uart_div(cfg.baud_div + 1)
-        configure(link, cfg)
+        settings = configure(link, cfg)
         # Changing PERIOD_US used to trip the SoC watchdog (the next tick stayed
         # at the old period's deadline); the firmware now restarts its tick.
         # Still wait past an old deadline and record anything latched, so a
@@ -182,7 +239,9 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
         while board.cycle < end:
             bridge.run_to(min(end, board.cycle + rec))
             trace.append((board.cycle, plant.screw_angle(0), plant.screw_angle(1), plant.screw_speed(0),
-                          plant.screw_speed(1), plant.current(0), plant.current(1)))
+                          plant.screw_speed(1), plant.current(0), plant.current(1),
+                          plant.charge(0), plant.charge(1), plant.current_sq_integral(0),
+                          plant.current_sq_integral(1)))
             link.poll()
             if board.cycle >= next_hb:
                 link.post("STATUS", axis=0)
@@ -202,6 +261,8 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
         run.uart_errors = board.uart_errors() if hasattr(board, "uart_errors") else 0
         run.link_errors = len(link.errors)
         run.bridge = asdict(bridge.stats)
+        run.board = tuple(settings)
+        run.resistance_ohm = tuple(a.resistance_ohm for a in params.axes)
     finally:
         if hasattr(board, "close"):
             board.close()
@@ -236,8 +297,10 @@ def _assemble(cfg: ExperimentConfig, link: Link, trace: list[tuple], target: int
     tt = (tr[:, 0] - c_step) / CLK_HZ
     t = np.arange(n) * cfg.period_us * 1e-6
     true_pos = np.stack([np.interp(t, tt, tr[:, 1 + a]) for a in (0, 1)], axis=1)
+    charge = np.stack([np.interp(t, tt, tr[:, 7 + a]) for a in (0, 1)], axis=1)
+    i2 = np.stack([np.interp(t, tt, tr[:, 9 + a]) for a in (0, 1)], axis=1)
     keep = tt >= -0.1
-    traj = Trajectory(t, pos, vel, cmd, err, true_pos)
+    traj = Trajectory(t, pos, vel, cmd, err, true_pos, charge - charge[0], i2 - i2[0])
     return RtlRun(cfg, traj, tt[keep], tr[keep][:, 1:3], tr[keep][:, 3:5], tr[keep][:, 5:7],
                   t0_jitter_s=float(np.percentile(off, 95) - base) / CLK_HZ, faults=faults)
 
@@ -247,48 +310,56 @@ class ModelRun:
     traj: Trajectory
     wall_s: float
     config: dict
+    resistance_ohm: tuple = ()
 
 
-def run_model(cfg: ExperimentConfig) -> ModelRun:
-    """The pure-model loop (torqueloop.sim.model_loop) set up as the firmware is:
-    same law and gains, sample period, step in whole counts, PWM period of
-    the hardware divisor, 10-bit command, brake off-phase."""
+def run_paper_model(cfg: ExperimentConfig) -> ModelRun:
+    """The model arm: the paper's simulation (model_loop.run_averaged) on
+    ``cfg.plant`` with the paper's tau_max in the scaling (eq. 23-25), the
+    Table 1 gains and the firmware's anti-windup (the paper's firmware law is
+    unknown; the same law in both arms keeps the comparison about the plant
+    and the drive, not the integrator)."""
+    params = cfg.plant_params()
     target_rad = cfg.target_counts * 2 * math.pi / COUNTS_PER_REV
     lc = LoopConfig(setpoint_rad=target_rad, t_end_s=cfg.t_end_s, sample_s=cfg.period_us * 1e-6,
-                    drive="brake" if cfg.brake else "coast", pwm_hz=cfg.pwm_hz_actual, gains=TABLE1[cfg.law])
-    params = load_params()
-    r = run_loop(lc, params, TwoAxisPlant(params, seed=0))
-    # sample k's command is the one computed at k (applied from the next period start)
+                    gains=TABLE1[cfg.law])
+    r = run_averaged(lc, params, TwoAxisPlant(params, seed=0))
     traj = Trajectory(r.t, r.x_meas, r.v_est, r.cmd, target_rad - r.x_meas, r.x_true)
-    return ModelRun(traj, r.wall_s, asdict(lc) | {"gains": [asdict(g) for g in lc.gains]})
+    return ModelRun(traj, r.wall_s, {"arm": "model", "plant": cfg.plant, "law": cfg.law, "drive": "averaged voltage",
+                                     "gains": [asdict(g) for g in lc.gains]},
+                    tuple(a.resistance_ohm for a in params.axes))
 
 
-def run_model_fw_law(cfg: ExperimentConfig) -> ModelRun:
-    """A second pure model: the same plant with the *firmware's* law in Python
-    (torqueloop/models/servo.py, the oracle of firmware/servo/control.c: fixed
-    point, anti-windup, deadband) and the hardware's PWM
-    (torqueloop.models.pwm_schedule).  No RTL, CPU or pins: the difference
-    between this and torqueloop.sim.model_loop is the law's implementation;
-    between this and the RTL, the rest."""
+def run_fast(cfg: ExperimentConfig) -> ModelRun:
+    """The fast path: the board's settings (``cfg.board()``) and plant with
+    the *firmware's* law in Python (torqueloop/models/servo.py, the oracle of
+    firmware/servo/control.c: fixed point, anti-windup, deadband, dead-zone
+    compensation by the PWM block) and the PWM block's event model
+    (torqueloop.models.pwm_schedule).  No RTL, CPU or pins: between this and
+    the RTL arm the difference is the implementation (the implementation
+    check); copper loss and current ripple come from the plant's exact
+    current integrals."""
     from torqueloop.models.pwm_schedule import PwmChannel, PwmSetting, run_until
     from torqueloop.models.servo import Axis, AxisParams
     from torqueloop.spec.bridge import BRAKE, COAST
-    params = load_params()
-    plant = TwoAxisPlant(params, seed=0)
+    params = cfg.plant_params()
+    plant = TwoAxisPlant(params, seed=0, energy=True)
     period = cfg.period_us * CLK_HZ // 1_000_000
     safe = BRAKE if cfg.brake else COAST
-    channels = [PwmChannel(PwmSetting(div=d, safe=safe)) for d in cfg.fdiv]
+    board = cfg.board()
+    setting = [dict(div=b["FDIV"], pw0=b["PW0"], pwmax=b["PWMAX"], safe=safe) for b in board]
+    channels = [PwmChannel(PwmSetting(**st), off_phase=safe) for st in setting]
     axes = []
     for ax in (0, 1):
         g = TABLE1[cfg.law][ax]
-        raw = [tp.gain_raw_from_phys(round(k * 1e6), TAU_MAX_MNM[ax], COUNTS_PER_REV) if k else 0
+        raw = [tp.gain_raw_from_phys(round(k * 1e6), board[ax]["TAU_MAX_MNM"], COUNTS_PER_REV) if k else 0
                for k in (g.kp, g.kd, g.ki)]
         a = Axis(AxisParams(law=LAWS[cfg.law], kp_q16=raw[0], kd_q16=raw[1], ki_q16=raw[2], vel_mode=0),
                  cfg.period_us)
         a.reset(0, 0)
         axes.append(a)
     n = int(round(cfg.t_end_s * 1e6 / cfg.period_us)) + 1
-    out = {k: np.zeros((n, 2)) for k in ("pos", "vel", "cmd", "err", "true")}
+    out = {k: np.zeros((n, 2)) for k in ("pos", "vel", "cmd", "err", "true", "q", "q2")}
     w0 = time.monotonic()
     for k in range(n):
         ts = k * period
@@ -298,13 +369,19 @@ def run_model_fw_law(cfg: ExperimentConfig) -> ModelRun:
                 axes[a].move(cfg.target_counts, False)
             pos = plant.count(a)
             cmd = axes[a].step(pos, 0, ts)
-            channels[a].load(PwmSetting(cmd=cmd, div=cfg.fdiv[a], safe=safe))
+            channels[a].load(PwmSetting(cmd=cmd, **setting[a]))
             out["pos"][k, a] = pos
             out["vel"][k, a] = axes[a].vel_q8 / 256
             out["cmd"][k, a] = cmd
             out["err"][k, a] = cfg.target_counts - pos
             out["true"][k, a] = plant.screw_angle(a)
+            out["q"][k, a] = plant.charge(a)
+            out["q2"][k, a] = plant.current_sq_integral(a)
     rad = 2 * math.pi / COUNTS_PER_REV
     t = np.arange(n) * cfg.period_us * 1e-6
-    traj = Trajectory(t, out["pos"] * rad, out["vel"] * rad, out["cmd"], out["err"] * rad, out["true"])
-    return ModelRun(traj, time.monotonic() - w0, {"law": "torqueloop.models.servo (firmware law)"})
+    traj = Trajectory(t, out["pos"] * rad, out["vel"] * rad, out["cmd"], out["err"] * rad, out["true"],
+                      out["q"], out["q2"])
+    return ModelRun(traj, time.monotonic() - w0,
+                    {"arm": "fast path", "plant": cfg.plant, "law": cfg.law, "board": list(board),
+                     "pwm_hz": list(cfg.pwm_hz_actual), "implementation": "torqueloop.models.servo (firmware law)"},
+                    tuple(a.resistance_ohm for a in params.axes))

@@ -80,3 +80,6 @@ class Link:
 
     def set_param(self, axis: int, name: str, value: int) -> int:
         return self.call("SET_PARAM", axis=axis, param=tp.PARAMS[name].id, value=value)["value"]
+
+    def get_param(self, axis: int, name: str) -> int:
+        return self.call("GET_PARAM", axis=axis, param=tp.PARAMS[name].id)["value"]

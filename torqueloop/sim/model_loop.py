@@ -78,6 +78,41 @@ class LoopResult:
     calls: int = 0
 
 
+class Law:
+    """One axis's control law as the firmware runs it (and as eq. 20-22 read
+    with Table 1): the paper's filtered Euler speed (sec. VI.B), the torque
+    K_p e - K_d v + K_i sum(e T_s), the integral held while the output is
+    saturated in the error's direction and its term kept within full scale
+    (``anti_windup``; off: the plain eq. 22 sum), and the torque as a
+    fraction of tau_max (eq. 23-25; the caller saturates and quantises)."""
+
+    def __init__(self, gains: Gains, tau_max_N_m: float, sample_s: float, vel_filter: float,
+                 anti_windup: bool = True) -> None:
+        self.g, self.tau_max, self.ts, self.a, self.aw = gains, tau_max_N_m, sample_s, vel_filter, anti_windup
+        self.x_prev = 0.0
+        self.v = 0.0
+        self.integ = 0.0
+        self.sat_sign = 0
+        self.first = True
+
+    def step(self, x: float, target: float) -> float:
+        """Take the position sample ``x``; return tau / tau_max (unsaturated)."""
+        if not self.first:
+            self.v = self.a * (x - self.x_prev) / self.ts + (1 - self.a) * self.v
+        self.first = False
+        self.x_prev = x
+        e = target - x
+        e_sign = (e > 0) - (e < 0)
+        if not (self.aw and self.sat_sign != 0 and self.sat_sign == e_sign):
+            self.integ += e * self.ts
+        if self.aw and self.g.ki > 0:
+            lim = self.tau_max / self.g.ki
+            self.integ = max(-lim, min(lim, self.integ))
+        tau = self.g.kp * e - self.g.kd * self.v + self.g.ki * self.integ
+        self.sat_sign = 1 if tau > self.tau_max else (-1 if tau < -self.tau_max else 0)
+        return tau / self.tau_max
+
+
 def run_loop(cfg: LoopConfig, params: PlantParams | None = None,
              plant: TwoAxisPlant | None = None, progress: bool = False) -> LoopResult:
     """Step both axes to ``setpoint_rad`` from rest and record every sample."""
@@ -89,15 +124,12 @@ def run_loop(cfg: LoopConfig, params: PlantParams | None = None,
     channels = [PwmChannel(PwmSetting(div=d, pw0=cfg.pw0, pwmax=full, safe=off), off_phase=off,
                            pwm_bits=cfg.pwm_bits) for d in divs]
     counts_per_rad = params.encoder.counts_per_motor_rev * params.axes[0].gear_ratio / (2 * math.pi)
-    tau_max = [a.tau_max_paper_N_m for a in params.axes]
+    laws = [Law(cfg.gains[a], params.axes[a].tau_max_paper_N_m, cfg.sample_s, cfg.vel_filter, cfg.anti_windup)
+            for a in range(2)]
     n_samples = int(round(cfg.t_end_s / cfg.sample_s)) + 1
     sample_ticks = round(cfg.sample_s * cfg.clk_hz)
     z = lambda: np.zeros((n_samples, 2))  # noqa: E731
     res = LoopResult(np.zeros(n_samples), z(), z(), z(), z(), z(), z(), z())
-    x_prev = [0.0, 0.0]
-    v = [0.0, 0.0]
-    integ = [0.0, 0.0]
-    sat_sign = [0, 0]        # sign of the last output's saturation (0: none)
     t0 = time.monotonic()
     calls = 0
     for k in range(n_samples):
@@ -106,27 +138,14 @@ def run_loop(cfg: LoopConfig, params: PlantParams | None = None,
         # sample: the firmware reads the decoder counts
         for a in range(2):
             x = plant.count(a) / counts_per_rad
-            if k > 0:
-                v[a] = cfg.vel_filter * (x - x_prev[a]) / cfg.sample_s + (1 - cfg.vel_filter) * v[a]
-            x_prev[a] = x
-            e = cfg.setpoint_rad - x
-            g = cfg.gains[a]
-            e_sign = (e > 0) - (e < 0)
-            if not (cfg.anti_windup and sat_sign[a] != 0 and sat_sign[a] == e_sign):
-                integ[a] += e * cfg.sample_s
-            if cfg.anti_windup and g.ki > 0:
-                lim = tau_max[a] / g.ki
-                integ[a] = max(-lim, min(lim, integ[a]))
-            tau = g.kp * e - g.kd * v[a] + g.ki * integ[a]
-            sat_sign[a] = 1 if tau > tau_max[a] else (-1 if tau < -tau_max[a] else 0)
-            cmd = command_for(tau / tau_max[a], cfg.pwm_bits)
+            cmd = command_for(laws[a].step(x, cfg.setpoint_rad), cfg.pwm_bits)
             channels[a].load(PwmSetting(cmd=cmd, div=divs[a], pw0=cfg.pw0, pwmax=full, safe=off))
             act = channels[a].active
             res.t[k] = k * cfg.sample_s
             res.x_meas[k, a] = x
             res.x_true[k, a] = plant.screw_angle(a)
             res.table_mm[k, a] = plant.table_mm(a)
-            res.v_est[k, a] = v[a]
+            res.v_est[k, a] = laws[a].v
             res.duty[k, a] = math.copysign(duty_ticks(act.cmd, act.pw0, act.pwmax, cfg.pwm_bits) / full, act.cmd)
             res.current[k, a] = plant.current(a)
             res.cmd[k, a] = cmd
@@ -135,6 +154,44 @@ def run_loop(cfg: LoopConfig, params: PlantParams | None = None,
                   f"{res.x_meas[k, 1]:.3f} rad", flush=True)
     res.wall_s = time.monotonic() - t0
     res.calls = calls
+    return res
+
+
+def run_averaged(cfg: LoopConfig, params: PlantParams | None = None,
+                 plant: TwoAxisPlant | None = None) -> LoopResult:
+    """The paper's simulation (sec. VI.B): eq. (7) and (17) driven by the
+    armature voltage u V averaged over the PWM period (an ideal source held
+    over each control sample: no PWM ripple), the position read without
+    encoder quantisation (the motor angle over G, where the encoder sits),
+    u = tau / tau_max saturated at +-1 (eq. 19) and not quantised; the law
+    of :class:`Law`.  ``cfg.pwm_hz``, ``pw0`` and ``drive`` do not apply."""
+    params = params or load_params()
+    plant = plant or TwoAxisPlant(params, seed=0)
+    laws = [Law(cfg.gains[a], params.axes[a].tau_max_paper_N_m, cfg.sample_s, cfg.vel_filter, cfg.anti_windup)
+            for a in range(2)]
+    n_samples = int(round(cfg.t_end_s / cfg.sample_s)) + 1
+    z = lambda: np.zeros((n_samples, 2))  # noqa: E731
+    res = LoopResult(np.zeros(n_samples), z(), z(), z(), z(), z(), z(), z())
+    supply = params.bridge.supply_V
+    volts = [0.0, 0.0]
+    t0 = time.monotonic()
+    for k in range(n_samples):
+        if k:
+            plant.advance_volts(cfg.sample_s, volts)
+        for a in range(2):
+            x = plant.motor_angle(a) / params.axes[a].gear_ratio
+            u = max(-1.0, min(1.0, laws[a].step(x, cfg.setpoint_rad)))
+            volts[a] = u * supply
+            res.t[k] = k * cfg.sample_s
+            res.x_meas[k, a] = x
+            res.x_true[k, a] = plant.screw_angle(a)
+            res.table_mm[k, a] = plant.table_mm(a)
+            res.v_est[k, a] = laws[a].v
+            res.duty[k, a] = u
+            res.current[k, a] = plant.current(a)
+            res.cmd[k, a] = u * full_scale(cfg.pwm_bits)
+    res.wall_s = time.monotonic() - t0
+    res.calls = n_samples
     return res
 
 

@@ -55,26 +55,6 @@ def decode_pins(code: int) -> tuple[Pins, Pins]:
                       (code >> (4 * a + 2)) & 1, (code >> (4 * a + 3)) & 1) for a in (0, 1))
 
 
-# ---- plant snapshot ----------------------------------------------------------
-# TwoAxisPlant has no save/restore API (asked for in the report); these are
-# the fields FastAxis.advance and TwoAxisPlant.advance change.
-_AXIS_FIELDS = ("pins", "e_pos", "e_neg", "mode", "count", "events", "_t_req", "_ticks")
-
-
-def snapshot(plant: TwoAxisPlant) -> tuple:
-    axes = tuple((a.z.copy(), tuple(getattr(a, f) for f in _AXIS_FIELDS)) for a in plant.axes)
-    return plant.t, dict(plant._pin_state), axes
-
-
-def restore(plant: TwoAxisPlant, snap: tuple) -> None:
-    plant.t, pin_state, axes = snap
-    plant._pin_state = dict(pin_state)
-    for a, (z, vals) in zip(plant.axes, axes):
-        a.z = z.copy()
-        for f, v in zip(_AXIS_FIELDS, vals):
-            setattr(a, f, v)
-
-
 @dataclass
 class BridgeStats:
     segments: int = 0           # plant advances that stood (pins constant over them)
@@ -146,7 +126,7 @@ class PlantOnPins:
             if pred is not None and c0 < pred < end:
                 end = pred
             t0 = time.perf_counter()
-            snap = snapshot(self.plant)
+            snap = self.plant.snapshot()
             edges = self.plant.advance((end - c0) * TICK_S, pins)
             self._push(edges, c0, c0)
             t1 = time.perf_counter()
@@ -158,7 +138,7 @@ class PlantOnPins:
                 # a pin changed before the horizon: redo the plant up to the change
                 self.stats.rollbacks += 1
                 b.clear_edges()
-                restore(self.plant, snap)
+                self.plant.restore(snap)
                 edges = self.plant.advance((c1 - c0) * TICK_S, pins)
                 self._push(edges, c0, c1)
             self.stats.board_s += t2 - t1
