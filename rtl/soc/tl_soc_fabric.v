@@ -107,8 +107,6 @@ module tl_soc_fabric #(
     localparam [PAGE_BITS-1:0] P_SYS   = `TL_SYS_PAGE;
     localparam [N_PAGES-1:0]   PAGE_USED = (1 << P_TIMER) | (1 << P_INTC) | (1 << P_GPIO) | (1 << P_UART)
                                          | (1 << P_AXIS0) | (1 << P_AXIS1) | (1 << P_SYS);
-    // The answer of a page without a block: no such register.
-    localparam [RS-1:0] RSP_NONE = {{(RS - 1){1'b0}}, 1'b1} << `TL_BUS_RSP_ERR_LSB;
 
     // ---- instruction bus: launch once, answer in the next cycle ---------------------------
     reg  ibus_ack_q, i_ram_q, i_err_q;
@@ -136,29 +134,20 @@ module tl_soc_fabric #(
     wire d_ram    = (dbus_addr & RAM_MASK) == `TL_RAM_BASE;
     wire d_per    = (dbus_addr & PER_MASK) == PER_BASE;
 
-    // The request every peripheral page sees; only the addressed page's strobe is set.
-    wire [PAGE_BITS-1:0] d_page  = dbus_addr[12 +: PAGE_BITS];
-    wire [31:0]          d_wmask = {{8{dbus_be[3]}}, {8{dbus_be[2]}}, {8{dbus_be[1]}}, {8{dbus_be[0]}}};
+    // The peripheral pages: a request bundle each, the addressed one's answer.
     /* verilator lint_off UNUSEDSIGNAL */  // an empty page's request goes nowhere
     wire [RQ*N_PAGES-1:0] page_req;
     /* verilator lint_on UNUSEDSIGNAL */
+    /* verilator lint_off UNDRIVEN */      // an empty page has no block: tl_soc_pages answers for it
     wire [RS*N_PAGES-1:0] page_rsp;
-    genvar p;
-    generate
-        for (p = 0; p < N_PAGES; p = p + 1) begin : g_page
-            assign page_req[p*RQ + `TL_BUS_REQ_STB_LSB] = d_launch && d_per && d_page == p;
-            assign page_req[p*RQ + `TL_BUS_REQ_WE_LSB]  = dbus_we;
-            assign page_req[p*RQ + `TL_BUS_REQ_IDX_LSB   +: 10] = dbus_addr[11:2];
-            assign page_req[p*RQ + `TL_BUS_REQ_WMASK_LSB +: 32] = d_wmask;
-            assign page_req[p*RQ + `TL_BUS_REQ_WBITS_LSB +: 32] = dbus_wdata & d_wmask;
-            // A page with no block answers every access with an error.
-            if (!PAGE_USED[p]) begin : g_empty
-                assign page_rsp[p*RS +: RS] = RSP_NONE;
-            end
-        end
-    endgenerate
+    /* verilator lint_on UNDRIVEN */
+    wire [RS-1:0]         d_rsp;          // this cycle, for the launched access
 
-    wire [RS-1:0] d_rsp = page_rsp[d_page*RS +: RS];   // the addressed page's answer, this cycle
+    tl_soc_pages #(.N_PAGES(N_PAGES), .PAGE_USED(PAGE_USED)) u_pages (
+        .stb(d_launch && d_per), .we(dbus_we), .be(dbus_be), .addr(dbus_addr[PAGE_BITS+11:0]),
+        .wdata(dbus_wdata), .page_req(page_req), .page_rsp(page_rsp), .rsp(d_rsp)
+    );
+
     reg  [31:0]   per_rdata;
 
     always @(posedge clk) begin

@@ -108,12 +108,15 @@ def _bundle_width(fields: tuple[BusField, ...]) -> int:
 
 
 def c_header(rm: RegMap) -> str:
-    """C11 header: TL_<BLOCK>_<REG> is the register as a volatile lvalue,
-    _ADDR its address; per layout TL_<KIND>_<REG>_OFS its offset in the page
+    """C11 header (numbers also for assembly: GNU as reads the u suffix):
+    TL_<BLOCK>_<REG> is the register as a volatile lvalue, _ADDR its address; per layout TL_<KIND>_<REG>_OFS its offset in the page
     and _<FIELD>_POS/_MSK the field (CMSIS naming)."""
     L = [f"/* {_BANNER} */", "#ifndef TORQUELOOP_REGS_H", "#define TORQUELOOP_REGS_H", "",
+         "/* Assembly sources (.S) may include it too: the numbers only. */",
+         "#ifndef __ASSEMBLER__",
          "#include <stdint.h>", "",
-         "#define TL_REG32(addr) (*(volatile uint32_t *)(uintptr_t)(addr))", "",
+         "#define TL_REG32(addr) (*(volatile uint32_t *)(uintptr_t)(addr))",
+         "#endif", "",
          f"#define TL_REGMAP_VERSION {rm.version}u",
          f"#define TL_CLK_HZ {rm.clk_hz}u", ""]
     for r in rm.regions:
