@@ -29,11 +29,11 @@ QUICK = False
 
 def tb_module(folder: str, name: str):
     """A test bench module (tb/<folder>/<name>.py) whose cocotb tests a
-    benchmark runs: its folder goes on sys.path, where the simulator's Python
+    benchmark runs: its folder (and tb/, for tbutil) goes on sys.path, where the simulator's Python
     (which gets this process's path) finds the module by name too."""
-    d = str(TB_DIR / folder)
-    if d not in sys.path:
-        sys.path.insert(0, d)
+    for d in (str(TB_DIR), str(TB_DIR / folder)):   # tb/ itself for the shared tbutil
+        if d not in sys.path:
+            sys.path.insert(0, d)
     return importlib.import_module(name)
 
 

@@ -6,7 +6,8 @@
     scripts/run_elf.py --memory-map
 
 The ELF's loadable segments are written at their addresses into the RAM of
-tb/cpu/cpu_sim_top (SoC memory map: RAM at 0x8000_0000), the core starts in
+tb/cpu/cpu_sim_top (the SoC's memory map: RAM at 0x8000_0000, the SoC's
+machine timer and interrupt controller at their pages), the core starts in
 the boot ROM at 0x0000_0000, whose two-instruction stub jumps to the ELF
 entry point, and runs until the program stores a non-zero word to its
 `tohost` symbol.  Prints cycles and retired instructions (both from reset,
@@ -40,21 +41,12 @@ sys.path.insert(0, str(REPO / "tb" / "cpu"))
 
 from torqueloop.models.rv32 import read_elf  # noqa: E402
 
-import re  # noqa: E402
+from torqueloop.spec import regs  # noqa: E402
 
-RAM_BASE = 0x8000_0000  # SoC memory map (torqueloop/spec/regmap.toml), as cpu_sim_top decodes it
-
-
-def _ram_bytes() -> int:
-    """cpu_sim_top's RAM_BYTES default: one source for the harness and --memory-map."""
-    src = (REPO / "tb" / "cpu" / "cpu_sim_top.v").read_text()
-    m = re.search(r"parameter\s+RAM_BYTES\s*=\s*(\d+)", src)
-    if m is None:
-        raise RuntimeError("RAM_BYTES default not found in tb/cpu/cpu_sim_top.v")
-    return int(m.group(1))
-
-
-RAM_BYTES = _ram_bytes()
+# The SoC memory map (torqueloop/spec/regmap.toml), which cpu_sim_top decodes
+# through the generated include; its RAM_BYTES defaults to the map's RAM size.
+RAM_BASE = regs.RAM_BASE
+RAM_BYTES = regs.RAM_SIZE
 
 
 def main(argv: list[str] | None = None) -> int:

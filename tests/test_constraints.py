@@ -187,6 +187,36 @@ def test_gpio_block_drives_outputs_reads_inputs_and_tristates_the_rest(table):
     assert all("'bz" in v for k, v in driven.items() if k not in used)
 
 
+def test_harness_block_is_the_mirror_of_the_top_block(table):
+    """The test wrappers' cable side: every header bit the top drives is read
+    into the net of the same name, every bit it reads is driven from it, and
+    spare bits are left alone (so the board bench can see them float)."""
+    block = board.gen_harness_gpio_block(table)
+    pairs = re.findall(r"assign\s+(\S+)\s*=\s*([^;]+);", block)
+    assert len(pairs) == len(table.gpio)
+    got = {(lhs, rhs.strip()) for lhs, rhs in pairs}
+    for g in table.gpio:
+        assert ((g.net, g.signal) if g.dir == "out" else (g.signal, g.net)) in got, g.signal
+    for name in {board.split_bit(g.net)[0] for g in table.gpio}:
+        assert re.search(rf"wire\s+(\[\d+:0\])?\s*{name};", block), f"net {name} not declared"
+
+
+def test_generate_check_covers_the_harness_wrappers():
+    """The wrappers' pin mapping is a generated product: `python -m
+    torqueloop.flow.generate --check` (make lint) lists both wrappers, and a
+    mapping that differs from the pin table is reported stale."""
+    from torqueloop.flow import generate
+
+    prods = generate.products()
+    rels = [str(w.relative_to(REPO_ROOT)) for w in board.HARNESS_V]
+    assert set(rels) <= set(prods)
+    for rel in rels:
+        planted = dict(prods)
+        planted[rel] = prods[rel].replace("= GPIO_0[6];", "= GPIO_0[5];").replace("GPIO_0[6] ", "GPIO_0[5] ")
+        assert planted[rel] != prods[rel]
+        assert rel in generate.stale(planted)
+
+
 # --- the top and the project's sources -------------------------------------------------------------
 
 def test_top_ports_match_the_pin_table(table):

@@ -49,6 +49,22 @@ def test_equivalence_proof_catches_a_broken_vhdl_twin(tmp_path):
     assert not eda.equivalence(c, vhdl_override=[f], work=tmp_path / "equiv").ok
 
 
+def test_equivalence_proof_sees_through_the_bus_records(tmp_path):
+    """The SoC blocks' VHDL twins take the bus as two records, their Verilog
+    twins as two vectors: the proof pairs them field by field, so a twin
+    that answers a listed register with a bus error fails it."""
+    c = core("soc_timer")
+    twin = next(p for p in c.vhdl if p.name == "tl_soc_timer.vhd")
+    good = twin.read_text()
+    broken = good.replace("elsif idx = TL_TIMER_MSIP_IDX then", "elsif false then")
+    assert broken != good
+    f = tmp_path / twin.name
+    f.write_text(broken)
+    others = [p for p in c.vhdl if p != twin]
+    assert eda.equivalence(c, work=tmp_path / "equiv_good").ok
+    assert not eda.equivalence(c, vhdl_override=[*others, f], work=tmp_path / "equiv").ok
+
+
 def test_manifest_uses_brings_sources_once_in_dependency_order(tmp_path):
     from torqueloop.flow.manifest import load_manifest as load
     (tmp_path / "a.v").write_text("")

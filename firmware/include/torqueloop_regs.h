@@ -3,9 +3,12 @@
 #ifndef TORQUELOOP_REGS_H
 #define TORQUELOOP_REGS_H
 
+/* Assembly sources (.S) may include it too: the numbers only. */
+#ifndef __ASSEMBLER__
 #include <stdint.h>
 
 #define TL_REG32(addr) (*(volatile uint32_t *)(uintptr_t)(addr))
+#endif
 
 #define TL_REGMAP_VERSION 1u
 #define TL_CLK_HZ 50000000u

@@ -29,6 +29,24 @@
 `define TL_SYS_BASE 32'h40006000
 `define TL_SYS_PAGE 6
 
+// Peripheral bus bundles, tl_soc_fabric <-> every block (docs/soc.md, Bus)
+`define TL_BUS_REQ_WIDTH 76
+`define TL_BUS_REQ_STB_LSB 0
+`define TL_BUS_REQ_STB_MSB 0
+`define TL_BUS_REQ_WE_LSB 1
+`define TL_BUS_REQ_WE_MSB 1
+`define TL_BUS_REQ_IDX_LSB 2
+`define TL_BUS_REQ_IDX_MSB 11
+`define TL_BUS_REQ_WMASK_LSB 12
+`define TL_BUS_REQ_WMASK_MSB 43
+`define TL_BUS_REQ_WBITS_LSB 44
+`define TL_BUS_REQ_WBITS_MSB 75
+`define TL_BUS_RSP_WIDTH 33
+`define TL_BUS_RSP_RDATA_LSB 0
+`define TL_BUS_RSP_RDATA_MSB 31
+`define TL_BUS_RSP_ERR_LSB 32
+`define TL_BUS_RSP_ERR_MSB 32
+
 // TIMER
 `define TL_TIMER_MTIME_LO_IDX 10'd0
 `define TL_TIMER_MTIME_LO_RESET 32'h00000000

@@ -6,6 +6,18 @@ use ieee.std_logic_1164.all;
 package tl_regmap_pkg is
     constant TL_REGMAP_VERSION : natural := 1;
     constant TL_CLK_HZ : natural := 50000000;
+    -- Peripheral bus bundles, tl_soc_fabric <-> every block (docs/soc.md, Bus)
+    type tl_bus_req_t is record
+        stb : std_logic;  -- one-cycle strobe: an access to this page starts now (once per access)
+        we : std_logic;  -- the access is a write
+        idx : std_logic_vector(9 downto 0);  -- word index in the page (addr[11:2]; addr[1:0] is ignored)
+        wmask : std_logic_vector(31 downto 0);  -- the bits a write changes: each byte enable repeated over its byte
+        wbits : std_logic_vector(31 downto 0);  -- write data with the bits outside wmask cleared
+    end record;
+    type tl_bus_rsp_t is record
+        rdata : std_logic_vector(31 downto 0);  -- the addressed register's read value (0 for write-only bits)
+        err : std_logic;  -- the index names no register of this block: the fabric answers with a bus error
+    end record;
     -- TIMER
     constant TL_TIMER_MTIME_LO_IDX : natural := 0;
     constant TL_TIMER_MTIME_LO_RESET : std_logic_vector(31 downto 0) := x"00000000";

@@ -9,22 +9,12 @@
 // is the PWM block's fault input, so the block enters its own safe state
 // within a clock and resumes only at a period start after the latch is
 // cleared; soc_safety_gate forces the PWM pins low on top of that.
-// Slave contract as in soc_ram.v.
+// Bus slave: see tl_soc_timer.v.
 `default_nettype none
 
 module tl_soc_axis (
     input  wire        clk,
     input  wire        rst,
-    input  wire        req,
-    input  wire        we,
-    input  wire [3:0]  be,
-    /* verilator lint_off UNUSEDSIGNAL */  // addr[1:0]: byte lanes come from be
-    input  wire [11:0] addr,
-    /* verilator lint_on UNUSEDSIGNAL */
-    input  wire [31:0] wdata,
-    output reg         ack,
-    output reg         err,
-    output reg  [31:0] rdata,
     // safety
     input  wire        safe,          // synchronous: drives must be off
     input  wire        bridge_fault,  // synchronous (soc_sys synchronises it), status only here
@@ -42,7 +32,10 @@ module tl_soc_axis (
     // interrupt sources
     output wire        period_event,  // PWM period start (pulse)
     output wire        index_event,   // index latched (level, rises once per arm)
-    output wire        fault_event    // illegal encoder transition or bridge fault (level)
+    output wire        fault_event,   // illegal encoder transition or bridge fault (level)
+    // bus (docs/soc.md, Bus): tl_soc_fabric's request to this page, this block's answer
+    input  wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,
+    output wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp    // combinational; the fabric registers it
 );
 
     localparam integer PWM_BITS = `TL_AXIS_PWM_PW0_PW0_WIDTH;
@@ -57,15 +50,18 @@ module tl_soc_axis (
     localparam [31:0] CTRL_RESET  = `TL_AXIS_PWM_CTRL_RESET;
     localparam [31:0] CFG_RESET   = `TL_AXIS_ENC_CFG_RESET;
 
-    wire [9:0]  idx   = addr[11:2];
-    wire        wr    = req && we;
-    wire [31:0] wmask = {{8{be[3]}}, {8{be[2]}}, {8{be[1]}}, {8{be[0]}}};
-    /* verilator lint_off UNUSEDSIGNAL */
-    wire [31:0] wbits = wdata & wmask;
-    /* verilator lint_on UNUSEDSIGNAL */
+    reg  [31:0] rdata;          // read decode at the end
+    reg         err;
+    assign bus_rsp = {err, rdata};   // regmap.vh's layout: TL_BUS_RSP_ERR_LSB = 32
 
-    function [31:0] merge(input [31:0] old, input [31:0] new_val, input [31:0] mask);
-        merge = (old & ~mask) | (new_val & mask);
+    wire        wr    = bus_req[`TL_BUS_REQ_STB_LSB] && bus_req[`TL_BUS_REQ_WE_LSB];
+    wire [9:0]  idx   = bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB];
+    wire [31:0] wmask = bus_req[`TL_BUS_REQ_WMASK_MSB:`TL_BUS_REQ_WMASK_LSB];
+    wire [31:0] wbits = bus_req[`TL_BUS_REQ_WBITS_MSB:`TL_BUS_REQ_WBITS_LSB];
+
+    // A register after a write: the written bytes, restricted to the bits `keep` software may change.
+    function [31:0] merge(input [31:0] old, input [31:0] mask, input [31:0] bits, input [31:0] keep);
+        merge = (old & ~(mask & keep)) | (bits & keep);
     endfunction
 
     // --- settings held here ----------------------------------------------------------
@@ -80,11 +76,11 @@ module tl_soc_axis (
             cfg_q   <= CFG_RESET;
         end else if (wr) begin
             case (idx)
-                `TL_AXIS_PWM_CMD_IDX:   cmd_q   <= merge(cmd_q,   wdata, wmask & `TL_AXIS_PWM_CMD_RW_MASK);
-                `TL_AXIS_PWM_PW0_IDX:   pw0_q   <= merge(pw0_q,   wdata, wmask & `TL_AXIS_PWM_PW0_RW_MASK);
-                `TL_AXIS_PWM_PWMAX_IDX: pwmax_q <= merge(pwmax_q, wdata, wmask & `TL_AXIS_PWM_PWMAX_RW_MASK);
-                `TL_AXIS_PWM_CTRL_IDX:  ctrl_q  <= merge(ctrl_q,  wdata, wmask & `TL_AXIS_PWM_CTRL_RW_MASK);
-                `TL_AXIS_ENC_CFG_IDX:   cfg_q   <= merge(cfg_q,   wdata, wmask & `TL_AXIS_ENC_CFG_RW_MASK);
+                `TL_AXIS_PWM_CMD_IDX:   cmd_q   <= merge(cmd_q, wmask, wbits, `TL_AXIS_PWM_CMD_RW_MASK);
+                `TL_AXIS_PWM_PW0_IDX:   pw0_q   <= merge(pw0_q, wmask, wbits, `TL_AXIS_PWM_PW0_RW_MASK);
+                `TL_AXIS_PWM_PWMAX_IDX: pwmax_q <= merge(pwmax_q, wmask, wbits, `TL_AXIS_PWM_PWMAX_RW_MASK);
+                `TL_AXIS_PWM_CTRL_IDX:  ctrl_q  <= merge(ctrl_q, wmask, wbits, `TL_AXIS_PWM_CTRL_RW_MASK);
+                `TL_AXIS_ENC_CFG_IDX:   cfg_q   <= merge(cfg_q, wmask, wbits, `TL_AXIS_ENC_CFG_RW_MASK);
                 default: ;
             endcase
         end
@@ -94,7 +90,7 @@ module tl_soc_axis (
     wire [DIV_BITS-1:0] div;
     wire                tick;
     /* verilator lint_off UNUSEDSIGNAL */
-    wire [31:0]         div_merged = merge({{(32-DIV_BITS){1'b0}}, div}, wdata, wmask);
+    wire [31:0]         div_merged = merge({{(32-DIV_BITS){1'b0}}, div}, wmask, wbits, 32'hFFFF_FFFF);
     /* verilator lint_on UNUSEDSIGNAL */
 
     tl_freq_div #(
@@ -127,7 +123,7 @@ module tl_soc_axis (
     wire                enc_dir, illegal_flag, index_seen, index_armed;
     wire [ILL_BITS-1:0] illegal_count;
     wire [2:0]          enc_filtered;
-    wire [31:0]         pos_merged = merge(position, wdata, wmask);
+    wire [31:0]         pos_merged = merge(position, wmask, wbits, 32'hFFFF_FFFF);
     wire                cmd_wr     = wr && idx == `TL_AXIS_ENC_CMD_IDX;
 
     tl_quad_decoder #(
@@ -148,49 +144,39 @@ module tl_soc_axis (
     assign index_event = index_seen;
     assign fault_event = illegal_flag | bridge_fault;
 
-    // --- bus read ----------------------------------------------------------------------------
-    always @(posedge clk) begin
-        if (rst) begin
-            ack   <= 1'b0;
-            err   <= 1'b0;
-            rdata <= 32'd0;
-        end else begin
-            ack   <= req;
-            err   <= 1'b0;
-            rdata <= 32'd0;
-            if (req) begin
-                case (idx)
-                    `TL_AXIS_FDIV_IDX:       rdata[DIV_BITS-1:0] <= div;
-                    `TL_AXIS_PWM_CMD_IDX:    rdata <= cmd_q;
-                    `TL_AXIS_PWM_PW0_IDX:    rdata <= pw0_q;
-                    `TL_AXIS_PWM_PWMAX_IDX:  rdata <= pwmax_q;
-                    `TL_AXIS_PWM_CTRL_IDX:   rdata <= ctrl_q;
-                    `TL_AXIS_PWM_STATUS_IDX: begin
-                        rdata[`TL_AXIS_PWM_STATUS_ACTIVE_LSB]       <= active;
-                        rdata[`TL_AXIS_PWM_STATUS_DIR_LSB]          <= dir_applied;
-                        rdata[`TL_AXIS_PWM_STATUS_FORCED_LSB]       <= safe;
-                        rdata[`TL_AXIS_PWM_STATUS_BRIDGE_FAULT_LSB] <= bridge_fault;
-                        rdata[`TL_AXIS_PWM_STATUS_DUTY_MSB:`TL_AXIS_PWM_STATUS_DUTY_LSB] <= duty_applied;
-                    end
-                    `TL_AXIS_ENC_POS_IDX:    rdata <= position;
-                    `TL_AXIS_ENC_CFG_IDX:    rdata <= cfg_q;
-                    `TL_AXIS_ENC_STATUS_IDX: begin
-                        rdata[`TL_AXIS_ENC_STATUS_DIR_LSB]         <= enc_dir;
-                        rdata[`TL_AXIS_ENC_STATUS_ILLEGAL_LSB]     <= illegal_flag;
-                        rdata[`TL_AXIS_ENC_STATUS_INDEX_SEEN_LSB]  <= index_seen;
-                        rdata[`TL_AXIS_ENC_STATUS_INDEX_ARMED_LSB] <= index_armed;
-                        rdata[`TL_AXIS_ENC_STATUS_Z_LSB:`TL_AXIS_ENC_STATUS_A_LSB] <= enc_filtered;
-                    end
-                    `TL_AXIS_ENC_ILLEGAL_IDX:       rdata[ILL_BITS-1:0] <= illegal_count;
-                    `TL_AXIS_ENC_INDEX_POS_IDX:     rdata <= index_pos;
-                    `TL_AXIS_ENC_EDGE_TIME_IDX:     rdata <= last_edge_time;
-                    `TL_AXIS_ENC_EDGE_INTERVAL_IDX: rdata <= edge_interval;
-                    `TL_AXIS_ENC_TIMESTAMP_IDX:     rdata <= timestamp;
-                    `TL_AXIS_ENC_CMD_IDX:           rdata <= 32'd0;
-                    default:                        err   <= 1'b1;
-                endcase
+    // --- read decode: this block's registers only; tl_soc_fabric acknowledges ---------------
+    always @(*) begin
+        {err, rdata} = 33'd0;
+        case (idx)
+            `TL_AXIS_FDIV_IDX:       rdata[DIV_BITS-1:0] = div;
+            `TL_AXIS_PWM_CMD_IDX:    rdata = cmd_q;
+            `TL_AXIS_PWM_PW0_IDX:    rdata = pw0_q;
+            `TL_AXIS_PWM_PWMAX_IDX:  rdata = pwmax_q;
+            `TL_AXIS_PWM_CTRL_IDX:   rdata = ctrl_q;
+            `TL_AXIS_PWM_STATUS_IDX: begin
+                rdata[`TL_AXIS_PWM_STATUS_ACTIVE_LSB]       = active;
+                rdata[`TL_AXIS_PWM_STATUS_DIR_LSB]          = dir_applied;
+                rdata[`TL_AXIS_PWM_STATUS_FORCED_LSB]       = safe;
+                rdata[`TL_AXIS_PWM_STATUS_BRIDGE_FAULT_LSB] = bridge_fault;
+                rdata[`TL_AXIS_PWM_STATUS_DUTY_MSB:`TL_AXIS_PWM_STATUS_DUTY_LSB] = duty_applied;
             end
-        end
+            `TL_AXIS_ENC_POS_IDX:    rdata = position;
+            `TL_AXIS_ENC_CFG_IDX:    rdata = cfg_q;
+            `TL_AXIS_ENC_STATUS_IDX: begin
+                rdata[`TL_AXIS_ENC_STATUS_DIR_LSB]         = enc_dir;
+                rdata[`TL_AXIS_ENC_STATUS_ILLEGAL_LSB]     = illegal_flag;
+                rdata[`TL_AXIS_ENC_STATUS_INDEX_SEEN_LSB]  = index_seen;
+                rdata[`TL_AXIS_ENC_STATUS_INDEX_ARMED_LSB] = index_armed;
+                rdata[`TL_AXIS_ENC_STATUS_Z_LSB:`TL_AXIS_ENC_STATUS_A_LSB] = enc_filtered;
+            end
+            `TL_AXIS_ENC_ILLEGAL_IDX:       rdata[ILL_BITS-1:0] = illegal_count;
+            `TL_AXIS_ENC_INDEX_POS_IDX:     rdata = index_pos;
+            `TL_AXIS_ENC_EDGE_TIME_IDX:     rdata = last_edge_time;
+            `TL_AXIS_ENC_EDGE_INTERVAL_IDX: rdata = edge_interval;
+            `TL_AXIS_ENC_TIMESTAMP_IDX:     rdata = timestamp;
+            `TL_AXIS_ENC_CMD_IDX:           rdata = 32'd0;
+            default:                        err   = 1'b1;
+        endcase
     end
 
 endmodule

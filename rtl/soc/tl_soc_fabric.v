@@ -12,12 +12,17 @@
 //
 // Bus protocol, per master (the CPU's contract, rtl/cpu): req + addr (+ we,
 // be, wdata) held until the one-cycle ack; rdata and err valid with ack.
-// The interconnect launches a request once (a one-cycle strobe to the
-// selected slave) and then waits for the slave's ack, so a slave never sees
-// a request twice even though the master holds req through the ack cycle.
-// Every slave here acks in the cycle after the strobe: an access takes two
-// cycles (launch, ack), and the next can launch in the cycle after the ack.
-// The two masters never share a slave port, so they never wait for each other.
+// This module is the one place that acknowledges: it launches a request once
+// (launch = req && !ack, so a request held through its ack cycle is not
+// served twice) and answers every launched request in the next cycle, from
+// the memory it went to, from the addressed peripheral page, or with an
+// error.  A peripheral block only decodes its own registers: it gets a
+// request bundle (strobe, we, word index, write mask and bits) and returns
+// its read value and "no such register" in the same cycle (bus_rsp, layout
+// in regmap.vh / regmap_pkg.vhd), which is registered here.  An access takes
+// two cycles (launch, ack) and the next can launch in the cycle after the
+// ack.  The two masters never share a memory port, so they never wait for
+// each other.
 `default_nettype none
 
 module tl_soc_fabric #(
@@ -91,6 +96,8 @@ module tl_soc_fabric #(
 
     // Page numbers of the peripheral blocks (regmap.vh).
     localparam integer PAGE_BITS = $clog2(N_PAGES);
+    localparam integer RQ        = `TL_BUS_REQ_WIDTH;
+    localparam integer RS        = `TL_BUS_RSP_WIDTH;
     localparam [PAGE_BITS-1:0] P_TIMER = `TL_TIMER_PAGE;
     localparam [PAGE_BITS-1:0] P_INTC  = `TL_INTC_PAGE;
     localparam [PAGE_BITS-1:0] P_GPIO  = `TL_GPIO_PAGE;
@@ -98,94 +105,92 @@ module tl_soc_fabric #(
     localparam [PAGE_BITS-1:0] P_AXIS0 = `TL_AXIS0_PAGE;
     localparam [PAGE_BITS-1:0] P_AXIS1 = `TL_AXIS1_PAGE;
     localparam [PAGE_BITS-1:0] P_SYS   = `TL_SYS_PAGE;
+    localparam [N_PAGES-1:0]   PAGE_USED = (1 << P_TIMER) | (1 << P_INTC) | (1 << P_GPIO) | (1 << P_UART)
+                                         | (1 << P_AXIS0) | (1 << P_AXIS1) | (1 << P_SYS);
 
-    // ---- instruction bus: launch once, decode ----------------------------------------------
-    reg  i_busy;
-    wire i_launch = ibus_req && !i_busy;
+    // ---- instruction bus: launch once, answer in the next cycle ---------------------------
+    reg  ibus_ack_q, i_ram_q, i_err_q;
+    wire i_launch = ibus_req && !ibus_ack_q;
     wire i_rom    = (ibus_addr & ROM_MASK) == `TL_BOOT_ROM_BASE;
     wire i_ram    = (ibus_addr & RAM_MASK) == `TL_RAM_BASE;
-    reg  i_miss_ack;
 
     always @(posedge clk) begin
         if (rst) begin
-            i_busy     <= 1'b0;
-            i_miss_ack <= 1'b0;
+            ibus_ack_q <= 1'b0;
+            i_ram_q    <= 1'b0;
+            i_err_q    <= 1'b0;
         end else begin
-            if (i_launch)
-                i_busy <= 1'b1;
-            else if (ibus_ack)
-                i_busy <= 1'b0;
+            ibus_ack_q <= i_launch;
+            i_ram_q    <= i_launch && i_ram;
             // Fetch from the peripherals or unmapped space: access fault.
-            i_miss_ack <= i_launch && !i_rom && !i_ram;
+            i_err_q    <= i_launch && !i_rom && !i_ram;
         end
     end
 
     // ---- data bus -----------------------------------------------------------------------------
-    reg  d_busy;
-    wire d_launch = dbus_req && !d_busy;
+    reg  dbus_ack_q, d_ram_q, d_per_q, d_err_q;
+    wire d_launch = dbus_req && !dbus_ack_q;
     wire d_rom    = (dbus_addr & ROM_MASK) == `TL_BOOT_ROM_BASE;
     wire d_ram    = (dbus_addr & RAM_MASK) == `TL_RAM_BASE;
     wire d_per    = (dbus_addr & PER_MASK) == PER_BASE;
-    wire [PAGE_BITS-1:0] d_page = dbus_addr[12 +: PAGE_BITS];
-    wire d_page_used = (d_page == P_TIMER) || (d_page == P_INTC) || (d_page == P_GPIO) || (d_page == P_UART)
-                    || (d_page == P_AXIS0) || (d_page == P_AXIS1) || (d_page == P_SYS);
-    reg  d_miss_ack;
 
-    wire d_per_launch = d_launch && d_per;
-    wire req_timer = d_per_launch && (d_page == P_TIMER);
-    wire req_intc  = d_per_launch && (d_page == P_INTC);
-    wire req_gpio  = d_per_launch && (d_page == P_GPIO);
-    wire req_uart  = d_per_launch && (d_page == P_UART);
-    wire req_axis0 = d_per_launch && (d_page == P_AXIS0);
-    wire req_axis1 = d_per_launch && (d_page == P_AXIS1);
-    wire req_sys   = d_per_launch && (d_page == P_SYS);
+    // The peripheral pages: a request bundle each, the addressed one's answer.
+    /* verilator lint_off UNUSEDSIGNAL */  // an empty page's request goes nowhere
+    wire [RQ*N_PAGES-1:0] page_req;
+    /* verilator lint_on UNUSEDSIGNAL */
+    /* verilator lint_off UNDRIVEN */      // an empty page has no block: tl_soc_pages answers for it
+    wire [RS*N_PAGES-1:0] page_rsp;
+    /* verilator lint_on UNDRIVEN */
+    wire [RS-1:0]         d_rsp;          // this cycle, for the launched access
+
+    tl_soc_pages #(.N_PAGES(N_PAGES), .PAGE_USED(PAGE_USED)) u_pages (
+        .stb(d_launch && d_per), .we(dbus_we), .be(dbus_be), .addr(dbus_addr[PAGE_BITS+11:0]),
+        .wdata(dbus_wdata), .page_req(page_req), .page_rsp(page_rsp), .rsp(d_rsp)
+    );
+
+    reg  [31:0]   per_rdata;
 
     always @(posedge clk) begin
         if (rst) begin
-            d_busy     <= 1'b0;
-            d_miss_ack <= 1'b0;
+            dbus_ack_q <= 1'b0;
+            d_ram_q    <= 1'b0;
+            d_per_q    <= 1'b0;
+            d_err_q    <= 1'b0;
+            per_rdata  <= 32'd0;
         end else begin
-            if (d_launch)
-                d_busy <= 1'b1;
-            else if (dbus_ack)
-                d_busy <= 1'b0;
-            d_miss_ack <= d_launch && !d_rom && !d_ram && !(d_per && d_page_used);
+            dbus_ack_q <= d_launch;
+            d_ram_q    <= d_launch && d_ram;
+            d_per_q    <= d_launch && d_per;
+            // Unmapped space, a write to the ROM, an empty page or an unlisted register.
+            d_err_q    <= d_launch && !(d_rom && !dbus_we) && !d_ram
+                                   && !(d_per && !d_rsp[`TL_BUS_RSP_ERR_LSB]);
+            per_rdata  <= d_rsp[`TL_BUS_RSP_RDATA_MSB:`TL_BUS_RSP_RDATA_LSB];
         end
     end
 
     // ---- boot ROM -----------------------------------------------------------------------------
-    wire        rom_a_ack, rom_a_err, rom_b_ack;
     wire [31:0] rom_a_rdata, rom_b_rdata;
 
     tl_soc_rom #(.ROM_BYTES(`TL_BOOT_ROM_SIZE), .INIT_FILE(ROM_INIT)) u_rom (
-        .clk(clk), .rst(rst),
-        .a_req(d_launch && d_rom), .a_we(dbus_we), .a_addr(dbus_addr[ROM_AW-1:0]),
-        .a_ack(rom_a_ack), .a_err(rom_a_err), .a_rdata(rom_a_rdata),
-        .b_req(i_launch && i_rom), .b_addr(ibus_addr[ROM_AW-1:0]),
-        .b_ack(rom_b_ack), .b_rdata(rom_b_rdata)
+        .clk(clk),
+        .a_addr(dbus_addr[ROM_AW-1:0]), .a_rdata(rom_a_rdata),
+        .b_addr(ibus_addr[ROM_AW-1:0]), .b_rdata(rom_b_rdata)
     );
 
     // ---- RAM ----------------------------------------------------------------------------------
-    wire        ram_a_ack, ram_b_ack;
     wire [31:0] ram_a_rdata, ram_b_rdata;
 
     tl_soc_ram #(.RAM_BYTES(RAM_BYTES), .INIT_FILE(RAM_INIT)) u_ram (
-        .clk(clk), .rst(rst),
-        .a_req(d_launch && d_ram), .a_we(dbus_we), .a_be(dbus_be), .a_addr(dbus_addr[RAM_AW-1:0]),
-        .a_wdata(dbus_wdata), .a_ack(ram_a_ack), .a_rdata(ram_a_rdata),
-        .b_req(i_launch && i_ram), .b_addr(ibus_addr[RAM_AW-1:0]),
-        .b_ack(ram_b_ack), .b_rdata(ram_b_rdata)
+        .clk(clk),
+        .a_we(d_launch && d_ram && dbus_we), .a_be(dbus_be), .a_addr(dbus_addr[RAM_AW-1:0]),
+        .a_wdata(dbus_wdata), .a_rdata(ram_a_rdata),
+        .b_addr(ibus_addr[RAM_AW-1:0]), .b_rdata(ram_b_rdata)
     );
 
-    // ---- peripherals --------------------------------------------------------------------------
-    wire [11:0] p_addr = dbus_addr[11:0];
-    wire        tim_ack, tim_err, int_ack, int_err, gpio_ack, gpio_err, sys_ack, sys_err;
-    wire        ax0_ack, ax0_err, ax1_ack, ax1_err, uart_ack, uart_err;
-    wire [31:0] tim_rdata, int_rdata, gpio_rdata, sys_rdata, ax0_rdata, ax1_rdata, uart_rdata;
-
+    // ---- peripherals, one page each -----------------------------------------------------------
     tl_soc_timer u_timer (
-        .clk(clk), .rst(rst), .req(req_timer), .we(dbus_we), .be(dbus_be), .addr(p_addr),
-        .wdata(dbus_wdata), .ack(tim_ack), .err(tim_err), .rdata(tim_rdata),
+        .clk(clk), .rst(rst),
+        .bus_req(page_req[P_TIMER*RQ +: RQ]), .bus_rsp(page_rsp[P_TIMER*RS +: RS]),
         .mtime(mtime), .irq_timer(irq_timer), .irq_software(irq_software)
     );
 
@@ -210,22 +215,22 @@ module tl_soc_fabric #(
     assign irq_src[`TL_INTC_PENDING_GPIO_KEY_LSB]   = key_event;
 
     tl_soc_intc u_intc (
-        .clk(clk), .rst(rst), .req(req_intc), .we(dbus_we), .be(dbus_be), .addr(p_addr),
-        .wdata(dbus_wdata), .ack(int_ack), .err(int_err), .rdata(int_rdata),
+        .clk(clk), .rst(rst),
+        .bus_req(page_req[P_INTC*RQ +: RQ]), .bus_rsp(page_rsp[P_INTC*RS +: RS]),
         .src(irq_src), .irq_external(irq_external)
     );
 
     tl_soc_gpio u_gpio (
-        .clk(clk), .rst(rst), .req(req_gpio), .we(dbus_we), .be(dbus_be), .addr(p_addr),
-        .wdata(dbus_wdata), .ack(gpio_ack), .err(gpio_err), .rdata(gpio_rdata),
+        .clk(clk), .rst(rst),
+        .bus_req(page_req[P_GPIO*RQ +: RQ]), .bus_rsp(page_rsp[P_GPIO*RS +: RS]),
         .ledr(ledr), .sw(sw), .key_n(key_n),
         .hex0_n(hex0_n), .hex1_n(hex1_n), .hex2_n(hex2_n), .hex3_n(hex3_n), .hex4_n(hex4_n), .hex5_n(hex5_n),
         .key_event(key_event)
     );
 
     tl_soc_sys #(.BUILD_ID(BUILD_ID), .CLK_HZ(CLK_HZ)) u_sys (
-        .clk(clk), .rst(rst), .req(req_sys), .we(dbus_we), .be(dbus_be), .addr(p_addr),
-        .wdata(dbus_wdata), .ack(sys_ack), .err(sys_err), .rdata(sys_rdata),
+        .clk(clk), .rst(rst),
+        .bus_req(page_req[P_SYS*RQ +: RQ]), .bus_rsp(page_rsp[P_SYS*RS +: RS]),
         .estop(estop), .bridge_fault(bridge_fault), .bridge_fault_s(bridge_fault_s),
         .safe(safe), .safety_event(safety_event)
     );
@@ -233,8 +238,8 @@ module tl_soc_fabric #(
     wire [1:0] rpwm_raw, lpwm_raw, pwm_raw;
 
     tl_soc_axis u_axis0 (
-        .clk(clk), .rst(rst), .req(req_axis0), .we(dbus_we), .be(dbus_be), .addr(p_addr),
-        .wdata(dbus_wdata), .ack(ax0_ack), .err(ax0_err), .rdata(ax0_rdata),
+        .clk(clk), .rst(rst),
+        .bus_req(page_req[P_AXIS0*RQ +: RQ]), .bus_rsp(page_rsp[P_AXIS0*RS +: RS]),
         .safe(safe), .bridge_fault(bridge_fault_s[0]),
         .enc_a(enc_a[0]), .enc_b(enc_b[0]), .enc_z(enc_z[0]),
         .rpwm(rpwm_raw[0]), .lpwm(lpwm_raw[0]), .r_en(r_en[0]), .l_en(l_en[0]),
@@ -243,8 +248,8 @@ module tl_soc_fabric #(
     );
 
     tl_soc_axis u_axis1 (
-        .clk(clk), .rst(rst), .req(req_axis1), .we(dbus_we), .be(dbus_be), .addr(p_addr),
-        .wdata(dbus_wdata), .ack(ax1_ack), .err(ax1_err), .rdata(ax1_rdata),
+        .clk(clk), .rst(rst),
+        .bus_req(page_req[P_AXIS1*RQ +: RQ]), .bus_rsp(page_rsp[P_AXIS1*RS +: RS]),
         .safe(safe), .bridge_fault(bridge_fault_s[1]),
         .enc_a(enc_a[1]), .enc_b(enc_b[1]), .enc_z(enc_z[1]),
         .rpwm(rpwm_raw[1]), .lpwm(lpwm_raw[1]), .r_en(r_en[1]), .l_en(l_en[1]),
@@ -259,26 +264,20 @@ module tl_soc_fabric #(
     );
 
     tl_soc_uart #(.CLK_HZ(CLK_HZ)) u_uart (
-        .clk(clk), .rst(rst), .req(req_uart), .we(dbus_we), .be(dbus_be), .addr(p_addr),
-        .wdata(dbus_wdata), .ack(uart_ack), .err(uart_err), .rdata(uart_rdata),
+        .clk(clk), .rst(rst),
+        .bus_req(page_req[P_UART*RQ +: RQ]), .bus_rsp(page_rsp[P_UART*RS +: RS]),
         .rxd(uart_rx), .txd(uart_tx), .cts_n(uart_cts_n), .rts_n(uart_rts_n),
         .rx_event(uart_rx_event), .tx_event(uart_tx_event)
     );
 
-    // ---- responses: only the addressed slave acks; rdata gated by its ack ---------------------
-    assign ibus_ack   = rom_b_ack | ram_b_ack | i_miss_ack;
-    assign ibus_err   = i_miss_ack;
-    assign ibus_rdata = ({32{rom_b_ack}} & rom_b_rdata) | ({32{ram_b_ack}} & ram_b_rdata);
+    // ---- responses: rdata and err are valid with ack ------------------------------------------
+    assign ibus_ack   = ibus_ack_q;
+    assign ibus_err   = i_err_q;
+    assign ibus_rdata = i_ram_q ? ram_b_rdata : rom_b_rdata;
 
-    assign dbus_ack   = rom_a_ack | ram_a_ack | tim_ack | int_ack | gpio_ack | sys_ack
-                      | ax0_ack | ax1_ack | uart_ack | d_miss_ack;
-    assign dbus_err   = rom_a_err | tim_err | int_err | gpio_err | sys_err | ax0_err | ax1_err
-                      | uart_err | d_miss_ack;
-    assign dbus_rdata = ({32{rom_a_ack}} & rom_a_rdata) | ({32{ram_a_ack}} & ram_a_rdata)
-                      | ({32{tim_ack}}   & tim_rdata)   | ({32{int_ack}}   & int_rdata)
-                      | ({32{gpio_ack}}  & gpio_rdata)  | ({32{sys_ack}}   & sys_rdata)
-                      | ({32{ax0_ack}}   & ax0_rdata)   | ({32{ax1_ack}}   & ax1_rdata)
-                      | ({32{uart_ack}}  & uart_rdata);
+    assign dbus_ack   = dbus_ack_q;
+    assign dbus_err   = d_err_q;
+    assign dbus_rdata = d_ram_q ? ram_a_rdata : d_per_q ? per_rdata : rom_a_rdata;
 
 endmodule
 

@@ -7,22 +7,12 @@
 // inversion happens here so software sees 1 = pressed / lit.  A key press
 // (0->1 after synchronisation) sets KEY_EDGE and pulses key_event for the
 // interrupt controller.  No debouncing: software that cares waits ~20 ms.
-// Slave contract as in soc_ram.v.
+// Bus slave: see tl_soc_timer.v.
 `default_nettype none
 
 module tl_soc_gpio (
     input  wire        clk,
     input  wire        rst,
-    input  wire        req,
-    input  wire        we,
-    input  wire [3:0]  be,
-    /* verilator lint_off UNUSEDSIGNAL */  // addr[1:0]: byte lanes come from be
-    input  wire [11:0] addr,
-    /* verilator lint_on UNUSEDSIGNAL */
-    input  wire [31:0] wdata,
-    output reg         ack,
-    output reg         err,
-    output reg  [31:0] rdata,
     // board pins
     output wire [9:0]  ledr,
     input  wire [9:0]  sw,        // asynchronous
@@ -33,12 +23,21 @@ module tl_soc_gpio (
     output wire [6:0]  hex3_n,
     output wire [6:0]  hex4_n,
     output wire [6:0]  hex5_n,
-    output wire        key_event  // one-cycle pulse: a key was pressed
+    output wire        key_event, // one-cycle pulse: a key was pressed
+    // bus (docs/soc.md, Bus): tl_soc_fabric's request to this page, this block's answer
+    /* verilator lint_off UNUSEDSIGNAL */  // a block reads the bits of the bundle it needs
+    input  wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,
+    /* verilator lint_on UNUSEDSIGNAL */
+    output wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp    // combinational; the fabric registers it
 );
 
     localparam [31:0] LEDR_RESET   = `TL_GPIO_LEDR_RESET;
     localparam [31:0] HEX_LO_RESET = `TL_GPIO_HEX_LO_RESET;
     localparam [31:0] HEX_HI_RESET = `TL_GPIO_HEX_HI_RESET;
+
+    reg  [31:0] rdata;          // read decode at the end
+    reg         err;
+    assign bus_rsp = {err, rdata};   // regmap.vh's layout: TL_BUS_RSP_ERR_LSB = 32
 
     wire [9:0] sw_s;
     wire [3:0] key_n_s;
@@ -56,12 +55,10 @@ module tl_soc_gpio (
     reg [3:0]  key_edge;
     reg        key_event_q;
 
-    wire [9:0]  idx   = addr[11:2];
-    wire        wr    = req && we;
-    wire [31:0] wmask = {{8{be[3]}}, {8{be[2]}}, {8{be[1]}}, {8{be[0]}}};
-    /* verilator lint_off UNUSEDSIGNAL */
-    wire [31:0] wbits = wdata & wmask;
-    /* verilator lint_on UNUSEDSIGNAL */
+    wire        wr    = bus_req[`TL_BUS_REQ_STB_LSB] && bus_req[`TL_BUS_REQ_WE_LSB];
+    wire [9:0]  idx   = bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB];
+    wire [31:0] wmask = bus_req[`TL_BUS_REQ_WMASK_MSB:`TL_BUS_REQ_WMASK_LSB];
+    wire [31:0] wbits = bus_req[`TL_BUS_REQ_WBITS_MSB:`TL_BUS_REQ_WBITS_LSB];
     wire [3:0]  press = key & ~key_q;
     wire [3:0]  clr   = (wr && idx == `TL_GPIO_KEY_EDGE_IDX) ? wbits[3:0] : 4'd0;
 
@@ -87,27 +84,18 @@ module tl_soc_gpio (
         end
     end
 
-    always @(posedge clk) begin
-        if (rst) begin
-            ack   <= 1'b0;
-            err   <= 1'b0;
-            rdata <= 32'd0;
-        end else begin
-            ack   <= req;
-            err   <= 1'b0;
-            rdata <= 32'd0;
-            if (req) begin
-                case (idx)
-                    `TL_GPIO_LEDR_IDX:     rdata[9:0] <= ledr_q;
-                    `TL_GPIO_SW_IDX:       rdata[9:0] <= sw_s;
-                    `TL_GPIO_KEY_IDX:      rdata[3:0] <= key;
-                    `TL_GPIO_KEY_EDGE_IDX: rdata[3:0] <= key_edge;
-                    `TL_GPIO_HEX_LO_IDX:   rdata      <= hex_lo_q;
-                    `TL_GPIO_HEX_HI_IDX:   rdata      <= hex_hi_q;
-                    default:               err        <= 1'b1;
-                endcase
-            end
-        end
+    // Read decode: this block's registers only; tl_soc_fabric acknowledges.
+    always @(*) begin
+        {err, rdata} = 33'd0;
+        case (idx)
+            `TL_GPIO_LEDR_IDX:     rdata[9:0] = ledr_q;
+            `TL_GPIO_SW_IDX:       rdata[9:0] = sw_s;
+            `TL_GPIO_KEY_IDX:      rdata[3:0] = key;
+            `TL_GPIO_KEY_EDGE_IDX: rdata[3:0] = key_edge;
+            `TL_GPIO_HEX_LO_IDX:   rdata      = hex_lo_q;
+            `TL_GPIO_HEX_HI_IDX:   rdata      = hex_hi_q;
+            default:               err        = 1'b1;
+        endcase
     end
 
     assign ledr      = ledr_q;

@@ -13,14 +13,8 @@ entity tl_soc_gpio is
     port (
         clk       : in  std_logic;
         rst       : in  std_logic;
-        req       : in  std_logic;
-        we        : in  std_logic;
-        be        : in  std_logic_vector(3 downto 0);
-        addr      : in  std_logic_vector(11 downto 0);
-        wdata     : in  std_logic_vector(31 downto 0);
-        ack       : out std_logic;
-        err       : out std_logic;
-        rdata     : out std_logic_vector(31 downto 0);
+        bus_req   : in  tl_bus_req_t;   -- from tl_soc_fabric (docs/soc.md, Bus)
+        bus_rsp   : out tl_bus_rsp_t;   -- combinational; the fabric registers it
         ledr      : out std_logic_vector(9 downto 0);
         sw        : in  std_logic_vector(9 downto 0);   -- asynchronous
         key_n     : in  std_logic_vector(3 downto 0);   -- asynchronous, active low
@@ -61,10 +55,10 @@ begin
         port map (clk => clk, rst => rst, async_in => key_n, sync_out => key_n_s);
 
     key   <= not key_n_s;
-    idx   <= to_integer(unsigned(addr(11 downto 2)));
-    wr    <= req = '1' and we = '1';
-    wmask <= (31 downto 24 => be(3), 23 downto 16 => be(2), 15 downto 8 => be(1), 7 downto 0 => be(0));
-    wbits <= wdata and wmask;
+    idx   <= to_integer(unsigned(bus_req.idx));
+    wr    <= bus_req.stb = '1' and bus_req.we = '1';
+    wmask <= bus_req.wmask;
+    wbits <= bus_req.wbits;
     press <= key and not key_q;
     clr   <= wbits(3 downto 0) when wr and idx = TL_GPIO_KEY_EDGE_IDX else (others => '0');
 
@@ -96,38 +90,6 @@ begin
         end if;
     end process;
 
-    process (clk)
-    begin
-        if rising_edge(clk) then
-            if rst = '1' then
-                ack   <= '0';
-                err   <= '0';
-                rdata <= (others => '0');
-            else
-                ack   <= req;
-                err   <= '0';
-                rdata <= (others => '0');
-                if req = '1' then
-                    if idx = TL_GPIO_LEDR_IDX then
-                        rdata(9 downto 0) <= ledr_q;
-                    elsif idx = TL_GPIO_SW_IDX then
-                        rdata(9 downto 0) <= sw_s;
-                    elsif idx = TL_GPIO_KEY_IDX then
-                        rdata(3 downto 0) <= key;
-                    elsif idx = TL_GPIO_KEY_EDGE_IDX then
-                        rdata(3 downto 0) <= key_edge;
-                    elsif idx = TL_GPIO_HEX_LO_IDX then
-                        rdata <= hex_lo_q;
-                    elsif idx = TL_GPIO_HEX_HI_IDX then
-                        rdata <= hex_hi_q;
-                    else
-                        err <= '1';
-                    end if;
-                end if;
-            end if;
-        end if;
-    end process;
-
     ledr      <= ledr_q;
     hex0_n    <= not hex_lo_q(TL_GPIO_HEX_LO_HEX0_MSB downto TL_GPIO_HEX_LO_HEX0_LSB);
     hex1_n    <= not hex_lo_q(TL_GPIO_HEX_LO_HEX1_MSB downto TL_GPIO_HEX_LO_HEX1_LSB);
@@ -136,4 +98,25 @@ begin
     hex4_n    <= not hex_hi_q(TL_GPIO_HEX_HI_HEX4_MSB downto TL_GPIO_HEX_HI_HEX4_LSB);
     hex5_n    <= not hex_hi_q(TL_GPIO_HEX_HI_HEX5_MSB downto TL_GPIO_HEX_HI_HEX5_LSB);
     key_event <= key_event_q;
+
+    -- Read decode: this block's registers only; tl_soc_fabric acknowledges.
+    process (all)
+    begin
+        bus_rsp <= (rdata => (others => '0'), err => '0');
+        if idx = TL_GPIO_LEDR_IDX then
+            bus_rsp.rdata(9 downto 0) <= ledr_q;
+        elsif idx = TL_GPIO_SW_IDX then
+            bus_rsp.rdata(9 downto 0) <= sw_s;
+        elsif idx = TL_GPIO_KEY_IDX then
+            bus_rsp.rdata(3 downto 0) <= key;
+        elsif idx = TL_GPIO_KEY_EDGE_IDX then
+            bus_rsp.rdata(3 downto 0) <= key_edge;
+        elsif idx = TL_GPIO_HEX_LO_IDX then
+            bus_rsp.rdata <= hex_lo_q;
+        elsif idx = TL_GPIO_HEX_HI_IDX then
+            bus_rsp.rdata <= hex_hi_q;
+        else
+            bus_rsp.err <= '1';
+        end if;
+    end process;
 end architecture rtl;

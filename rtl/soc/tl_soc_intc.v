@@ -6,7 +6,7 @@
 // the CPU is busy.  PENDING is write-1-to-clear; an event in the same cycle
 // as the clear wins, so clearing cannot swallow a new event.  irq_external
 // is the level |(PENDING & ENABLE).  Bit layout: INTC block of
-// torqueloop/spec/regmap.toml.  Slave contract as in soc_ram.v.
+// torqueloop/spec/regmap.toml.  Bus slave: see tl_soc_timer.v.
 `default_nettype none
 
 module tl_soc_intc #(
@@ -14,36 +14,33 @@ module tl_soc_intc #(
 ) (
     input  wire             clk,
     input  wire             rst,
-    input  wire             req,
-    input  wire             we,
-    input  wire [3:0]       be,
-    /* verilator lint_off UNUSEDSIGNAL */  // addr[1:0]: byte lanes come from be
-    input  wire [11:0]      addr,
-    /* verilator lint_on UNUSEDSIGNAL */
-    input  wire [31:0]      wdata,
-    output reg              ack,
-    output reg              err,
-    output reg  [31:0]      rdata,
     input  wire [N_SRC-1:0] src,
-    output wire             irq_external
+    output wire             irq_external,
+    // bus (docs/soc.md, Bus): tl_soc_fabric's request to this page, this block's answer
+    /* verilator lint_off UNUSEDSIGNAL */  // a block reads the bits of the bundle it needs
+    input  wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,
+    /* verilator lint_on UNUSEDSIGNAL */
+    output wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp    // combinational; the fabric registers it
 );
 
     localparam [31:0] PENDING_RESET = `TL_INTC_PENDING_RESET;
     localparam [31:0] ENABLE_RESET  = `TL_INTC_ENABLE_RESET;
 
+    reg  [31:0] rdata;          // read decode at the end
+    reg         err;
+    assign bus_rsp = {err, rdata};   // regmap.vh's layout: TL_BUS_RSP_ERR_LSB = 32
+
     reg [N_SRC-1:0] src_q;
     reg [N_SRC-1:0] pending;
     reg [N_SRC-1:0] enable;
 
-    wire [9:0]       idx   = addr[11:2];
-    wire             wr    = req && we;
-    wire [31:0]      wmask = {{8{be[3]}}, {8{be[2]}}, {8{be[1]}}, {8{be[0]}}};
-    /* verilator lint_off UNUSEDSIGNAL */
-    wire [31:0]      wbits = wdata & wmask;
-    /* verilator lint_on UNUSEDSIGNAL */
+    wire             wr    = bus_req[`TL_BUS_REQ_STB_LSB] && bus_req[`TL_BUS_REQ_WE_LSB];
+    wire [9:0]       idx   = bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB];
+    wire [N_SRC-1:0] wmask = bus_req[`TL_BUS_REQ_WMASK_LSB +: N_SRC];
+    wire [N_SRC-1:0] wbits = bus_req[`TL_BUS_REQ_WBITS_LSB +: N_SRC];
     wire [N_SRC-1:0] rise  = src & ~src_q;
-    wire [N_SRC-1:0] clr   = (wr && idx == `TL_INTC_PENDING_IDX) ? wbits[N_SRC-1:0] : {N_SRC{1'b0}};
-    wire [N_SRC-1:0] set   = (wr && idx == `TL_INTC_SET_IDX)     ? wbits[N_SRC-1:0] : {N_SRC{1'b0}};
+    wire [N_SRC-1:0] clr   = (wr && idx == `TL_INTC_PENDING_IDX) ? wbits : {N_SRC{1'b0}};
+    wire [N_SRC-1:0] set   = (wr && idx == `TL_INTC_SET_IDX)     ? wbits : {N_SRC{1'b0}};
     wire [N_SRC-1:0] active = pending & enable;
 
     always @(posedge clk) begin
@@ -56,29 +53,20 @@ module tl_soc_intc #(
             src_q   <= src;
             pending <= (pending & ~clr) | rise | set;
             if (wr && idx == `TL_INTC_ENABLE_IDX)
-                enable <= (enable & ~wmask[N_SRC-1:0]) | wbits[N_SRC-1:0];
+                enable <= (enable & ~wmask) | wbits;
         end
     end
 
-    always @(posedge clk) begin
-        if (rst) begin
-            ack   <= 1'b0;
-            err   <= 1'b0;
-            rdata <= 32'd0;
-        end else begin
-            ack   <= req;
-            err   <= 1'b0;
-            rdata <= 32'd0;
-            if (req) begin
-                case (idx)
-                    `TL_INTC_PENDING_IDX: rdata[N_SRC-1:0] <= pending;
-                    `TL_INTC_ENABLE_IDX:  rdata[N_SRC-1:0] <= enable;
-                    `TL_INTC_ACTIVE_IDX:  rdata[N_SRC-1:0] <= active;
-                    `TL_INTC_SET_IDX:     rdata <= 32'd0;
-                    default:              err <= 1'b1;
-                endcase
-            end
-        end
+    // Read decode: this block's registers only; tl_soc_fabric acknowledges.
+    always @(*) begin
+        {err, rdata} = 33'd0;
+        case (idx)
+            `TL_INTC_PENDING_IDX: rdata[N_SRC-1:0] = pending;
+            `TL_INTC_ENABLE_IDX:  rdata[N_SRC-1:0] = enable;
+            `TL_INTC_ACTIVE_IDX:  rdata[N_SRC-1:0] = active;
+            `TL_INTC_SET_IDX:     rdata = 32'd0;
+            default:              err = 1'b1;
+        endcase
     end
 
     assign irq_external = |active;

@@ -16,14 +16,8 @@ entity tl_soc_intc is
     port (
         clk          : in  std_logic;
         rst          : in  std_logic;
-        req          : in  std_logic;
-        we           : in  std_logic;
-        be           : in  std_logic_vector(3 downto 0);
-        addr         : in  std_logic_vector(11 downto 0);
-        wdata        : in  std_logic_vector(31 downto 0);
-        ack          : out std_logic;
-        err          : out std_logic;
-        rdata        : out std_logic_vector(31 downto 0);
+        bus_req      : in  tl_bus_req_t;   -- from tl_soc_fabric (docs/soc.md, Bus)
+        bus_rsp      : out tl_bus_rsp_t;   -- combinational; the fabric registers it
         src          : in  std_logic_vector(N_SRC - 1 downto 0);
         irq_external : out std_logic
     );
@@ -36,20 +30,20 @@ architecture rtl of tl_soc_intc is
 
     signal idx    : natural range 0 to 1023;
     signal wr     : boolean;
-    signal wmask  : std_logic_vector(31 downto 0);
-    signal wbits  : std_logic_vector(31 downto 0);
+    signal wmask  : std_logic_vector(N_SRC - 1 downto 0);
+    signal wbits  : std_logic_vector(N_SRC - 1 downto 0);
     signal rise   : std_logic_vector(N_SRC - 1 downto 0);
     signal clr    : std_logic_vector(N_SRC - 1 downto 0);
     signal set    : std_logic_vector(N_SRC - 1 downto 0);
     signal active : std_logic_vector(N_SRC - 1 downto 0);
 begin
-    idx    <= to_integer(unsigned(addr(11 downto 2)));
-    wr     <= req = '1' and we = '1';
-    wmask  <= (31 downto 24 => be(3), 23 downto 16 => be(2), 15 downto 8 => be(1), 7 downto 0 => be(0));
-    wbits  <= wdata and wmask;
+    idx    <= to_integer(unsigned(bus_req.idx));
+    wr     <= bus_req.stb = '1' and bus_req.we = '1';
+    wmask  <= bus_req.wmask(N_SRC - 1 downto 0);
+    wbits  <= bus_req.wbits(N_SRC - 1 downto 0);
     rise   <= src and not src_q;
-    clr    <= wbits(N_SRC - 1 downto 0) when wr and idx = TL_INTC_PENDING_IDX else (others => '0');
-    set    <= wbits(N_SRC - 1 downto 0) when wr and idx = TL_INTC_SET_IDX else (others => '0');
+    clr    <= wbits when wr and idx = TL_INTC_PENDING_IDX else (others => '0');
+    set    <= wbits when wr and idx = TL_INTC_SET_IDX else (others => '0');
     active <= pending and enable;
 
     process (clk)
@@ -64,39 +58,26 @@ begin
                 src_q   <= src;
                 pending <= (pending and not clr) or rise or set;
                 if wr and idx = TL_INTC_ENABLE_IDX then
-                    enable <= (enable and not wmask(N_SRC - 1 downto 0)) or wbits(N_SRC - 1 downto 0);
-                end if;
-            end if;
-        end if;
-    end process;
-
-    process (clk)
-    begin
-        if rising_edge(clk) then
-            if rst = '1' then
-                ack   <= '0';
-                err   <= '0';
-                rdata <= (others => '0');
-            else
-                ack   <= req;
-                err   <= '0';
-                rdata <= (others => '0');
-                if req = '1' then
-                    if idx = TL_INTC_PENDING_IDX then
-                        rdata(N_SRC - 1 downto 0) <= pending;
-                    elsif idx = TL_INTC_ENABLE_IDX then
-                        rdata(N_SRC - 1 downto 0) <= enable;
-                    elsif idx = TL_INTC_ACTIVE_IDX then
-                        rdata(N_SRC - 1 downto 0) <= active;
-                    elsif idx = TL_INTC_SET_IDX then
-                        rdata <= (others => '0');
-                    else
-                        err <= '1';
-                    end if;
+                    enable <= (enable and not wmask) or wbits;
                 end if;
             end if;
         end if;
     end process;
 
     irq_external <= or active;
+
+    -- Read decode: this block's registers only; tl_soc_fabric acknowledges.
+    process (all)
+    begin
+        bus_rsp <= (rdata => (others => '0'), err => '0');
+        if idx = TL_INTC_PENDING_IDX then
+            bus_rsp.rdata(N_SRC - 1 downto 0) <= pending;
+        elsif idx = TL_INTC_ENABLE_IDX then
+            bus_rsp.rdata(N_SRC - 1 downto 0) <= enable;
+        elsif idx = TL_INTC_ACTIVE_IDX then
+            bus_rsp.rdata(N_SRC - 1 downto 0) <= active;
+        elsif idx /= TL_INTC_SET_IDX then
+            bus_rsp.err <= '1';
+        end if;
+    end process;
 end architecture rtl;

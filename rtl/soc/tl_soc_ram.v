@@ -8,9 +8,8 @@
 // conditional writes); $readmemh initialises the blocks in the bitstream.
 // Read-during-write on the other port returns the old word (single clock).
 //
-// Bus slave contract (every soc_* slave): req is a one-cycle strobe from the
-// interconnect; the slave answers with exactly one ack pulse (here in the
-// next cycle), rdata valid with it; addr/we/be/wdata stay stable until ack.
+// tl_soc_fabric writes only on an access it launches and acknowledges every
+// access itself, so the memory is the template and nothing else.
 `default_nettype none
 
 module tl_soc_ram #(
@@ -19,23 +18,18 @@ module tl_soc_ram #(
     parameter integer ADDR_BITS = $clog2(RAM_BYTES)
 ) (
     input  wire        clk,
-    input  wire        rst,
     // port A: data bus
-    input  wire        a_req,
-    input  wire        a_we,
+    input  wire        a_we,                     // write strobe (the fabric's launch of a store)
     input  wire [3:0]  a_be,
     /* verilator lint_off UNUSEDSIGNAL */  // addr[1:0]: byte lanes come from be
     input  wire [ADDR_BITS-1:0] a_addr,           // byte address inside the RAM
     /* verilator lint_on UNUSEDSIGNAL */
     input  wire [31:0] a_wdata,
-    output reg         a_ack,
     output reg  [31:0] a_rdata,
     // port B: instruction bus
-    input  wire        b_req,
     /* verilator lint_off UNUSEDSIGNAL */
     input  wire [ADDR_BITS-1:0] b_addr,
     /* verilator lint_on UNUSEDSIGNAL */
-    output reg         b_ack,
     output reg  [31:0] b_rdata
 );
 
@@ -53,7 +47,7 @@ module tl_soc_ram #(
 
     // Memory arrays have no reset (block RAM contents survive reset).
     always @(posedge clk) begin
-        if (a_req && a_we) begin
+        if (a_we) begin
             if (a_be[0]) mem[a_idx][7:0]   <= a_wdata[7:0];
             if (a_be[1]) mem[a_idx][15:8]  <= a_wdata[15:8];
             if (a_be[2]) mem[a_idx][23:16] <= a_wdata[23:16];
@@ -64,16 +58,6 @@ module tl_soc_ram #(
 
     always @(posedge clk) begin
         b_rdata <= mem[b_idx];
-    end
-
-    always @(posedge clk) begin
-        if (rst) begin
-            a_ack <= 1'b0;
-            b_ack <= 1'b0;
-        end else begin
-            a_ack <= a_req;
-            b_ack <= b_req;
-        end
     end
 
 endmodule

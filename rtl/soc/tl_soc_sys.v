@@ -8,7 +8,7 @@
 // bridge outputs low in soc_safety_gate.  Firmware can only clear a cause
 // bit (W1C) once its cause has gone; it cannot clear a latch while the
 // e-stop is still pressed.  Layout: SYS block of torqueloop/spec/regmap.toml.
-// Slave contract as in soc_ram.v.
+// Bus slave: see tl_soc_timer.v.
 `default_nettype none
 
 module tl_soc_sys #(
@@ -17,25 +17,24 @@ module tl_soc_sys #(
 ) (
     input  wire        clk,
     input  wire        rst,
-    input  wire        req,
-    input  wire        we,
-    input  wire [3:0]  be,
-    /* verilator lint_off UNUSEDSIGNAL */  // addr[1:0]: byte lanes come from be
-    input  wire [11:0] addr,
-    /* verilator lint_on UNUSEDSIGNAL */
-    input  wire [31:0] wdata,
-    output reg         ack,
-    output reg         err,
-    output reg  [31:0] rdata,
     input  wire        estop,        // asynchronous, 1 = stop (wire the NC contact so a break reads 1)
     input  wire [1:0]  bridge_fault, // asynchronous, 1 = fault, per axis
     output wire [1:0]  bridge_fault_s, // bridge_fault synchronised, for the axes' status
     output wire        safe,         // 1 = drives must be off
-    output wire        safety_event  // one-cycle pulse: a cause bit was newly set
+    output wire        safety_event, // one-cycle pulse: a cause bit was newly set
+    // bus (docs/soc.md, Bus): tl_soc_fabric's request to this page, this block's answer
+    /* verilator lint_off UNUSEDSIGNAL */  // a block reads the bits of the bundle it needs
+    input  wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,
+    /* verilator lint_on UNUSEDSIGNAL */
+    output wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp    // combinational; the fabric registers it
 );
 
     localparam [31:0] ID_RESET      = `TL_SYS_ID_RESET;
     localparam [31:0] VERSION_RESET = `TL_SYS_VERSION_RESET;
+
+    reg  [31:0] rdata;          // read decode at the end
+    reg         err;
+    assign bus_rsp = {err, rdata};   // regmap.vh's layout: TL_BUS_RSP_ERR_LSB = 32
 
     wire estop_s;
     wire [1:0] fault_s;
@@ -50,12 +49,10 @@ module tl_soc_sys #(
     reg  [3:0]  latch;          // {wdog, fault1, fault0, estop}, as SAFETY[11:8]
     reg         event_q;
 
-    wire [9:0]  idx   = addr[11:2];
-    wire        wr    = req && we;
-    wire [31:0] wmask = {{8{be[3]}}, {8{be[2]}}, {8{be[1]}}, {8{be[0]}}};
-    /* verilator lint_off UNUSEDSIGNAL */
-    wire [31:0] wbits = wdata & wmask;
-    /* verilator lint_on UNUSEDSIGNAL */
+    wire        wr    = bus_req[`TL_BUS_REQ_STB_LSB] && bus_req[`TL_BUS_REQ_WE_LSB];
+    wire [9:0]  idx   = bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB];
+    wire [31:0] wmask = bus_req[`TL_BUS_REQ_WMASK_MSB:`TL_BUS_REQ_WMASK_LSB];
+    wire [31:0] wbits = bus_req[`TL_BUS_REQ_WBITS_MSB:`TL_BUS_REQ_WBITS_LSB];
 
     wire        kick      = wr && (idx == `TL_SYS_WDOG_KICK_IDX || idx == `TL_SYS_WDOG_LOAD_IDX);
     wire        wdog_fire = (wdog_load != 32'd0) && (wdog_cnt == 32'd1) && !kick;
@@ -95,33 +92,24 @@ module tl_soc_sys #(
     assign bridge_fault_s = fault_s;
     assign safety_event = event_q;
 
-    always @(posedge clk) begin
-        if (rst) begin
-            ack   <= 1'b0;
-            err   <= 1'b0;
-            rdata <= 32'd0;
-        end else begin
-            ack   <= req;
-            err   <= 1'b0;
-            rdata <= 32'd0;
-            if (req) begin
-                case (idx)
-                    `TL_SYS_ID_IDX:        rdata <= ID_RESET;
-                    `TL_SYS_VERSION_IDX:   rdata <= VERSION_RESET;
-                    `TL_SYS_BUILD_ID_IDX:  rdata <= BUILD_ID;
-                    `TL_SYS_CLK_HZ_IDX:    rdata <= CLK_HZ;
-                    `TL_SYS_SAFETY_IDX: begin
-                        rdata[`TL_SYS_SAFETY_SAFE_LSB]     <= safe;
-                        rdata[`TL_SYS_SAFETY_ESTOP_IN_LSB] <= estop_s;
-                        rdata[`TL_SYS_SAFETY_WDOG_LSB:`TL_SYS_SAFETY_ESTOP_LSB] <= latch;
-                    end
-                    `TL_SYS_WDOG_LOAD_IDX: rdata <= wdog_load;
-                    `TL_SYS_WDOG_KICK_IDX: rdata <= 32'd0;
-                    `TL_SYS_SCRATCH_IDX:   rdata <= scratch;
-                    default:               err   <= 1'b1;
-                endcase
+    // Read decode: this block's registers only; tl_soc_fabric acknowledges.
+    always @(*) begin
+        {err, rdata} = 33'd0;
+        case (idx)
+            `TL_SYS_ID_IDX:        rdata = ID_RESET;
+            `TL_SYS_VERSION_IDX:   rdata = VERSION_RESET;
+            `TL_SYS_BUILD_ID_IDX:  rdata = BUILD_ID;
+            `TL_SYS_CLK_HZ_IDX:    rdata = CLK_HZ;
+            `TL_SYS_SAFETY_IDX: begin
+                rdata[`TL_SYS_SAFETY_SAFE_LSB]     = safe;
+                rdata[`TL_SYS_SAFETY_ESTOP_IN_LSB] = estop_s;
+                rdata[`TL_SYS_SAFETY_WDOG_LSB:`TL_SYS_SAFETY_ESTOP_LSB] = latch;
             end
-        end
+            `TL_SYS_WDOG_LOAD_IDX: rdata = wdog_load;
+            `TL_SYS_WDOG_KICK_IDX: rdata = 32'd0;
+            `TL_SYS_SCRATCH_IDX:   rdata = scratch;
+            default:               err   = 1'b1;
+        endcase
     end
 
 endmodule

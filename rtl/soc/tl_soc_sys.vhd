@@ -17,14 +17,8 @@ entity tl_soc_sys is
     port (
         clk            : in  std_logic;
         rst            : in  std_logic;
-        req            : in  std_logic;
-        we             : in  std_logic;
-        be             : in  std_logic_vector(3 downto 0);
-        addr           : in  std_logic_vector(11 downto 0);
-        wdata          : in  std_logic_vector(31 downto 0);
-        ack            : out std_logic;
-        err            : out std_logic;
-        rdata          : out std_logic_vector(31 downto 0);
+        bus_req        : in  tl_bus_req_t;   -- from tl_soc_fabric (docs/soc.md, Bus)
+        bus_rsp        : out tl_bus_rsp_t;   -- combinational; the fabric registers it
         estop          : in  std_logic;                       -- asynchronous, 1 = stop
         bridge_fault   : in  std_logic_vector(1 downto 0);    -- asynchronous, 1 = fault
         bridge_fault_s : out std_logic_vector(1 downto 0);
@@ -65,10 +59,10 @@ begin
         generic map (WIDTH => 2, RESET_VAL => 0)
         port map (clk => clk, rst => rst, async_in => bridge_fault, sync_out => fault_s);
 
-    idx   <= to_integer(unsigned(addr(11 downto 2)));
-    wr    <= req = '1' and we = '1';
-    wmask <= (31 downto 24 => be(3), 23 downto 16 => be(2), 15 downto 8 => be(1), 7 downto 0 => be(0));
-    wbits <= wdata and wmask;
+    idx   <= to_integer(unsigned(bus_req.idx));
+    wr    <= bus_req.stb = '1' and bus_req.we = '1';
+    wmask <= bus_req.wmask;
+    wbits <= bus_req.wbits;
 
     kick      <= wr and (idx = TL_SYS_WDOG_KICK_IDX or idx = TL_SYS_WDOG_LOAD_IDX);
     wdog_fire <= '1' when wdog_load /= 0 and wdog_cnt = 1 and not kick else '0';
@@ -119,41 +113,28 @@ begin
     bridge_fault_s <= fault_s;
     safety_event   <= event_q;
 
-    process (clk)
+    -- Read decode: this block's registers only; tl_soc_fabric acknowledges.
+    process (all)
     begin
-        if rising_edge(clk) then
-            if rst = '1' then
-                ack   <= '0';
-                err   <= '0';
-                rdata <= (others => '0');
-            else
-                ack   <= req;
-                err   <= '0';
-                rdata <= (others => '0');
-                if req = '1' then
-                    if idx = TL_SYS_ID_IDX then
-                        rdata <= TL_SYS_ID_RESET;
-                    elsif idx = TL_SYS_VERSION_IDX then
-                        rdata <= TL_SYS_VERSION_RESET;
-                    elsif idx = TL_SYS_BUILD_ID_IDX then
-                        rdata <= BUILD_ID;
-                    elsif idx = TL_SYS_CLK_HZ_IDX then
-                        rdata <= std_logic_vector(to_unsigned(CLK_HZ, 32));
-                    elsif idx = TL_SYS_SAFETY_IDX then
-                        rdata(TL_SYS_SAFETY_SAFE_LSB)     <= safe_i;
-                        rdata(TL_SYS_SAFETY_ESTOP_IN_LSB) <= estop_s;
-                        rdata(TL_SYS_SAFETY_WDOG_LSB downto TL_SYS_SAFETY_ESTOP_LSB) <= latch;
-                    elsif idx = TL_SYS_WDOG_LOAD_IDX then
-                        rdata <= std_logic_vector(wdog_load);
-                    elsif idx = TL_SYS_WDOG_KICK_IDX then
-                        rdata <= (others => '0');
-                    elsif idx = TL_SYS_SCRATCH_IDX then
-                        rdata <= scratch;
-                    else
-                        err <= '1';
-                    end if;
-                end if;
-            end if;
+        bus_rsp <= (rdata => (others => '0'), err => '0');
+        if idx = TL_SYS_ID_IDX then
+            bus_rsp.rdata <= TL_SYS_ID_RESET;
+        elsif idx = TL_SYS_VERSION_IDX then
+            bus_rsp.rdata <= TL_SYS_VERSION_RESET;
+        elsif idx = TL_SYS_BUILD_ID_IDX then
+            bus_rsp.rdata <= BUILD_ID;
+        elsif idx = TL_SYS_CLK_HZ_IDX then
+            bus_rsp.rdata <= std_logic_vector(to_unsigned(CLK_HZ, 32));
+        elsif idx = TL_SYS_SAFETY_IDX then
+            bus_rsp.rdata(TL_SYS_SAFETY_SAFE_LSB)     <= safe_i;
+            bus_rsp.rdata(TL_SYS_SAFETY_ESTOP_IN_LSB) <= estop_s;
+            bus_rsp.rdata(TL_SYS_SAFETY_WDOG_LSB downto TL_SYS_SAFETY_ESTOP_LSB) <= latch;
+        elsif idx = TL_SYS_WDOG_LOAD_IDX then
+            bus_rsp.rdata <= std_logic_vector(wdog_load);
+        elsif idx = TL_SYS_SCRATCH_IDX then
+            bus_rsp.rdata <= scratch;
+        elsif idx /= TL_SYS_WDOG_KICK_IDX then
+            bus_rsp.err <= '1';
         end if;
     end process;
 end architecture rtl;

@@ -5,37 +5,37 @@
 // encoder timestamps share one time base.  irq_timer is the level
 // mtime >= mtimecmp, as the privileged spec defines it; mtimecmp resets to
 // all ones so no interrupt fires before firmware arms it.  Register layout:
-// TIMER block of torqueloop/spec/regmap.toml.  Slave contract as in soc_ram.v.
+// TIMER block of torqueloop/spec/regmap.toml.  Bus slave as every block of
+// the SoC: a request bundle in, the read value and decode error out, in the
+// same cycle; tl_soc_fabric acknowledges (docs/soc.md, Bus).
 `default_nettype none
 
 module tl_soc_timer (
     input  wire        clk,
     input  wire        rst,
-    input  wire        req,
-    input  wire        we,
-    input  wire [3:0]  be,
-    /* verilator lint_off UNUSEDSIGNAL */  // addr[1:0]: byte lanes come from be
-    input  wire [11:0] addr,
-    /* verilator lint_on UNUSEDSIGNAL */
-    input  wire [31:0] wdata,
-    output reg         ack,
-    output reg         err,
-    output reg  [31:0] rdata,
     output wire [63:0] mtime,
     output wire        irq_timer,
-    output wire        irq_software
+    output wire        irq_software,
+    // bus (docs/soc.md, Bus): tl_soc_fabric's request to this page, this block's answer
+    input  wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,
+    output wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp    // combinational; the fabric registers it
 );
+
+    reg  [31:0] rdata;          // read decode at the end
+    reg         err;
+    assign bus_rsp = {err, rdata};   // regmap.vh's layout: TL_BUS_RSP_ERR_LSB = 32
 
     reg [63:0] mtime_q;
     reg [63:0] mtimecmp_q;
     reg        msip_q;
 
-    wire [9:0]  idx   = addr[11:2];
-    wire        wr    = req && we;
-    wire [31:0] wmask = {{8{be[3]}}, {8{be[2]}}, {8{be[1]}}, {8{be[0]}}};
+    wire        wr    = bus_req[`TL_BUS_REQ_STB_LSB] && bus_req[`TL_BUS_REQ_WE_LSB];
+    wire [9:0]  idx   = bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB];
+    wire [31:0] wmask = bus_req[`TL_BUS_REQ_WMASK_MSB:`TL_BUS_REQ_WMASK_LSB];
+    wire [31:0] wbits = bus_req[`TL_BUS_REQ_WBITS_MSB:`TL_BUS_REQ_WBITS_LSB];
 
-    function [31:0] merge(input [31:0] old, input [31:0] new_val, input [31:0] mask);
-        merge = (old & ~mask) | (new_val & mask);
+    function [31:0] merge(input [31:0] old, input [31:0] mask, input [31:0] bits);
+        merge = (old & ~mask) | bits;
     endfunction
 
     always @(posedge clk) begin
@@ -46,41 +46,31 @@ module tl_soc_timer (
         end else begin
             // A write to mtime replaces the count for this cycle (no increment).
             if (wr && idx == `TL_TIMER_MTIME_LO_IDX)
-                mtime_q <= {mtime_q[63:32], merge(mtime_q[31:0], wdata, wmask)};
+                mtime_q <= {mtime_q[63:32], merge(mtime_q[31:0], wmask, wbits)};
             else if (wr && idx == `TL_TIMER_MTIME_HI_IDX)
-                mtime_q <= {merge(mtime_q[63:32], wdata, wmask), mtime_q[31:0]};
+                mtime_q <= {merge(mtime_q[63:32], wmask, wbits), mtime_q[31:0]};
             else
                 mtime_q <= mtime_q + 64'd1;
             if (wr && idx == `TL_TIMER_MTIMECMP_LO_IDX)
-                mtimecmp_q[31:0] <= merge(mtimecmp_q[31:0], wdata, wmask);
+                mtimecmp_q[31:0] <= merge(mtimecmp_q[31:0], wmask, wbits);
             if (wr && idx == `TL_TIMER_MTIMECMP_HI_IDX)
-                mtimecmp_q[63:32] <= merge(mtimecmp_q[63:32], wdata, wmask);
-            if (wr && idx == `TL_TIMER_MSIP_IDX && be[0])
-                msip_q <= wdata[`TL_TIMER_MSIP_MSIP_LSB];
+                mtimecmp_q[63:32] <= merge(mtimecmp_q[63:32], wmask, wbits);
+            if (wr && idx == `TL_TIMER_MSIP_IDX && wmask[`TL_TIMER_MSIP_MSIP_LSB])
+                msip_q <= wbits[`TL_TIMER_MSIP_MSIP_LSB];
         end
     end
 
-    // Bus response: one cycle after the request strobe.
-    always @(posedge clk) begin
-        if (rst) begin
-            ack   <= 1'b0;
-            err   <= 1'b0;
-            rdata <= 32'd0;
-        end else begin
-            ack   <= req;
-            err   <= 1'b0;
-            rdata <= 32'd0;
-            if (req) begin
-                case (idx)
-                    `TL_TIMER_MTIME_LO_IDX:    rdata <= mtime_q[31:0];
-                    `TL_TIMER_MTIME_HI_IDX:    rdata <= mtime_q[63:32];
-                    `TL_TIMER_MTIMECMP_LO_IDX: rdata <= mtimecmp_q[31:0];
-                    `TL_TIMER_MTIMECMP_HI_IDX: rdata <= mtimecmp_q[63:32];
-                    `TL_TIMER_MSIP_IDX:        rdata <= {31'd0, msip_q};
-                    default:                   err   <= 1'b1;
-                endcase
-            end
-        end
+    // Read decode: this block's registers only; tl_soc_fabric acknowledges.
+    always @(*) begin
+        {err, rdata} = 33'd0;
+        case (idx)
+            `TL_TIMER_MTIME_LO_IDX:    rdata = mtime_q[31:0];
+            `TL_TIMER_MTIME_HI_IDX:    rdata = mtime_q[63:32];
+            `TL_TIMER_MTIMECMP_LO_IDX: rdata = mtimecmp_q[31:0];
+            `TL_TIMER_MTIMECMP_HI_IDX: rdata = mtimecmp_q[63:32];
+            `TL_TIMER_MSIP_IDX:        rdata = {31'd0, msip_q};
+            default:                   err   = 1'b1;
+        endcase
     end
 
     assign mtime        = mtime_q;

@@ -13,14 +13,8 @@ entity tl_soc_timer is
     port (
         clk          : in  std_logic;
         rst          : in  std_logic;
-        req          : in  std_logic;
-        we           : in  std_logic;
-        be           : in  std_logic_vector(3 downto 0);
-        addr         : in  std_logic_vector(11 downto 0);
-        wdata        : in  std_logic_vector(31 downto 0);
-        ack          : out std_logic;
-        err          : out std_logic;
-        rdata        : out std_logic_vector(31 downto 0);
+        bus_req      : in  tl_bus_req_t;   -- from tl_soc_fabric (docs/soc.md, Bus)
+        bus_rsp      : out tl_bus_rsp_t;   -- combinational; the fabric registers it
         mtime        : out std_logic_vector(63 downto 0);
         irq_timer    : out std_logic;
         irq_software : out std_logic
@@ -35,15 +29,17 @@ architecture rtl of tl_soc_timer is
     signal idx   : natural range 0 to 1023;
     signal wr    : boolean;
     signal wmask : std_logic_vector(31 downto 0);
+    signal wbits : std_logic_vector(31 downto 0);
 
-    function merge(old, new_val, mask : std_logic_vector(31 downto 0)) return std_logic_vector is
+    function merge(old, mask, bits : std_logic_vector(31 downto 0)) return std_logic_vector is
     begin
-        return (old and not mask) or (new_val and mask);
+        return (old and not mask) or bits;
     end function;
 begin
-    idx   <= to_integer(unsigned(addr(11 downto 2)));
-    wr    <= req = '1' and we = '1';
-    wmask <= (31 downto 24 => be(3), 23 downto 16 => be(2), 15 downto 8 => be(1), 7 downto 0 => be(0));
+    idx   <= to_integer(unsigned(bus_req.idx));
+    wr    <= bus_req.stb = '1' and bus_req.we = '1';
+    wmask <= bus_req.wmask;
+    wbits <= bus_req.wbits;
 
     process (clk)
     begin
@@ -58,51 +54,20 @@ begin
             else
                 -- A write to mtime replaces the count for this cycle (no increment).
                 if wr and idx = TL_TIMER_MTIME_LO_IDX then
-                    mtime_q(31 downto 0) <= unsigned(merge(std_logic_vector(mtime_q(31 downto 0)), wdata, wmask));
+                    mtime_q(31 downto 0) <= unsigned(merge(std_logic_vector(mtime_q(31 downto 0)), wmask, wbits));
                 elsif wr and idx = TL_TIMER_MTIME_HI_IDX then
-                    mtime_q(63 downto 32) <= unsigned(merge(std_logic_vector(mtime_q(63 downto 32)), wdata, wmask));
+                    mtime_q(63 downto 32) <= unsigned(merge(std_logic_vector(mtime_q(63 downto 32)), wmask, wbits));
                 else
                     mtime_q <= mtime_q + 1;
                 end if;
                 if wr and idx = TL_TIMER_MTIMECMP_LO_IDX then
-                    mtimecmp_q(31 downto 0) <= unsigned(merge(std_logic_vector(mtimecmp_q(31 downto 0)), wdata, wmask));
+                    mtimecmp_q(31 downto 0) <= unsigned(merge(std_logic_vector(mtimecmp_q(31 downto 0)), wmask, wbits));
                 end if;
                 if wr and idx = TL_TIMER_MTIMECMP_HI_IDX then
-                    mtimecmp_q(63 downto 32) <= unsigned(merge(std_logic_vector(mtimecmp_q(63 downto 32)), wdata, wmask));
+                    mtimecmp_q(63 downto 32) <= unsigned(merge(std_logic_vector(mtimecmp_q(63 downto 32)), wmask, wbits));
                 end if;
-                if wr and idx = TL_TIMER_MSIP_IDX and be(0) = '1' then
-                    msip_q <= wdata(TL_TIMER_MSIP_MSIP_LSB);
-                end if;
-            end if;
-        end if;
-    end process;
-
-    -- Bus response: one cycle after the request strobe.
-    process (clk)
-    begin
-        if rising_edge(clk) then
-            if rst = '1' then
-                ack   <= '0';
-                err   <= '0';
-                rdata <= (others => '0');
-            else
-                ack   <= req;
-                err   <= '0';
-                rdata <= (others => '0');
-                if req = '1' then
-                    if idx = TL_TIMER_MTIME_LO_IDX then
-                        rdata <= std_logic_vector(mtime_q(31 downto 0));
-                    elsif idx = TL_TIMER_MTIME_HI_IDX then
-                        rdata <= std_logic_vector(mtime_q(63 downto 32));
-                    elsif idx = TL_TIMER_MTIMECMP_LO_IDX then
-                        rdata <= std_logic_vector(mtimecmp_q(31 downto 0));
-                    elsif idx = TL_TIMER_MTIMECMP_HI_IDX then
-                        rdata <= std_logic_vector(mtimecmp_q(63 downto 32));
-                    elsif idx = TL_TIMER_MSIP_IDX then
-                        rdata <= (0 => msip_q, others => '0');
-                    else
-                        err <= '1';
-                    end if;
+                if wr and idx = TL_TIMER_MSIP_IDX and wmask(TL_TIMER_MSIP_MSIP_LSB) = '1' then
+                    msip_q <= wbits(TL_TIMER_MSIP_MSIP_LSB);
                 end if;
             end if;
         end if;
@@ -111,4 +76,23 @@ begin
     mtime        <= std_logic_vector(mtime_q);
     irq_timer    <= '1' when mtime_q >= mtimecmp_q else '0';
     irq_software <= msip_q;
+
+    -- Read decode: this block's registers only; tl_soc_fabric acknowledges.
+    process (all)
+    begin
+        bus_rsp <= (rdata => (others => '0'), err => '0');
+        if idx = TL_TIMER_MTIME_LO_IDX then
+            bus_rsp.rdata <= std_logic_vector(mtime_q(31 downto 0));
+        elsif idx = TL_TIMER_MTIME_HI_IDX then
+            bus_rsp.rdata <= std_logic_vector(mtime_q(63 downto 32));
+        elsif idx = TL_TIMER_MTIMECMP_LO_IDX then
+            bus_rsp.rdata <= std_logic_vector(mtimecmp_q(31 downto 0));
+        elsif idx = TL_TIMER_MTIMECMP_HI_IDX then
+            bus_rsp.rdata <= std_logic_vector(mtimecmp_q(63 downto 32));
+        elsif idx = TL_TIMER_MSIP_IDX then
+            bus_rsp.rdata <= (0 => msip_q, others => '0');
+        else
+            bus_rsp.err <= '1';
+        end if;
+    end process;
 end architecture rtl;

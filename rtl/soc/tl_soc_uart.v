@@ -7,7 +7,7 @@
 // core's one-clock error pulses into sticky flags, and counts frame errors
 // (the core counts overruns).  A read of RX_DATA pops the byte it returns,
 // in the same clock, so each byte is seen exactly once.
-// Slave contract as in soc_ram.v.
+// Bus slave: see tl_soc_timer.v.
 `default_nettype none
 
 module tl_soc_uart #(
@@ -16,16 +16,6 @@ module tl_soc_uart #(
 ) (
     input  wire        clk,
     input  wire        rst,
-    input  wire        req,
-    input  wire        we,
-    input  wire [3:0]  be,
-    /* verilator lint_off UNUSEDSIGNAL */  // addr[1:0]: byte lanes come from be
-    input  wire [11:0] addr,
-    /* verilator lint_on UNUSEDSIGNAL */
-    input  wire [31:0] wdata,
-    output reg         ack,
-    output reg         err,
-    output reg  [31:0] rdata,
     // pins
     input  wire        rxd,           // asynchronous (the core synchronises)
     output wire        txd,
@@ -33,20 +23,28 @@ module tl_soc_uart #(
     output wire        rts_n,
     // interrupt sources (levels; the INTC latches their rising edges)
     output wire        rx_event,      // RX FIFO not empty
-    output wire        tx_event       // TX FIFO empty
+    output wire        tx_event,      // TX FIFO empty
+    // bus (docs/soc.md, Bus): tl_soc_fabric's request to this page, this block's answer
+    /* verilator lint_off UNUSEDSIGNAL */  // a block reads the bits of the bundle it needs
+    input  wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,
+    /* verilator lint_on UNUSEDSIGNAL */
+    output wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp    // combinational; the fabric registers it
 );
 
     localparam integer LVL_BITS = $clog2(FIFO_DEPTH) + 1;
     localparam [31:0]  BAUD_RESET = `TL_UART_BAUD_DIV_RESET;
     localparam [31:0]  CTRL_RESET = `TL_UART_CTRL_RESET;
 
-    wire [9:0]  idx   = addr[11:2];
-    wire        wr    = req && we;
-    wire        rd    = req && !we;
-    wire [31:0] wmask = {{8{be[3]}}, {8{be[2]}}, {8{be[1]}}, {8{be[0]}}};
-    /* verilator lint_off UNUSEDSIGNAL */
-    wire [31:0] wbits = wdata & wmask;
-    /* verilator lint_on UNUSEDSIGNAL */
+    reg  [31:0] rdata;          // read decode at the end
+    reg         err;
+    assign bus_rsp = {err, rdata};   // regmap.vh's layout: TL_BUS_RSP_ERR_LSB = 32
+
+    wire        stb   = bus_req[`TL_BUS_REQ_STB_LSB];
+    wire        wr    = stb && bus_req[`TL_BUS_REQ_WE_LSB];
+    wire        rd    = stb && !bus_req[`TL_BUS_REQ_WE_LSB];
+    wire [9:0]  idx   = bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB];
+    wire [15:0] wmask = bus_req[`TL_BUS_REQ_WMASK_LSB +: 16];
+    wire [15:0] wbits = bus_req[`TL_BUS_REQ_WBITS_LSB +: 16];
 
     reg [15:0] baud_q;
     reg        flow_q;
@@ -59,14 +57,14 @@ module tl_soc_uart #(
     wire                frame_error, break_detect, overrun_error;
     wire [15:0]         overrun_count;
 
-    wire tx_push   = wr && idx == `TL_UART_TX_DATA_IDX && be[0];
+    wire tx_push   = wr && idx == `TL_UART_TX_DATA_IDX && wmask[0];
     wire rx_pop    = rd && idx == `TL_UART_RX_DATA_IDX;
     wire cnt_clr   = wr && idx == `TL_UART_CNT_CLEAR_IDX;
     wire err_wr    = wr && idx == `TL_UART_ERR_IDX;
 
     tl_uart #(.CLK_HZ(CLK_HZ), .FIFO_DEPTH(FIFO_DEPTH)) u_uart (
         .clk(clk), .rst(rst), .baud_div(baud_q), .flow_en(flow_q),
-        .s_tx_data(wdata[7:0]), .s_tx_valid(tx_push), .s_tx_ready(tx_ready),
+        .s_tx_data(wbits[7:0]), .s_tx_valid(tx_push), .s_tx_ready(tx_ready),
         .m_rx_data(rx_data), .m_rx_valid(rx_valid), .m_rx_ready(rx_pop),
         .rx_level(rx_level), .tx_level(tx_level), .tx_busy(tx_busy),
         .frame_error(frame_error), .break_detect(break_detect),
@@ -86,9 +84,9 @@ module tl_soc_uart #(
             frame_count <= 16'd0;
         end else begin
             if (wr && idx == `TL_UART_BAUD_DIV_IDX)
-                baud_q <= (baud_q & ~wmask[15:0]) | wbits[15:0];
-            if (wr && idx == `TL_UART_CTRL_IDX && be[0])
-                flow_q <= wdata[`TL_UART_CTRL_FLOW_EN_LSB];
+                baud_q <= (baud_q & ~wmask) | wbits;
+            if (wr && idx == `TL_UART_CTRL_IDX && wmask[`TL_UART_CTRL_FLOW_EN_LSB])
+                flow_q <= wbits[`TL_UART_CTRL_FLOW_EN_LSB];
             // A new error in the clearing clock stays set.
             err_q <= (err_q & ~err_clr) | err_set;
             if (cnt_clr && wbits[`TL_UART_CNT_CLEAR_FRAME_LSB])
@@ -100,40 +98,31 @@ module tl_soc_uart #(
 
     wire tx_idle = !tx_busy && (tx_level == {LVL_BITS{1'b0}});
 
-    always @(posedge clk) begin
-        if (rst) begin
-            ack   <= 1'b0;
-            err   <= 1'b0;
-            rdata <= 32'd0;
-        end else begin
-            ack   <= req;
-            err   <= 1'b0;
-            rdata <= 32'd0;
-            if (req) begin
-                case (idx)
-                    `TL_UART_TX_DATA_IDX:  rdata <= 32'd0;
-                    `TL_UART_RX_DATA_IDX: begin
-                        rdata[`TL_UART_RX_DATA_DATA_MSB:`TL_UART_RX_DATA_DATA_LSB] <= rx_valid ? rx_data : 8'd0;
-                        rdata[`TL_UART_RX_DATA_VALID_LSB] <= rx_valid;
-                    end
-                    `TL_UART_STATUS_IDX: begin
-                        rdata[`TL_UART_STATUS_TX_READY_LSB] <= tx_ready;
-                        rdata[`TL_UART_STATUS_TX_IDLE_LSB]  <= tx_idle;
-                        rdata[`TL_UART_STATUS_RX_VALID_LSB] <= rx_valid;
-                        rdata[`TL_UART_STATUS_RTS_N_LSB]    <= rts_n;
-                        rdata[`TL_UART_STATUS_RX_LEVEL_LSB +: LVL_BITS] <= rx_level;
-                        rdata[`TL_UART_STATUS_TX_LEVEL_LSB +: LVL_BITS] <= tx_level;
-                    end
-                    `TL_UART_BAUD_DIV_IDX:      rdata[15:0] <= baud_q;
-                    `TL_UART_CTRL_IDX:          rdata[`TL_UART_CTRL_FLOW_EN_LSB] <= flow_q;
-                    `TL_UART_ERR_IDX:           rdata[3:0]  <= err_q;
-                    `TL_UART_FRAME_COUNT_IDX:   rdata[15:0] <= frame_count;
-                    `TL_UART_OVERRUN_COUNT_IDX: rdata[15:0] <= overrun_count;
-                    `TL_UART_CNT_CLEAR_IDX:     rdata <= 32'd0;
-                    default:                    err <= 1'b1;
-                endcase
+    // Read decode: this block's registers only; tl_soc_fabric acknowledges.
+    always @(*) begin
+        {err, rdata} = 33'd0;
+        case (idx)
+            `TL_UART_TX_DATA_IDX:  rdata = 32'd0;
+            `TL_UART_RX_DATA_IDX: begin
+                rdata[`TL_UART_RX_DATA_DATA_MSB:`TL_UART_RX_DATA_DATA_LSB] = rx_valid ? rx_data : 8'd0;
+                rdata[`TL_UART_RX_DATA_VALID_LSB] = rx_valid;
             end
-        end
+            `TL_UART_STATUS_IDX: begin
+                rdata[`TL_UART_STATUS_TX_READY_LSB] = tx_ready;
+                rdata[`TL_UART_STATUS_TX_IDLE_LSB]  = tx_idle;
+                rdata[`TL_UART_STATUS_RX_VALID_LSB] = rx_valid;
+                rdata[`TL_UART_STATUS_RTS_N_LSB]    = rts_n;
+                rdata[`TL_UART_STATUS_RX_LEVEL_LSB +: LVL_BITS] = rx_level;
+                rdata[`TL_UART_STATUS_TX_LEVEL_LSB +: LVL_BITS] = tx_level;
+            end
+            `TL_UART_BAUD_DIV_IDX:      rdata[15:0] = baud_q;
+            `TL_UART_CTRL_IDX:          rdata[`TL_UART_CTRL_FLOW_EN_LSB] = flow_q;
+            `TL_UART_ERR_IDX:           rdata[3:0]  = err_q;
+            `TL_UART_FRAME_COUNT_IDX:   rdata[15:0] = frame_count;
+            `TL_UART_OVERRUN_COUNT_IDX: rdata[15:0] = overrun_count;
+            `TL_UART_CNT_CLEAR_IDX:     rdata = 32'd0;
+            default:                    err = 1'b1;
+        endcase
     end
 
     assign rx_event = rx_valid;

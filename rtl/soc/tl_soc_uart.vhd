@@ -18,14 +18,8 @@ entity tl_soc_uart is
     port (
         clk      : in  std_logic;
         rst      : in  std_logic;
-        req      : in  std_logic;
-        we       : in  std_logic;
-        be       : in  std_logic_vector(3 downto 0);
-        addr     : in  std_logic_vector(11 downto 0);
-        wdata    : in  std_logic_vector(31 downto 0);
-        ack      : out std_logic;
-        err      : out std_logic;
-        rdata    : out std_logic_vector(31 downto 0);
+        bus_req  : in  tl_bus_req_t;   -- from tl_soc_fabric (docs/soc.md, Bus)
+        bus_rsp  : out tl_bus_rsp_t;   -- combinational; the fabric registers it
         rxd      : in  std_logic;
         txd      : out std_logic;
         cts_n    : in  std_logic;
@@ -58,8 +52,8 @@ architecture rtl of tl_soc_uart is
     signal idx     : natural range 0 to 1023;
     signal wr      : boolean;
     signal rd      : boolean;
-    signal wmask   : std_logic_vector(31 downto 0);
-    signal wbits   : std_logic_vector(31 downto 0);
+    signal wmask   : std_logic_vector(15 downto 0);
+    signal wbits   : std_logic_vector(15 downto 0);
     signal tx_push : std_logic;
     signal rx_pop  : std_logic;
     signal cnt_clr : boolean;
@@ -69,12 +63,12 @@ architecture rtl of tl_soc_uart is
     signal tx_idle : std_logic;
     signal ovr_clr : std_logic;
 begin
-    idx     <= to_integer(unsigned(addr(11 downto 2)));
-    wr      <= req = '1' and we = '1';
-    rd      <= req = '1' and we = '0';
-    wmask   <= (31 downto 24 => be(3), 23 downto 16 => be(2), 15 downto 8 => be(1), 7 downto 0 => be(0));
-    wbits   <= wdata and wmask;
-    tx_push <= '1' when wr and idx = TL_UART_TX_DATA_IDX and be(0) = '1' else '0';
+    idx     <= to_integer(unsigned(bus_req.idx));
+    wr      <= bus_req.stb = '1' and bus_req.we = '1';
+    rd      <= bus_req.stb = '1' and bus_req.we = '0';
+    wmask   <= bus_req.wmask(15 downto 0);
+    wbits   <= bus_req.wbits(15 downto 0);
+    tx_push <= '1' when wr and idx = TL_UART_TX_DATA_IDX and wmask(0) = '1' else '0';
     rx_pop  <= '1' when rd and idx = TL_UART_RX_DATA_IDX else '0';
     cnt_clr <= wr and idx = TL_UART_CNT_CLEAR_IDX;
     err_wr  <= wr and idx = TL_UART_ERR_IDX;
@@ -84,7 +78,7 @@ begin
         generic map (CLK_HZ => CLK_HZ, FIFO_DEPTH => FIFO_DEPTH)
         port map (
             clk => clk, rst => rst, baud_div => baud_q, flow_en => flow_q,
-            s_tx_data => wdata(7 downto 0), s_tx_valid => tx_push, s_tx_ready => tx_ready,
+            s_tx_data => wbits(7 downto 0), s_tx_valid => tx_push, s_tx_ready => tx_ready,
             m_rx_data => rx_data, m_rx_valid => rx_valid, m_rx_ready => rx_pop,
             rx_level => rx_level, tx_level => tx_level, tx_busy => tx_busy,
             frame_error => frame_error, break_detect => break_detect,
@@ -106,10 +100,10 @@ begin
                 frame_count <= (others => '0');
             else
                 if wr and idx = TL_UART_BAUD_DIV_IDX then
-                    baud_q <= (baud_q and not wmask(15 downto 0)) or wbits(15 downto 0);
+                    baud_q <= (baud_q and not wmask) or wbits;
                 end if;
-                if wr and idx = TL_UART_CTRL_IDX and be(0) = '1' then
-                    flow_q <= wdata(TL_UART_CTRL_FLOW_EN_LSB);
+                if wr and idx = TL_UART_CTRL_IDX and wmask(TL_UART_CTRL_FLOW_EN_LSB) = '1' then
+                    flow_q <= wbits(TL_UART_CTRL_FLOW_EN_LSB);
                 end if;
                 -- A new error in the clearing clock stays set.
                 err_q <= (err_q and not err_clr) or err_set;
@@ -128,53 +122,38 @@ begin
 
     tx_idle <= '1' when tx_busy = '0' and unsigned(tx_level) = 0 else '0';
 
-    process (clk)
-    begin
-        if rising_edge(clk) then
-            if rst = '1' then
-                ack   <= '0';
-                err   <= '0';
-                rdata <= (others => '0');
-            else
-                ack   <= req;
-                err   <= '0';
-                rdata <= (others => '0');
-                if req = '1' then
-                    if idx = TL_UART_TX_DATA_IDX then
-                        rdata <= (others => '0');
-                    elsif idx = TL_UART_RX_DATA_IDX then
-                        if rx_valid = '1' then
-                            rdata(TL_UART_RX_DATA_DATA_MSB downto TL_UART_RX_DATA_DATA_LSB) <= rx_data;
-                        end if;
-                        rdata(TL_UART_RX_DATA_VALID_LSB) <= rx_valid;
-                    elsif idx = TL_UART_STATUS_IDX then
-                        rdata(TL_UART_STATUS_TX_READY_LSB) <= tx_ready;
-                        rdata(TL_UART_STATUS_TX_IDLE_LSB)  <= tx_idle;
-                        rdata(TL_UART_STATUS_RX_VALID_LSB) <= rx_valid;
-                        rdata(TL_UART_STATUS_RTS_N_LSB)    <= rts_n_i;
-                        rdata(TL_UART_STATUS_RX_LEVEL_LSB + LVL_BITS - 1 downto TL_UART_STATUS_RX_LEVEL_LSB) <= rx_level;
-                        rdata(TL_UART_STATUS_TX_LEVEL_LSB + LVL_BITS - 1 downto TL_UART_STATUS_TX_LEVEL_LSB) <= tx_level;
-                    elsif idx = TL_UART_BAUD_DIV_IDX then
-                        rdata(15 downto 0) <= baud_q;
-                    elsif idx = TL_UART_CTRL_IDX then
-                        rdata(TL_UART_CTRL_FLOW_EN_LSB) <= flow_q;
-                    elsif idx = TL_UART_ERR_IDX then
-                        rdata(3 downto 0) <= err_q;
-                    elsif idx = TL_UART_FRAME_COUNT_IDX then
-                        rdata(15 downto 0) <= std_logic_vector(frame_count);
-                    elsif idx = TL_UART_OVERRUN_COUNT_IDX then
-                        rdata(15 downto 0) <= overrun_count;
-                    elsif idx = TL_UART_CNT_CLEAR_IDX then
-                        rdata <= (others => '0');
-                    else
-                        err <= '1';
-                    end if;
-                end if;
-            end if;
-        end if;
-    end process;
-
     rts_n    <= rts_n_i;
     rx_event <= rx_valid;
     tx_event <= tx_idle;
+
+    -- Read decode: this block's registers only; tl_soc_fabric acknowledges.
+    process (all)
+    begin
+        bus_rsp <= (rdata => (others => '0'), err => '0');
+        if idx = TL_UART_RX_DATA_IDX then
+            if rx_valid = '1' then
+                bus_rsp.rdata(TL_UART_RX_DATA_DATA_MSB downto TL_UART_RX_DATA_DATA_LSB) <= rx_data;
+            end if;
+            bus_rsp.rdata(TL_UART_RX_DATA_VALID_LSB) <= rx_valid;
+        elsif idx = TL_UART_STATUS_IDX then
+            bus_rsp.rdata(TL_UART_STATUS_TX_READY_LSB) <= tx_ready;
+            bus_rsp.rdata(TL_UART_STATUS_TX_IDLE_LSB)  <= tx_idle;
+            bus_rsp.rdata(TL_UART_STATUS_RX_VALID_LSB) <= rx_valid;
+            bus_rsp.rdata(TL_UART_STATUS_RTS_N_LSB)    <= rts_n_i;
+            bus_rsp.rdata(TL_UART_STATUS_RX_LEVEL_LSB + LVL_BITS - 1 downto TL_UART_STATUS_RX_LEVEL_LSB) <= rx_level;
+            bus_rsp.rdata(TL_UART_STATUS_TX_LEVEL_LSB + LVL_BITS - 1 downto TL_UART_STATUS_TX_LEVEL_LSB) <= tx_level;
+        elsif idx = TL_UART_BAUD_DIV_IDX then
+            bus_rsp.rdata(15 downto 0) <= baud_q;
+        elsif idx = TL_UART_CTRL_IDX then
+            bus_rsp.rdata(TL_UART_CTRL_FLOW_EN_LSB) <= flow_q;
+        elsif idx = TL_UART_ERR_IDX then
+            bus_rsp.rdata(3 downto 0) <= err_q;
+        elsif idx = TL_UART_FRAME_COUNT_IDX then
+            bus_rsp.rdata(15 downto 0) <= std_logic_vector(frame_count);
+        elsif idx = TL_UART_OVERRUN_COUNT_IDX then
+            bus_rsp.rdata(15 downto 0) <= overrun_count;
+        elsif idx /= TL_UART_TX_DATA_IDX and idx /= TL_UART_CNT_CLEAR_IDX then
+            bus_rsp.err <= '1';
+        end if;
+    end process;
 end architecture rtl;

@@ -21,20 +21,18 @@ from __future__ import annotations
 import os
 import random
 import subprocess
-import sys
 from pathlib import Path
 
 import cocotb
 import pytest
-from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, Timer, with_timeout
-from cocotb.utils import get_sim_time
-from cocotbext.uart import UartSink, UartSource
 
 from torqueloop.spec import bootproto as bp
 from torqueloop.flow.manifest import REPO_ROOT
 from torqueloop.flow.simrun import BUILD_ROOT, run
 from torqueloop.flow import boot_image as build_boot
+
+import tbutil
 
 PROG = Path(__file__).resolve().parent / "prog"
 CLK_NS = 20
@@ -67,23 +65,13 @@ def build_prog(name: str) -> bytes:
 class TB:
     def __init__(self, dut) -> None:
         self.dut = dut
-        self.src = UartSource(dut.uart_rx, baud=BAUD, bits=8)
-        self.sink = UartSink(dut.uart_tx, baud=BAUD, bits=8)
-        dut.sw.value = 0
-        dut.key_n.value = 0xF
-        dut.estop.value = 0
-        dut.bridge_fault.value = 0
-        dut.enc_a.value = 0
-        dut.enc_b.value = 0
-        dut.enc_z.value = 0
-        dut.uart_cts_n.value = 0
-        cocotb.start_soon(Clock(dut.clk, CLK_NS, unit="ns").start())
+        tbutil.idle_soc_pins(dut)
+        self.src, self.sink = tbutil.uart_models(dut.uart_rx, dut.uart_tx, BAUD)
+        tbutil.start_clock(dut, CLK_NS)
 
     @property
     def cycle(self) -> int:
-        # From simulated time, not a per-edge Python counter (that would cost
-        # more than the whole SoC model).
-        return int(get_sim_time("ns")) // CLK_NS
+        return tbutil.cycle_now(CLK_NS)
 
     async def reset(self) -> int:
         """Reset the SoC (RAM keeps its contents, as on the board); returns

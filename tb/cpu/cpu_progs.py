@@ -2,8 +2,8 @@
 """Build test programs for the CPU and run them on the ISS oracle.
 
 Programs are compiled at test time with Debian's riscv64-unknown-elf-gcc
-for rv32im_zicsr / ilp32 and linked with tb/cpu/progs/link.ld into
-build/cpu_progs/<tag>/.
+for rv32im_zicsr / ilp32 (with the register header, firmware/include, on the
+include path) and linked with tb/cpu/progs/link.ld into build/cpu_progs/<tag>/.
 """
 
 from __future__ import annotations
@@ -14,14 +14,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from torqueloop.flow.manifest import REPO_ROOT
+from torqueloop.spec import regs
 from torqueloop.models.rv32 import Memory, Rv32, load_elf, read_elf, run_to_tohost
 
 PROGS = Path(__file__).resolve().parent / "progs"
 BUILD = REPO_ROOT / "build" / "cpu_progs"
 GCC = "riscv64-unknown-elf-gcc"
 ARCH = ["-march=rv32im_zicsr", "-mabi=ilp32"]
-RAM_BASE = 0x8000_0000
-RAM_BYTES = 64 * 1024
+RAM_BASE = regs.RAM_BASE      # the SoC's memory map, as cpu_sim_top decodes it
+RAM_BYTES = regs.RAM_SIZE     # cpu_sim_top's RAM_BYTES default
 
 
 def build(name: str, sources: list[Path], tag: str = "", opt: str = "-O2",
@@ -33,7 +34,7 @@ def build(name: str, sources: list[Path], tag: str = "", opt: str = "-O2",
     tmp = out_dir / f"{name}.{os.getpid()}.elf"
     srcs = ([PROGS / "crt0.S"] if crt0 else []) + list(sources)
     cmd = [GCC, *ARCH, opt, "-nostdlib", "-ffreestanding", "-static", "-std=c11",
-           "-Wall", "-Werror", "-I", str(PROGS), "-T", str(PROGS / "link.ld"), "-Wl,--no-warn-rwx-segments",
+           "-Wall", "-Werror", "-I", str(PROGS), "-I", str(REPO_ROOT / "firmware" / "include"), "-T", str(PROGS / "link.ld"), "-Wl,--no-warn-rwx-segments",
            "-o", str(tmp), *map(str, srcs), "-lgcc"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:

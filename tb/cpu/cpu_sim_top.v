@@ -1,17 +1,21 @@
 // SPDX-License-Identifier: MIT
 `default_nettype none
 // Test harness of the CPU (simulation only, not part of the SoC): the core,
-// a two-port RAM, a boot ROM stub, the machine timer, a test interrupt
-// device and the counters the ELF runner reports.  Uses the SoC memory map
-// so that programs linked for it run unchanged on both:
-//   0x0000_0000  boot ROM (4 KiB): `lui t0, %hi(boot_entry); jalr %lo(boot_entry)(t0)`
-//   0x4000_0000  machine timer: mtime lo/hi +0x0/+0x4, mtimecmp lo/hi +0x8/+0xC
-//   0x4000_1000  test interrupt device: bit 0 drives irq_external, bit 1 irq_software
-//   0x8000_0000  RAM, RAM_BYTES long
-// Anything else answers with *_err (access fault).  The testbench loads
-// and reads the RAM through the ld_* port while rst is high.
+// a two-port RAM, a boot ROM stub, the SoC's own machine timer and interrupt
+// controller (rtl/soc/tl_soc_timer.v, tl_soc_intc.v) and the counters the
+// ELF runner reports.  The memory map is the SoC's, from the register map's
+// generated include (rtl/soc/regmap.vh), so programs linked for one run
+// unchanged on the other:
+//   TL_BOOT_ROM_BASE  boot stub: `lui t0, %hi(boot_entry); jalr %lo(boot_entry)(t0)`, then zeros
+//   TL_TIMER_BASE     TIMER page: mtime, mtimecmp, MSIP (irq_timer, irq_software)
+//   TL_INTC_BASE      INTC page: no sources are wired here; a program raises
+//                     irq_external through INTC.SET and ENABLE
+//   TL_RAM_BASE       RAM, RAM_BYTES long
+// Every other peripheral page and anything else answers with *_err (access
+// fault).  Unlike tl_soc_fabric, both buses may add random wait states.  The
+// testbench loads and reads the RAM through the ld_* port while rst is high.
 module cpu_sim_top #(
-    parameter RAM_BYTES = 65536
+    parameter integer RAM_BYTES = `TL_RAM_SIZE   // a power of two
 ) (
     input  wire        clk,
     input  wire        rst,
@@ -19,7 +23,9 @@ module cpu_sim_top #(
     input  wire        wait_states,  // 1: random wait states on both buses
     // RAM access for the testbench, only while rst is high
     input  wire        ld_we,
+    /* verilator lint_off UNUSEDSIGNAL */  // the word index is used
     input  wire [31:0] ld_addr,      // byte address inside the RAM region
+    /* verilator lint_on UNUSEDSIGNAL */
     input  wire [31:0] ld_wdata,
     output reg  [31:0] ld_rdata,     // registered: valid the cycle after ld_addr
     // tohost watch: the first non-zero word stored at tohost_addr
@@ -30,25 +36,33 @@ module cpu_sim_top #(
     output reg  [63:0] instret,      // retired instructions, frozen at tohost_hit
     output wire        irq_timer
 );
-    localparam [31:0] RAM_BASE = 32'h8000_0000;
-    localparam        RAM_WORDS = RAM_BYTES / 4;
-    localparam        AW = $clog2(RAM_WORDS);
+    localparam integer RAM_WORDS = RAM_BYTES / 4;
+    localparam integer AW        = $clog2(RAM_WORDS);
+    localparam integer N_PAGES   = `TL_PERIPH_SIZE / 4096;
+    localparam integer PAGE_BITS = $clog2(N_PAGES);
+    localparam integer RQ        = `TL_BUS_REQ_WIDTH;
+    localparam integer RS        = `TL_BUS_RSP_WIDTH;
+    localparam integer ROM_AW    = $clog2(`TL_BOOT_ROM_SIZE);
+    localparam [31:0]  ROM_MASK  = ~(`TL_BOOT_ROM_SIZE - 1);
+    localparam [31:0]  RAM_MASK  = ~(RAM_BYTES - 1);
+    localparam [31:0]  PER_MASK  = ~(`TL_PERIPH_SIZE - 1);
+    localparam [N_PAGES-1:0] PAGE_USED = (1 << `TL_TIMER_PAGE) | (1 << `TL_INTC_PAGE);
 
     wire        ibus_req, dbus_req, dbus_we, retire;
     wire [31:0] ibus_addr, dbus_addr, dbus_wdata;
     wire [3:0]  dbus_be;
     reg         ibus_ack, ibus_err, dbus_ack, dbus_err;
     reg  [31:0] ibus_rdata, dbus_rdata;
-    reg  [63:0] mtime, mtimecmp;
-    reg  [1:0]  test_irq;
+    wire [63:0] mtime;
+    wire        irq_software, irq_external;
 
-    tl_cpu #(.RESET_PC(32'h0000_0000)) u_cpu (
+    tl_cpu #(.RESET_PC(`TL_BOOT_ROM_BASE)) u_cpu (
         .clk(clk), .rst(rst),
         .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
         .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
         .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
         .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
-        .irq_timer(irq_timer), .irq_external(test_irq[0]), .irq_software(test_irq[1]),
+        .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
         .mtime(mtime), .retire(retire)
     );
 
@@ -63,6 +77,15 @@ module cpu_sim_top #(
     wire istall = wait_states && lfsr[0];
     wire dstall = wait_states && lfsr[5];
 
+    // ---- decode: the SoC's memory map ---------------------------------------------
+    wire i_rom = (ibus_addr & ROM_MASK) == `TL_BOOT_ROM_BASE;
+    wire i_ram = (ibus_addr & RAM_MASK) == `TL_RAM_BASE;
+    wire d_ram = (dbus_addr & RAM_MASK) == `TL_RAM_BASE;
+    wire d_per = (dbus_addr & PER_MASK) == `TL_PERIPH_BASE;
+    wire [AW-1:0] i_word = ibus_addr[AW+1:2];
+    wire [AW-1:0] d_word = dbus_addr[AW+1:2];
+    wire [AW-1:0] l_word = ld_addr[AW+1:2];
+
     // ---- RAM: port A instruction fetch, port B data (or the loader in reset) ----
     reg [31:0] ram [0:RAM_WORDS-1];
     // Zeroed like .bss expects, and so that no simulator reads X.
@@ -71,26 +94,14 @@ module cpu_sim_top #(
         for (k = 0; k < RAM_WORDS; k = k + 1)
             ram[k] = 32'd0;
     end
-    wire [31:0] i_off = ibus_addr - RAM_BASE;
-    wire [31:0] d_off = dbus_addr - RAM_BASE;
-    /* verilator lint_off UNUSEDSIGNAL */
-    wire [31:0] l_off = ld_addr - RAM_BASE;     // only the word index is used
-    /* verilator lint_on UNUSEDSIGNAL */
-    wire i_ram = ibus_addr >= RAM_BASE && i_off < RAM_BYTES;
-    wire d_ram = dbus_addr >= RAM_BASE && d_off < RAM_BYTES;
-    wire i_rom = ibus_addr < 32'h0000_1000;
-    wire d_timer = dbus_addr[31:4] == 28'h4000_000;
-    wire d_test  = dbus_addr[31:2] == 30'h1000_0400;
-    wire [AW-1:0] i_word = i_off[AW+1:2];
-    wire [AW-1:0] d_word = d_off[AW+1:2];
-    wire [AW-1:0] l_word = l_off[AW+1:2];
 
     // Boot stub: lui x5, %hi(entry); jalr x0, %lo(entry)(x5)
     /* verilator lint_off UNUSEDSIGNAL */
     wire [31:0] entry_hi = boot_entry + 32'h800;  // %hi rounds for jalr's signed %lo
     /* verilator lint_on UNUSEDSIGNAL */
-    wire [31:0] rom_word = ibus_addr[11:2] == 10'd0 ? {entry_hi[31:12], 5'd5, 7'b0110111} :
-                           ibus_addr[11:2] == 10'd1 ? {boot_entry[11:0], 5'd5, 3'b000, 5'd0, 7'b1100111} :
+    wire [ROM_AW-3:0] rom_idx = ibus_addr[ROM_AW-1:2];
+    wire [31:0] rom_word = rom_idx == 0 ? {entry_hi[31:12], 5'd5, 7'b0110111} :
+                           rom_idx == 1 ? {boot_entry[11:0], 5'd5, 3'b000, 5'd0, 7'b1100111} :
                            32'd0;
 
     always @(posedge clk) begin
@@ -102,7 +113,32 @@ module cpu_sim_top #(
         end
     end
 
+    // ---- the SoC's timer and interrupt controller on their pages ----------------
     wire d_go = !rst && dbus_req && !dbus_ack && !dstall;
+    /* verilator lint_off UNUSEDSIGNAL */  // the other pages' requests go nowhere
+    wire [RQ*N_PAGES-1:0] page_req;
+    /* verilator lint_on UNUSEDSIGNAL */
+    /* verilator lint_off UNDRIVEN */      // pages without a block here: tl_soc_pages answers for them
+    wire [RS*N_PAGES-1:0] page_rsp;
+    /* verilator lint_on UNDRIVEN */
+    wire [RS-1:0]         per_rsp;
+
+    tl_soc_pages #(.N_PAGES(N_PAGES), .PAGE_USED(PAGE_USED)) u_pages (
+        .stb(d_go && d_per), .we(dbus_we), .be(dbus_be), .addr(dbus_addr[PAGE_BITS+11:0]),
+        .wdata(dbus_wdata), .page_req(page_req), .page_rsp(page_rsp), .rsp(per_rsp)
+    );
+
+    tl_soc_timer u_timer (
+        .clk(clk), .rst(rst), .mtime(mtime), .irq_timer(irq_timer), .irq_software(irq_software),
+        .bus_req(page_req[`TL_TIMER_PAGE*RQ +: RQ]), .bus_rsp(page_rsp[`TL_TIMER_PAGE*RS +: RS])
+    );
+
+    tl_soc_intc u_intc (
+        .clk(clk), .rst(rst), .src({`TL_INTC_ENABLE_MASK_WIDTH{1'b0}}), .irq_external(irq_external),
+        .bus_req(page_req[`TL_INTC_PAGE*RQ +: RQ]), .bus_rsp(page_rsp[`TL_INTC_PAGE*RS +: RS])
+    );
+
+    // ---- data bus: RAM or a peripheral page, answered in the cycle after d_go ----
     always @(posedge clk) begin
         dbus_ack <= 1'b0;
         if (rst) begin
@@ -111,46 +147,14 @@ module cpu_sim_top #(
             ld_rdata <= ram[l_word];
         end else if (d_go) begin
             dbus_ack   <= 1'b1;
-            dbus_err   <= !(d_ram || d_timer || d_test);
-            dbus_rdata <= ram[d_word];
+            dbus_err   <= d_per ? per_rsp[`TL_BUS_RSP_ERR_LSB] : !d_ram;
+            dbus_rdata <= d_per ? per_rsp[`TL_BUS_RSP_RDATA_MSB:`TL_BUS_RSP_RDATA_LSB] : ram[d_word];
             if (d_ram && dbus_we) begin
                 if (dbus_be[0]) ram[d_word][7:0]   <= dbus_wdata[7:0];
                 if (dbus_be[1]) ram[d_word][15:8]  <= dbus_wdata[15:8];
                 if (dbus_be[2]) ram[d_word][23:16] <= dbus_wdata[23:16];
                 if (dbus_be[3]) ram[d_word][31:24] <= dbus_wdata[31:24];
             end
-            if (d_timer) begin
-                case (dbus_addr[3:2])
-                    2'd0: dbus_rdata <= mtime[31:0];
-                    2'd1: dbus_rdata <= mtime[63:32];
-                    2'd2: dbus_rdata <= mtimecmp[31:0];
-                    default: dbus_rdata <= mtimecmp[63:32];
-                endcase
-            end
-            if (d_test)
-                dbus_rdata <= {30'd0, test_irq};
-        end
-    end
-
-    // ---- machine timer and test interrupt device --------------------------------
-    assign irq_timer = mtime >= mtimecmp;
-    always @(posedge clk) begin
-        if (rst) begin
-            mtime    <= 64'd0;
-            mtimecmp <= {64{1'b1}};
-            test_irq <= 2'b00;
-        end else begin
-            mtime <= mtime + 64'd1;
-            if (d_go && dbus_we && d_timer) begin
-                case (dbus_addr[3:2])
-                    2'd0: mtime[31:0]     <= dbus_wdata;
-                    2'd1: mtime[63:32]    <= dbus_wdata;
-                    2'd2: mtimecmp[31:0]  <= dbus_wdata;
-                    default: mtimecmp[63:32] <= dbus_wdata;
-                endcase
-            end
-            if (d_go && dbus_we && d_test)
-                test_irq <= dbus_wdata[1:0];
         end
     end
 

@@ -16,9 +16,10 @@ from cocotb.clock import Clock
 from cocotb.triggers import First, ReadOnly, RisingEdge, Timer
 
 from torqueloop.models.rv32 import Elf
+from torqueloop.spec import regs
 
 CLK_NS = 20  # CLOCK_50
-RAM_BASE = 0x8000_0000
+RAM_BASE = regs.RAM_BASE  # the SoC's memory map, as cpu_sim_top decodes it
 
 
 @dataclass

@@ -37,17 +37,16 @@ from pathlib import Path
 
 import cocotb
 import pytest
-from cocotb.clock import Clock
 from cocotb.simtime import get_sim_time
 from cocotb.triggers import ClockCycles, FallingEdge, First, Timer
 
 from torqueloop.spec import regs
 from torqueloop.flow.board_files import load_pin_table
-from torqueloop.flow.manifest import REPO_ROOT
 from torqueloop.flow.simrun import BUILD_ROOT, run, sims_for
 
+import tbutil
+
 HERE = Path(__file__).resolve().parent
-SOC_PROG = REPO_ROOT / "tb" / "soc" / "prog"   # the SoC bench's crt0 and linker script (4 KiB RAM)
 RAM_BYTES_TB = 4096
 UART_BAUD = 1_000_000          # careless.c sets BAUD_DIV = 49 (tb/soc covers the 115200 default)
 FAULT_FILTER_CLKS = 250        # de0_cv_top's drive_interlock
@@ -103,6 +102,26 @@ class PlantOnPins:
             await First(d.rpwm.value_change, d.lpwm.value_change, d.r_en.value_change,
                         d.l_en.value_change, Timer(self.CHUNK_NS, unit="ns"))
             self.sync()
+
+
+async def _power_up(dut, sw: int, baud: int):
+    """The cable harness at rest (keys released, no fault, encoders still,
+    the RN-XV idle and ready), switches at ``sw``, a reset pulse; returns the
+    RN-XV side's UART models (source into the FPGA, sink from it)."""
+    tbutil.start_clock(dut)
+    dut.reset_n.value = 0
+    dut.key.value = 0xF
+    dut.sw.value = sw
+    dut.fault_n.value = 0b11
+    dut.enc_a.value = 0
+    dut.enc_b.value = 0
+    dut.enc_z.value = 0
+    dut.rnxv_tx.value = 1
+    dut.rnxv_rts.value = 0
+    source, sink = tbutil.uart_models(dut.rnxv_tx, dut.rnxv_rx, baud)
+    await ClockCycles(dut.clk, 5)
+    dut.reset_n.value = 1
+    return source, sink
 
 
 def _bridge(dut) -> dict[str, int]:
@@ -168,22 +187,8 @@ def _check_driving(high: dict[str, int], cycles: int, what: str) -> None:
 
 @cocotb.test()
 async def board_interlock_and_uart_on_the_header_pins(dut):
-    from cocotbext.uart import UartSink, UartSource
-
-    cocotb.start_soon(Clock(dut.clk, 20, unit="ns").start())
-    dut.reset_n.value = 0
-    dut.key.value = 0xF
-    dut.sw.value = 0x201          # SW[0] already up at power-up (SW[9] just to be different)
-    dut.fault_n.value = 0b11
-    dut.enc_a.value = 0
-    dut.enc_b.value = 0
-    dut.enc_z.value = 0
-    dut.rnxv_tx.value = 1
-    dut.rnxv_rts.value = 0
-    source = UartSource(dut.rnxv_tx, baud=UART_BAUD, bits=8)
-    sink = UartSink(dut.rnxv_rx, baud=UART_BAUD, bits=8)
-    await ClockCycles(dut.clk, 5)
-    dut.reset_n.value = 1
+    # SW[0] already up at power-up (SW[9] just to be different)
+    source, sink = await _power_up(dut, sw=0x201, baud=UART_BAUD)
     plant = PlantOnPins(dut)
 
     # 1. Power-up with the arm switch up: the firmware asks for torque, nothing moves.
@@ -289,25 +294,10 @@ async def servo_firmware_answers_the_protocol_on_the_header(dut):
     """The real servo firmware (firmware/servo, 1 Mbaud test build) on the
     board image: IDENTIFY answers through GPIO_0 pins 13/14, and ENABLE is
     refused while KEY[0] is pressed; no bridge input moves meanwhile."""
-    from cocotbext.uart import UartSink, UartSource
-
     from torqueloop.spec import protocol
 
-    cocotb.start_soon(Clock(dut.clk, 20, unit="ns").start())
-    dut.reset_n.value = 0
-    dut.key.value = 0xF
-    dut.sw.value = 0x001
-    dut.fault_n.value = 0b11
-    dut.enc_a.value = 0
-    dut.enc_b.value = 0
-    dut.enc_z.value = 0
-    dut.rnxv_tx.value = 1
-    dut.rnxv_rts.value = 0
-    source = UartSource(dut.rnxv_tx, baud=SERVO_BAUD, bits=8)
-    sink = UartSink(dut.rnxv_rx, baud=SERVO_BAUD, bits=8)
+    source, sink = await _power_up(dut, sw=0x001, baud=SERVO_BAUD)
     decoder = protocol.FrameDecoder()
-    await ClockCycles(dut.clk, 5)
-    dut.reset_n.value = 1
     await ClockCycles(dut.clk, SERVO_STARTUP_CLOCKS)
 
     reply = await _exchange(dut, source, sink, decoder, protocol.request("IDENTIFY", 1), 60_000)
@@ -353,25 +343,11 @@ def build_rom_image(name: str) -> Path:
     """Compile prog/<name>.c with the SoC bench's crt0 and linker script into
     a boot-ROM $readmemh image (one 32-bit word per line)."""
     out = BUILD_ROOT / "de0_cv_top" / "prog"
-    out.mkdir(parents=True, exist_ok=True)
-    pid = os.getpid()
-    elf, binf, hexf = out / f"{name}.{pid}.elf", out / f"{name}.{pid}.bin", out / f"{name}.hex"
-    subprocess.run(
-        ["riscv64-unknown-elf-gcc", "-march=rv32im_zicsr", "-mabi=ilp32", "-O2", "-nostdlib",
-         "-ffreestanding", "-static", "-std=c11", "-Wall", "-Wextra", "-Werror",
-         "-I", str(REPO_ROOT / "firmware" / "include"), "-T", str(SOC_PROG / "link.ld"),
-         "-Wl,--no-warn-rwx-segments", "-o", str(elf), str(SOC_PROG / "crt0.S"), str(HERE / "prog" / f"{name}.c")],
-        check=True, capture_output=True, text=True)
-    subprocess.run(["riscv64-unknown-elf-objcopy", "-O", "binary", str(elf), str(binf)], check=True)
-    data = binf.read_bytes()
-    elf.unlink()
-    binf.unlink()
-    assert len(data) <= regs.BOOT_ROM_SIZE, f"{name}: {len(data)} bytes do not fit the boot ROM"
-    data += bytes(regs.BOOT_ROM_SIZE - len(data))
-    words = [int.from_bytes(data[i:i + 4], "little") for i in range(0, len(data), 4)]
-    tmp = out / f"{name}.{os.getpid()}.hex"
-    tmp.write_text("".join(f"{w:08x}\n" for w in words))
-    return _publish(tmp, hexf)
+    image = tbutil.soc_prog_sections(HERE / "prog" / f"{name}.c", out, {"rom": []})["rom"]
+    assert len(image) <= regs.BOOT_ROM_SIZE, f"{name}: {len(image)} bytes do not fit the boot ROM"
+    hexf = out / f"{name}.hex"
+    tbutil.write_if_changed(hexf, tbutil.readmemh(image, regs.BOOT_ROM_SIZE))
+    return hexf
 
 
 # Icarus only: a Verilator build of the whole SoC costs about a minute of CPU,

@@ -17,20 +17,20 @@ which Icarus runs ~30x slower (minutes per test).
 from __future__ import annotations
 
 import json
-import logging
 import os
 import random
 from pathlib import Path
 
 import cocotb
 import pytest
-from cocotb.clock import Clock
 from cocotb.queue import Queue
 from cocotb.triggers import ClockCycles, Edge, First, Timer, with_timeout
 from cocotb.utils import get_sim_time
 
 from torqueloop.spec import protocol as P
 from torqueloop.models import servo as ref
+
+import tbutil
 
 CLK_NS = 20
 BAUD = 1_000_000
@@ -47,7 +47,6 @@ def now_ns() -> float:
 
 class TB:
     def __init__(self, dut) -> None:
-        from cocotbext.uart import UartSink, UartSource
         self.dut = dut
         self.seq = 0
         self.replies: Queue = Queue()
@@ -55,20 +54,9 @@ class TB:
         self.errors: list[P.Frame] = []
         self.enc = [0, 0]
         self.reply_timeout_us = 2000
-        cocotb.start_soon(Clock(dut.clk, CLK_NS, unit="ns").start())
-        dut.sw.value = 0
-        dut.key_n.value = 0xF
-        dut.bridge_fault.value = 0
-        dut.enc_a.value = 0
-        dut.enc_b.value = 0
-        dut.enc_z.value = 0
-        dut.uart_rx.value = 1
-        dut.uart_cts_n.value = 0
-        dut.estop.value = 0
-        self.src = UartSource(dut.uart_rx, baud=BAUD, bits=8)
-        self.sink = UartSink(dut.uart_tx, baud=BAUD, bits=8)
-        for log in (self.src.log, self.sink.log):
-            log.setLevel(logging.WARNING)    # a line per byte costs more than the simulation
+        tbutil.start_clock(dut, CLK_NS)
+        tbutil.idle_soc_pins(dut)
+        self.src, self.sink = tbutil.uart_models(dut.uart_rx, dut.uart_tx, BAUD, quiet=True)
         self.dec = P.FrameDecoder()
 
     async def start(self) -> None:

@@ -18,105 +18,36 @@ from pathlib import Path
 
 import cocotb
 import pytest
-from cocotb.clock import Clock
-from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
+from cocotb.triggers import ClockCycles, FallingEdge, Timer
 
 from torqueloop.spec import regs
 from torqueloop.models.soc_bus import BusModel
 from torqueloop.flow.simrun import BUILD_ROOT, run, sims_for
 
+import tbutil
+
 RAM_BYTES_TB = 4096  # small RAM keeps the simulators fast; decode is the same
 MAX_WAIT = 8         # cycles a bus access may take before the test calls it a hang
-
-
-class BusMaster:
-    """One CPU bus port (ibus or dbus).  Drives on the falling edge, samples
-    ack on the falling edge; `hold` keeps req/addr high through the ack
-    cycle, as a registered CPU master does."""
-
-    def __init__(self, tb: "TB", prefix: str) -> None:
-        self.tb = tb
-        self.dut = tb.dut
-        self.p = prefix
-        self.is_dbus = prefix == "dbus"
-        self.sig("req").value = 0
-        self.sig("addr").value = 0
-        if self.is_dbus:
-            self.sig("we").value = 0
-            self.sig("be").value = 0
-            self.sig("wdata").value = 0
-        self.accesses = 0
-        self.busy_cycles = 0
-
-    def sig(self, name: str):
-        return getattr(self.dut, f"{self.p}_{name}")
-
-    async def access(self, addr: int, we: bool = False, wdata: int = 0, be: int = 0xF,
-                     hold: bool | None = None) -> tuple[int, bool, int]:
-        """One bus transfer; returns (rdata, err, launch cycle)."""
-        assert we is False or self.is_dbus
-        self.sig("req").value = 1
-        self.sig("addr").value = addr
-        if self.is_dbus:
-            self.sig("we").value = int(we)
-            self.sig("be").value = be
-            self.sig("wdata").value = wdata
-        for _ in range(MAX_WAIT):
-            await FallingEdge(self.dut.clk)
-            self.busy_cycles += 1
-            if int(self.sig("ack").value):
-                break
-        else:
-            raise AssertionError(f"{self.p} access to {addr:#010x} never acknowledged (hang)")
-        rdata = int(self.sig("rdata").value)
-        err = bool(int(self.sig("err").value))
-        launch = self.tb.cycle
-        self.accesses += 1
-        if hold if hold is not None else random.random() < 0.5:
-            await FallingEdge(self.dut.clk)   # keep the old request through the ack cycle's edge
-            self.busy_cycles += 1
-        self.sig("req").value = 0
-        return rdata, err, launch
-
-    async def read(self, addr: int) -> int:
-        rdata, err, _ = await self.access(addr)
-        assert not err, f"{self.p} read {addr:#010x}: unexpected bus error"
-        return rdata
-
-    async def write(self, addr: int, wdata: int, be: int = 0xF) -> None:
-        _, err, _ = await self.access(addr, we=True, wdata=wdata, be=be)
-        assert not err, f"{self.p} write {addr:#010x}: unexpected bus error"
 
 
 class TB:
     def __init__(self, dut) -> None:
         self.dut = dut
-        self.cycle = 0
-        dut.sw.value = 0
-        dut.key_n.value = 0xF
-        dut.bridge_fault.value = 0
-        dut.enc_a.value = 0
-        dut.enc_b.value = 0
-        dut.enc_z.value = 0
-        dut.uart_rx.value = 1
-        dut.uart_cts_n.value = 0
-        dut.estop.value = 0
-        self.ibus = BusMaster(self, "ibus")
-        self.dbus = BusMaster(self, "dbus")
-        cocotb.start_soon(Clock(dut.clk, 20, unit="ns").start())
-        cocotb.start_soon(self._count())
+        tbutil.idle_soc_pins(dut)
+        self.ibus = tbutil.BusMaster(dut, "ibus", MAX_WAIT)
+        self.dbus = tbutil.BusMaster(dut, "dbus", MAX_WAIT)
+        tbutil.start_clock(dut)
         self.model = BusModel(ram_bytes=RAM_BYTES_TB)
         rom_hex = os.environ.get("SOC_ROM_HEX")
         ram_hex = os.environ.get("SOC_RAM_HEX")
         if rom_hex:
-            self.model.rom = read_hex(Path(rom_hex))
+            self.model.rom = tbutil.read_hex(Path(rom_hex))
         if ram_hex:
-            self.model.load_ram_words(read_hex(Path(ram_hex)))
+            self.model.load_ram_words(tbutil.read_hex(Path(ram_hex)))
 
-    async def _count(self) -> None:
-        while True:
-            await RisingEdge(self.dut.clk)
-            self.cycle += 1
+    @property
+    def cycle(self) -> int:
+        return tbutil.cycle_now()
 
     async def reset(self) -> None:
         self.dut.rst.value = 1
@@ -129,22 +60,6 @@ class TB:
         """Firmware's first act: acknowledge the reset-time ESTOP latch."""
         await self.dbus.write(regs.SYS_SAFETY, regs.SYS_SAFETY_ESTOP_MSK)
         assert await self.dbus.read(regs.SYS_SAFETY) & regs.SYS_SAFETY_SAFE_MSK == 0
-
-
-def read_hex(path: Path) -> list[int]:
-    return [int(line, 16) for line in path.read_text().split() if line.strip()]
-
-
-def write_hex(path: Path, words: list[int]) -> None:
-    """Atomic and skipped when identical: a concurrent run of this bench may
-    be reading the image right now."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    text = "".join(f"{w:08x}\n" for w in words)
-    if path.exists() and path.read_text() == text:
-        return
-    tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    tmp.replace(path)
 
 
 # --- registers ------------------------------------------------------------------------------
@@ -511,16 +426,13 @@ async def uart_moves_bytes_both_ways_and_flags_errors(dut):
     """Bytes from an independent UART model (cocotbext-uart) come out of
     RX_DATA in order and raise INTC UART_RX; bytes written to TX_DATA reach
     the model; a frame without stop bit is flagged and counted."""
-    from cocotbext.uart import UartSink, UartSource
-
     tb = TB(dut)
     await tb.reset()
     div = 15                                        # 16 clocks per bit
     baud = 50_000_000 // (div + 1)
     await tb.dbus.write(regs.UART_BAUD_DIV, div)
     await tb.dbus.write(regs.INTC_PENDING, 0x3FF)
-    source = UartSource(dut.uart_rx, baud=baud, bits=8)
-    sink = UartSink(dut.uart_tx, baud=baud, bits=8)
+    source, sink = tbutil.uart_models(dut.uart_rx, dut.uart_tx, baud)
 
     rx = bytes(random.getrandbits(8) for _ in range(random.randrange(3, 12)))
     await source.write(rx)
@@ -568,8 +480,6 @@ async def uart_flow_control_holds_the_peer_and_waits_for_cts(dut):
     """RTS/CTS (CTRL.FLOW_EN, the RN-XV's `set uart flow 1`): RTS_N rises when
     the RX FIFO fills to its threshold (16 - 4 bytes) and falls when firmware
     drains it; with CTS_N high the transmitter holds a byte until CTS_N falls."""
-    from cocotbext.uart import UartSink, UartSource
-
     tb = TB(dut)
     await tb.reset()
     div = 15
@@ -577,8 +487,7 @@ async def uart_flow_control_holds_the_peer_and_waits_for_cts(dut):
     bit_cycles = div + 1
     await tb.dbus.write(regs.UART_BAUD_DIV, div)
     await tb.dbus.write(regs.UART_CTRL, regs.UART_CTRL_FLOW_EN_MSK)
-    source = UartSource(dut.uart_rx, baud=baud, bits=8)
-    sink = UartSink(dut.uart_tx, baud=baud, bits=8)
+    source, sink = tbutil.uart_models(dut.uart_rx, dut.uart_tx, baud)
     assert int(dut.uart_rts_n.value) == 0
     threshold = 16 - 4
     await source.write(bytes(range(threshold - 1)))
@@ -613,8 +522,8 @@ def _images() -> tuple[Path, Path]:
     rng = random.Random(20260101)
     d = BUILD_ROOT / "soc_fabric" / "images"
     rom, ram = d / "rom.hex", d / "ram.hex"
-    write_hex(rom, [rng.getrandbits(32) for _ in range(regs.BOOT_ROM_SIZE // 4)])
-    write_hex(ram, [rng.getrandbits(32) for _ in range(RAM_BYTES_TB // 4)])
+    tbutil.write_if_changed(rom, tbutil.readmemh(rng.randbytes(regs.BOOT_ROM_SIZE), regs.BOOT_ROM_SIZE))
+    tbutil.write_if_changed(ram, tbutil.readmemh(rng.randbytes(RAM_BYTES_TB), RAM_BYTES_TB))
     return rom, ram
 
 

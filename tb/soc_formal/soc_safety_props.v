@@ -15,24 +15,19 @@
 module soc_safety_props (
     input wire        clk,
     input wire        rst,
-    input wire        req,
-    input wire        we,
-    input wire [3:0]  be,
-    input wire [11:0] addr,
-    input wire [31:0] wdata,
+    input wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,   // any access, any time
     input wire        estop,
     input wire [1:0]  bridge_fault,
     input wire [1:0]  rpwm_in,
     input wire [1:0]  lpwm_in,
     input wire [1:0]  pwm_in
 );
-    wire        ack, err, safe, safety_event;
-    wire [31:0] rdata;
+    wire        safe, safety_event;
+    wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp;
     wire [1:0]  fault_s, rpwm, lpwm, pwm;
 
     tl_soc_sys dut (
-        .clk(clk), .rst(rst), .req(req), .we(we), .be(be), .addr(addr), .wdata(wdata),
-        .ack(ack), .err(err), .rdata(rdata), .estop(estop), .bridge_fault(bridge_fault),
+        .clk(clk), .rst(rst), .bus_req(bus_req), .bus_rsp(bus_rsp), .estop(estop), .bridge_fault(bridge_fault),
         .bridge_fault_s(fault_s), .safe(safe), .safety_event(safety_event)
     );
 
@@ -49,7 +44,8 @@ module soc_safety_props (
 
     always @(posedge clk) begin
         estop_edges <= !estop ? 2'd0 : (estop_edges == 2'd3 ? 2'd3 : estop_edges + 2'd1);
-        ack_write_q <= !rst && req && we && addr[11:2] == `TL_SYS_SAFETY_IDX;
+        ack_write_q <= !rst && bus_req[`TL_BUS_REQ_STB_LSB] && bus_req[`TL_BUS_REQ_WE_LSB]
+                       && bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB] == `TL_SYS_SAFETY_IDX;
         safe_q      <= safe;
         past_valid  <= 1'b1;
     end

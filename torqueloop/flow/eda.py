@@ -18,6 +18,7 @@ from typing import Iterable, Mapping
 
 from torqueloop.flow import tools
 from torqueloop.flow.manifest import REPO_ROOT, Core
+from torqueloop.spec.regmap import BUS_REQ, BUS_RSP, BusField
 
 BUILD = REPO_ROOT / "build"
 
@@ -94,8 +95,60 @@ def ghdl_to_verilog(c: Core, params: Mapping[str, int], out: Path) -> tuple[bool
     proc = subprocess.run(cmd, cwd=REPO_ROOT, capture_output=True, text=True)
     if proc.returncode != 0:
         return False, proc.stderr
-    out.write_text(_fix_ghdl_wide_constants(proc.stdout))
+    out.write_text(pack_bus_records(_fix_ghdl_wide_constants(proc.stdout), c.top))
     return True, proc.stderr
+
+
+#: record ports of the VHDL twins -> their fields; the Verilog twin carries
+#: each as one vector of the same name (regmap.vh's TL_BUS_* layout)
+BUS_BUNDLES: dict[str, tuple[BusField, ...]] = {"bus_req": BUS_REQ, "bus_rsp": BUS_RSP}
+
+_PORT = re.compile(r"^\s*\(?\s*(input|output)\s+(?:\[(\d+):0\]\s+)?(\w+)\s*(,|\);)\s*$")
+
+
+def pack_bus_records(text: str, top: str) -> str:
+    """GHDL flattens a record port into one port per field (``bus_req_stb``,
+    ``bus_req_idx`` ...); give the top module the Verilog twin's port instead,
+    one vector per record in the field layout of the register map's bus
+    (torqueloop.spec.regmap.BUS_REQ / BUS_RSP), so equiv_make pairs the ports
+    by name.  The fields stay as wires of their old names, so the netlist
+    body is untouched.  A module without record ports is returned as is."""
+    lines = text.split("\n")
+    try:
+        start = lines.index(f"module {top}")
+    except ValueError:
+        return text
+    ports: list[tuple[str, int, str]] = []
+    end = start + 1
+    while True:
+        m = _PORT.match(lines[end])
+        if m is None:
+            return text          # not the header layout this was written for: leave it
+        ports.append((m.group(1), int(m.group(2)) + 1 if m.group(2) else 1, m.group(3)))
+        if m.group(4) == ");":
+            break
+        end += 1
+    names = {n for _, _, n in ports}
+    bundles = {b: fs for b, fs in BUS_BUNDLES.items() if all(f"{b}_{f.name}" in names for f in fs)}
+    if not bundles:
+        return text
+    fields = {f"{b}_{f.name}": (b, f) for b, fs in bundles.items() for f in fs}
+    header: list[str] = []
+    body: list[str] = []
+    for direction, width, name in ports:
+        if name in fields:
+            b, f = fields[name]
+            rng = f"[{f.width - 1}:0] " if f.width > 1 else ""
+            sl = f"[{f.msb}:{f.lsb}]" if f.width > 1 else f"[{f.lsb}]"
+            body.append(f"  wire {rng}{name};")
+            body.append(f"  assign {name} = {b}{sl};" if direction == "input" else f"  assign {b}{sl} = {name};")
+            continue
+        header.append(f"{direction} {f'[{width - 1}:0] ' if width > 1 else ''}{name}")
+    for b, fs in bundles.items():
+        direction = next(d for d, _, n in ports if n == f"{b}_{fs[0].name}")
+        header.append(f"{direction} [{fs[-1].msb}:0] {b}")
+    new = [f"module {top}", "  (" + ",\n   ".join(header) + ");", *body]
+    return "\n".join(lines[:start] + new + lines[end + 1:])
 
 
 def _fix_ghdl_wide_constants(text: str) -> str:

@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: MIT
 """firmware/common/link.ld from the memory map (torqueloop/spec/regmap.toml),
-written and checked by ``python -m torqueloop.flow.generate [--check]``.
+and tb/cpu/progs/link.ld, the CPU test programs' script; written and checked
+by ``python -m torqueloop.flow.generate [--check]``.
 
 Firmware images run from RAM (loaded by RAM_INIT in simulation or on the
 FPGA, later by the bootloader): code, constants, data, bss and stack all in
@@ -66,4 +67,30 @@ SECTIONS
 
 
 
-OUTPUTS = {"firmware/common/link.ld": linker_script}
+def cpu_test_linker_script(rm: RegMap | None = None) -> str:
+    """The CPU test programs of tb/cpu (run on cpu_sim_top and the ISS):
+    everything in RAM, entry _start, and the tohost / begin_signature /
+    end_signature symbols of the riscv-tests conventions run_elf.py reads."""
+    rm = rm or load()
+    ram = rm.region("RAM")
+    return f"""/* Generated from torqueloop/spec/regmap.toml by torqueloop.flow.generate - do not edit. */
+/* Test programs of tb/cpu: everything in the RAM of the SoC memory map, entry _start.
+   tohost and the signature symbols follow the riscv-tests / riscv-arch-test
+   conventions run_elf.py reads. */
+OUTPUT_ARCH(riscv)
+ENTRY(_start)
+MEMORY {{ RAM (rwx) : ORIGIN = 0x{ram.base:08X}, LENGTH = 0x{ram.size:X} }}
+SECTIONS
+{{
+  .text : {{ *(.text.init) *(.text .text.*) }} > RAM
+  .rodata : {{ *(.rodata .rodata.* .srodata .srodata.*) }} > RAM
+  .data : {{ *(.data .data.* .sdata .sdata.*) }} > RAM
+  .bss : {{ *(.bss .bss.* .sbss .sbss.* COMMON) }} > RAM
+  .signature : ALIGN(16) {{ begin_signature = .; *(.signature) end_signature = .; }} > RAM
+  .tohost : ALIGN(64) {{ *(.tohost) }} > RAM
+  __stack_top = ORIGIN(RAM) + LENGTH(RAM);
+}}
+"""
+
+
+OUTPUTS = {"firmware/common/link.ld": linker_script, "tb/cpu/progs/link.ld": cpu_test_linker_script}

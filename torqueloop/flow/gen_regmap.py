@@ -11,7 +11,7 @@ Python needs no generated module: :mod:`torqueloop.spec.regs` reads the TOML.
 
 from __future__ import annotations
 
-from torqueloop.spec.regmap import ACCESS_TYPES, PAGE_BYTES, Field, RegMap, load
+from torqueloop.spec.regmap import ACCESS_TYPES, BUS_REQ, BUS_RSP, PAGE_BYTES, BusField, Field, RegMap, load
 
 #: generated file (relative to the repo root) -> generator function name
 OUTPUTS = {
@@ -29,7 +29,8 @@ def verilog_header(rm: RegMap) -> str:
     """`defines: region bases/sizes, page indices, per-register word index
     within the page (_IDX, for case on addr[11:2]), reset value and access
     masks, per-field LSB/MSB/WIDTH/RESET.  Offsets are per layout (kind), so
-    both AXIS instances share one set of register macros."""
+    both AXIS instances share one set of register macros.  The peripheral bus
+    bundles are vectors with a _LSB/_MSB pair per field."""
     L = [f"// {_BANNER}", "// Listed first in every SoC core's source list (macros are global).",
          "`ifndef TL_REGMAP_VH", "`define TL_REGMAP_VH", "",
          f"`define TL_REGMAP_VERSION 32'd{rm.version}",
@@ -42,6 +43,12 @@ def verilog_header(rm: RegMap) -> str:
     for b in rm.blocks:
         L.append(f"`define TL_{b.name}_BASE 32'h{b.base:08X}")
         L.append(f"`define TL_{b.name}_PAGE {(b.base - periph.base) // PAGE_BYTES}")
+    L += ["", "// Peripheral bus bundles, tl_soc_fabric <-> every block (docs/soc.md, Bus)"]
+    for bundle, fields in (("REQ", BUS_REQ), ("RSP", BUS_RSP)):
+        L.append(f"`define TL_BUS_{bundle}_WIDTH {_bundle_width(fields)}")
+        for f in fields:
+            L.append(f"`define TL_BUS_{bundle}_{f.name.upper()}_LSB {f.lsb}")
+            L.append(f"`define TL_BUS_{bundle}_{f.name.upper()}_MSB {f.msb}")
     for kind, b in rm.kinds.items():
         L.append("")
         L.append(f"// {kind}")
@@ -64,11 +71,20 @@ def verilog_header(rm: RegMap) -> str:
 def vhdl_package(rm: RegMap) -> str:
     """VHDL-2008 package tl_regmap_pkg with the constants of regmap.vh:
     word index (_IDX), reset and access masks (std_logic_vector(31 downto 0)),
-    field LSB/MSB/WIDTH (natural)."""
+    field LSB/MSB/WIDTH (natural); and the peripheral bus bundles as the
+    records tl_bus_req_t / tl_bus_rsp_t (GHDL names their flattened ports
+    bus_req_<field>, which the equivalence proof packs into regmap.vh's vector)."""
     L = [f"-- {_BANNER}", "library ieee;", "use ieee.std_logic_1164.all;", "",
          "package tl_regmap_pkg is",
          f"    constant TL_REGMAP_VERSION : natural := {rm.version};",
-         f"    constant TL_CLK_HZ : natural := {rm.clk_hz};"]
+         f"    constant TL_CLK_HZ : natural := {rm.clk_hz};",
+         "    -- Peripheral bus bundles, tl_soc_fabric <-> every block (docs/soc.md, Bus)"]
+    for bundle, fields in (("req", BUS_REQ), ("rsp", BUS_RSP)):
+        L.append(f"    type tl_bus_{bundle}_t is record")
+        for f in fields:
+            typ = "std_logic" if f.width == 1 else f"std_logic_vector({f.width - 1} downto 0)"
+            L.append(f"        {f.name} : {typ};  -- {f.desc}")
+        L.append("    end record;")
     for kind, b in rm.kinds.items():
         L.append(f"    -- {kind}")
         for r in b.registers:
@@ -87,13 +103,20 @@ def vhdl_package(rm: RegMap) -> str:
     return "\n".join(L)
 
 
+def _bundle_width(fields: tuple[BusField, ...]) -> int:
+    return fields[-1].msb + 1
+
+
 def c_header(rm: RegMap) -> str:
-    """C11 header: TL_<BLOCK>_<REG> is the register as a volatile lvalue,
-    _ADDR its address; per layout TL_<KIND>_<REG>_OFS its offset in the page
+    """C11 header (numbers also for assembly: GNU as reads the u suffix):
+    TL_<BLOCK>_<REG> is the register as a volatile lvalue, _ADDR its address; per layout TL_<KIND>_<REG>_OFS its offset in the page
     and _<FIELD>_POS/_MSK the field (CMSIS naming)."""
     L = [f"/* {_BANNER} */", "#ifndef TORQUELOOP_REGS_H", "#define TORQUELOOP_REGS_H", "",
+         "/* Assembly sources (.S) may include it too: the numbers only. */",
+         "#ifndef __ASSEMBLER__",
          "#include <stdint.h>", "",
-         "#define TL_REG32(addr) (*(volatile uint32_t *)(uintptr_t)(addr))", "",
+         "#define TL_REG32(addr) (*(volatile uint32_t *)(uintptr_t)(addr))",
+         "#endif", "",
          f"#define TL_REGMAP_VERSION {rm.version}u",
          f"#define TL_CLK_HZ {rm.clk_hz}u", ""]
     for r in rm.regions:

@@ -54,6 +54,10 @@ def products(table: board.PinTable | None = None,
     top_text = board.TOP_V.read_text()
     out.append(Product(board.TOP_V, board.replace_between(
         top_text, board.TOP_BEGIN, board.TOP_END, board.gen_top_gpio_block(table))))
+    harness = board.gen_harness_gpio_block(table)
+    for wrapper in board.HARNESS_V:
+        out.append(Product(wrapper, board.replace_between(
+            wrapper.read_text(), board.HARNESS_BEGIN, board.HARNESS_END, harness)))
     if board.HARDWARE_MD.exists():
         md = board.HARDWARE_MD.read_text()
         out.append(Product(board.HARDWARE_MD, board.replace_between(

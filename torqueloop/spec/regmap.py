@@ -22,6 +22,46 @@ REGMAP_TOML = Path(__file__).resolve().with_name("regmap.toml")
 ACCESS_TYPES = ("rw", "ro", "w1c", "wo")
 PAGE_BYTES = 0x1000  # one peripheral block per 4 KiB page
 
+
+@dataclass(frozen=True)
+class BusField:
+    """One field of a peripheral-bus bundle, at bits [lsb + width - 1 : lsb]."""
+
+    name: str
+    lsb: int
+    width: int
+    desc: str
+
+    @property
+    def msb(self) -> int:
+        return self.lsb + self.width - 1
+
+
+def _bundle(*fields: tuple[str, int, str]) -> tuple[BusField, ...]:
+    out, lsb = [], 0
+    for name, width, desc in fields:
+        out.append(BusField(name, lsb, width, desc))
+        lsb += width
+    return tuple(out)
+
+
+#: The SoC's peripheral bus: what tl_soc_fabric hands a block for one access
+#: to its page (request) and what the block answers in the same cycle
+#: (response; the fabric registers it and acknowledges).  LSB first.  Verilog
+#: carries each bundle as one vector (`TL_BUS_REQ_<FIELD>_LSB/_MSB in
+#: regmap.vh), VHDL as the records tl_bus_req_t / tl_bus_rsp_t (regmap_pkg.vhd).
+BUS_REQ = _bundle(
+    ("stb", 1, "one-cycle strobe: an access to this page starts now (once per access)"),
+    ("we", 1, "the access is a write"),
+    ("idx", (PAGE_BYTES // 4 - 1).bit_length(), "word index in the page (addr[11:2]; addr[1:0] is ignored)"),
+    ("wmask", 32, "the bits a write changes: each byte enable repeated over its byte"),
+    ("wbits", 32, "write data with the bits outside wmask cleared"),
+)
+BUS_RSP = _bundle(
+    ("rdata", 32, "the addressed register's read value (0 for write-only bits)"),
+    ("err", 1, "the index names no register of this block: the fabric answers with a bus error"),
+)
+
 @dataclass(frozen=True)
 class Field:
     name: str

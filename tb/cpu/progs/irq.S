@@ -1,9 +1,12 @@
 /* SPDX-License-Identifier: MIT */
-# Interrupts on cpu_sim_top (machine timer at 0x4000_0000, test interrupt
-# device at 0x4000_1000).  Self-checking: tohost = 1 on success, else
-# (n << 1) | 1 with n the failed check.  Every trap's mcause is appended to
-# `log` (in the signature), which the test bench compares with the
-# expected sequence; it also measures latency on the timer interrupts.
+# Interrupts on cpu_sim_top, through the SoC's own timer and interrupt
+# controller at their SoC addresses (firmware/include/torqueloop_regs.h):
+# TIMER.MTIMECMP raises irq_timer, TIMER.MSIP irq_software, INTC.SET with
+# the source enabled raises irq_external (W1C INTC.PENDING drops it).
+# Self-checking: tohost = 1 on success, else (n << 1) | 1 with n the failed
+# check.  Every trap's mcause is appended to `log` (in the signature), which
+# the test bench compares with the expected sequence; it also measures
+# latency on the timer interrupts.
 #   1. timer interrupt taken from a spin loop, 4 times
 #   2. masking: pending but MIE = 0 or MTIE = 0 -> not taken; enabling
 #      takes it right after the enabling instruction
@@ -13,9 +16,17 @@
 #   5. timer interrupts landing in divides: the results stay right
 #   6. (first, before any interrupt) the time CSR follows mtime, and mcycle
 #      counts clock cycles like mtime does
-    .equ    MTIME,    0x40000000
-    .equ    MTIMECMP, 0x40000008
-    .equ    TESTIRQ,  0x40001000
+#include "torqueloop_regs.h"
+    # s0 = TIMER page, s1 = INTC page
+    .equ    MTIME,    TL_TIMER_MTIME_LO_OFS
+    .equ    CMP_LO,   TL_TIMER_MTIMECMP_LO_OFS
+    .equ    CMP_HI,   TL_TIMER_MTIMECMP_HI_OFS
+    .equ    MSIP,     TL_TIMER_MSIP_OFS
+    .equ    PENDING,  TL_INTC_PENDING_OFS
+    .equ    ENABLE,   TL_INTC_ENABLE_OFS
+    .equ    SET,      TL_INTC_SET_OFS
+    # Any INTC source will do: the harness wires none, the program sets it.
+    .equ    EXT,      TL_INTC_PENDING_GPIO_KEY_MSK
 
     .macro  fail n
     li      a0, \n
@@ -31,25 +42,27 @@ _start:
     li      x22, 0              # external interrupts taken
     li      x24, 0              # 1: timer handler nests an external interrupt
     li      x25, 0              # software interrupts taken
-    li      s0, MTIME
-    li      s1, TESTIRQ
+    li      s0, TL_TIMER_BASE
+    li      s1, TL_INTC_BASE
+    li      t0, EXT
+    sw      t0, ENABLE(s1)      # the external source enabled; it stays idle until SET
     la      t0, handler
     csrw    mtvec, t0
 
     # --- 6. counters ---
     csrr    t0, time
-    lw      t1, 0(s0)
+    lw      t1, MTIME(s0)
     sub     t1, t1, t0          # mtime read a few cycles after time
     bltz    t1, 30f
     li      t2, 8
     bge     t1, t2, 30f
     csrr    a1, mcycle
-    lw      a2, 0(s0)
+    lw      a2, MTIME(s0)
     li      t1, 100
 31: addi    t1, t1, -1
     bnez    t1, 31b
     csrr    a3, mcycle
-    lw      a4, 0(s0)
+    lw      a4, MTIME(s0)
     sub     a1, a3, a1
     sub     a2, a4, a2
     sub     a1, a1, a2          # same cycle count over the loop
@@ -70,10 +83,10 @@ _start:
     # --- 1. timer from a spin loop, 4 times ---
     li      s2, 4
 1:  mv      s3, x20
-    lw      t0, 0(s0)
+    lw      t0, MTIME(s0)
     addi    t0, t0, 100
-    sw      t0, 8(s0)           # mtimecmp lo (hi is still all ones)
-    sw      zero, 12(s0)        # mtimecmp hi = 0: armed
+    sw      t0, CMP_LO(s0)      # mtimecmp lo (hi is still all ones)
+    sw      zero, CMP_HI(s0)    # mtimecmp hi = 0: armed
     li      t1, 10000
 2:  addi    t1, t1, -1
     beqz    t1, 3f
@@ -86,8 +99,8 @@ _start:
     # --- 2. masking ---
 4:  csrci   mstatus, 8          # MIE = 0
     mv      s3, x20
-    sw      zero, 8(s0)
-    sw      zero, 12(s0)        # mtimecmp = 0: pending now
+    sw      zero, CMP_LO(s0)
+    sw      zero, CMP_HI(s0)    # mtimecmp = 0: pending now
     csrr    t0, mip
     andi    t0, t0, 0x80
     bnez    t0, 5f
@@ -113,10 +126,10 @@ _start:
     # --- 3. nesting ---
 9:  li      x24, 1
     mv      s3, x22
-    lw      t0, 0(s0)
+    lw      t0, MTIME(s0)
     addi    t0, t0, 20
-    sw      t0, 8(s0)
-    sw      zero, 12(s0)
+    sw      t0, CMP_LO(s0)
+    sw      zero, CMP_HI(s0)
     li      t1, 10000
 10: addi    t1, t1, -1
     beqz    t1, 11f
@@ -130,10 +143,12 @@ _start:
 
     # --- 4. priority: all three pending, then enable ---
 13: csrci   mstatus, 8
-    li      t0, 3
-    sw      t0, 0(s1)           # external and software lines high
-    sw      zero, 8(s0)
-    sw      zero, 12(s0)        # timer pending
+    li      t0, EXT
+    sw      t0, SET(s1)         # external line high
+    li      t0, 1
+    sw      t0, MSIP(s0)        # software line high
+    sw      zero, CMP_LO(s0)
+    sw      zero, CMP_HI(s0)    # timer pending
     csrsi   mstatus, 8          # taken in priority order: MEI, MSI, MTI
     nop
     li      t0, 1
@@ -146,10 +161,10 @@ _start:
     li      s4, 0x9e3779b9      # operand generator state
     li      s5, 3               # timer offset, walks 3..
     mv      s6, x20
-16: lw      t0, 0(s0)
+16: lw      t0, MTIME(s0)
     add     t0, t0, s5
-    sw      t0, 8(s0)
-    sw      zero, 12(s0)
+    sw      t0, CMP_LO(s0)
+    sw      zero, CMP_HI(s0)
     li      t0, 1664525
     mul     s4, s4, t0
     li      t0, 1013904223
@@ -182,7 +197,7 @@ _start:
 19: addi    s2, s2, -1
     bnez    s2, 16b
     li      t0, -1
-    sw      t0, 12(s0)          # disarm
+    sw      t0, CMP_HI(s0)      # disarm
     sub     t0, x20, s6
     li      t1, 30
     bge     t0, t1, 20f         # most iterations took a timer interrupt
@@ -225,24 +240,23 @@ handler:
     j       report
 h_timer:
     li      x28, -1
-    sw      x28, 12(s0)         # mtimecmp hi = all ones: line low
+    sw      x28, CMP_HI(s0)     # mtimecmp hi = all ones: line low
     addi    x20, x20, 1
     beqz    x24, h_done
     csrsi   mstatus, 8          # allow nesting
-    li      x28, 1
-    sw      x28, 0(s1)          # raise external: preempts this handler now
+    li      x28, EXT
+    sw      x28, SET(s1)        # raise external: preempts this handler now
     nop
     mv      x23, x22
     csrci   mstatus, 8
     j       h_done
 h_ext:
-    lw      x28, 0(s1)
-    andi    x28, x28, 2
-    sw      x28, 0(s1)          # drop the external line, keep software
+    li      x28, EXT
+    sw      x28, PENDING(s1)    # drop the external line (W1C), keep software
     addi    x22, x22, 1
     j       h_done
 h_sw:
-    sw      zero, 0(s1)
+    sw      zero, MSIP(s0)
     addi    x25, x25, 1
 h_done:
     lw      x28, 12(sp)
