@@ -264,14 +264,23 @@ def rotor_hold_torque(c: AxisConsts, x: np.ndarray, mode: Mode, direction: int) 
     return float(forces(c, x, mode._replace(sm=direction))[0])
 
 
+#: a rotor breaks away only beyond its band by this much (N m, motor side).
+#: With no rotor friction the band is the gearbox's own (xi_b T_g .. T_g) and
+#: can be zero wide; without the margin a state resting on its edge (net
+#: torque zero to rounding) switched stuck/sliding at every step (Zeno).
+#: 1e-9 N m is 1e-7 of a stall torque.
+ROTOR_BREAKAWAY_MARGIN = 1e-9
+
+
 def rotor_stick_or_slide(c: AxisConsts, x: np.ndarray, mode: Mode) -> int:
     """sm for a rotor at rest: +1 / -1 if the net torque towards that side
     breaks away, else 0 (stuck).  At most one side can break away.  Without
     rotor friction (ts = 0) the band is the gearbox's own: with the
     asymmetric efficiency a load can be held between xi_b T_g and T_g."""
-    if rotor_hold_torque(c, x, mode, 1) > c.ts_m:
+    band = c.ts_m + ROTOR_BREAKAWAY_MARGIN
+    if rotor_hold_torque(c, x, mode, 1) > band:
         return 1
-    if rotor_hold_torque(c, x, mode, -1) < -c.ts_m:
+    if rotor_hold_torque(c, x, mode, -1) < -band:
         return -1
     return 0
 
@@ -355,8 +364,9 @@ def guards(c: AxisConsts, mode: Mode, e_pos: float, e_neg: float) -> list[Guard]
         elif mode.sm < 0:
             out.append(Guard("rotor", 0, _linear_row(lambda z: -z[W_M], c), 1e-9))
         else:
-            out.append(Guard("rotor", 0, _linear_row(lambda z: c.ts_m - rotor_hold_torque(c, z, mode, 1), c), 1e-12))
-            out.append(Guard("rotor", 1, _linear_row(lambda z: c.ts_m + rotor_hold_torque(c, z, mode, -1), c), 1e-12))
+            band = c.ts_m + ROTOR_BREAKAWAY_MARGIN
+            out.append(Guard("rotor", 0, _linear_row(lambda z: band - rotor_hold_torque(c, z, mode, 1), c), 1e-12))
+            out.append(Guard("rotor", 1, _linear_row(lambda z: band + rotor_hold_torque(c, z, mode, -1), c), 1e-12))
     if c.xi_b is not None and mode.cg != 0:
         # the mesh torque changing sign turns driving into back-driving
         out.append(Guard("mesh", 0, _linear_row(lambda z: mode.gd * mesh_torque(c, z, mode), c), 1e-12))

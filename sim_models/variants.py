@@ -120,9 +120,16 @@ def apply_effect(a: AxisParams, eff: str, cfg: dict, supply_V: float, r_path_ohm
     raise PlantVariantError(f"unknown effect {eff!r} (known: {', '.join(EFFECTS)})")
 
 
-def load_variant(name: str = DEFAULT_VARIANT, off: Iterable[str] = ()) -> PlantParams:
-    """The plant parameters of a named variant, with the named effects off."""
+def load_variant(name: str = DEFAULT_VARIANT, off: Iterable[str] = (),
+                 tweak: dict[str, dict] | None = None) -> PlantParams:
+    """The plant parameters of a named variant, with the named effects off;
+    ``tweak`` replaces effect parameters ({"brush_drop": {"volts": 1.0}}), for
+    sensitivity studies."""
     off = tuple(off)
+    tweak = tweak or {}
+    for e in tweak:
+        if e not in EFFECTS:
+            raise PlantVariantError(f"unknown effect {e!r} (known: {', '.join(EFFECTS)})")
     for e in off:
         if e not in EFFECTS:
             raise PlantVariantError(f"unknown effect {e!r} (known: {', '.join(EFFECTS)})")
@@ -134,6 +141,7 @@ def load_variant(name: str = DEFAULT_VARIANT, off: Iterable[str] = ()) -> PlantP
             raise PlantVariantError(f"effect.{eff}.enabled = {enabled!r}: must be true or false")
         if not enabled or eff in off:
             continue
+        cfg = {**cfg, **tweak.get(eff, {})}
         axes = [apply_effect(a, eff, cfg, base.bridge.supply_V, 2 * base.bridge.r_on_ohm) for a in axes]
     for a in axes:
         a.validate(base.bridge, f"variant {name}: ")

@@ -62,9 +62,9 @@ def main() -> int:
     if rep.exists():
         import json
         d = json.loads(rep.read_text())
-        for law, v in d["laws"].items():
-            rr = v["rtl_run"]
-            print(f"  last make run ({v['config']['t_end_s']:.0f} s, {law}): {rr['wall_s']:.0f} s wall, "
+        for law, v in d.get("arms", {}).get("experiment", {}).items():
+            rr = v["run"]
+            print(f"  last make run ({d['meta']['T_s']:.0f} s, {law}, experiment arm): {rr['wall_s']:.0f} s wall, "
                   f"{rr['cycles_per_cpu_s'] / 1e6:.2f} Mclk/CPU-s")
     # cocotb harness against native on the same short run (fast link, 1 ms period)
     short = experiment.ExperimentConfig(law="PD", t_end_s=0.02, period_us=1000, baud_div=15, progress=False)

@@ -329,12 +329,13 @@ class LabBench:
     variant, its physics cached across sessions; ``measure(axis, seed)``
     gives a :data:`Measure` whose instrument noise comes from ``seed``."""
 
-    def __init__(self, plant: Plant = Plant(), config: "object | None" = None) -> None:
+    def __init__(self, plant: Plant = Plant(), config: "object | None" = None,
+                 tweak: dict[str, dict] | None = None) -> None:
         from sim_models.dyno import RopeBenchConfig, RopeDynamometer
         from sim_models.variants import load_variant
 
         self.plant = plant
-        p = load_variant(plant.name, plant.off)
+        p = load_variant(plant.name, plant.off, tweak)
         cfg = config or RopeBenchConfig()
         self.config = cfg
         self.dyno = {a.name: RopeDynamometer(a, p, cfg) for a in p.axes}

@@ -267,7 +267,7 @@ def _arm_table(rep: dict[str, Any]) -> list[str]:
     L = ["## Each arm's step response (settling: last entry into the 2 % band; steady-state error: mean of the last "
          "10 %)", "", "| law | axis | arm | overshoot (%) | settling (s) | steady-state error (counts) | "
          "tracking RMSE (rad) | copper loss (J) |", "|---|---|---|---|---|---|---|---|"]
-    for law in rep["arms"]["experiment"].keys() | rep["arms"]["model"].keys():
+    for law in [k for k in ("P", "PD", "PID") if k in rep["arms"]["experiment"] or k in rep["arms"]["model"]]:
         for ax in AXES:
             for arm in ("model", "experiment"):
                 v = rep["arms"][arm].get(law, {}).get(ax)
