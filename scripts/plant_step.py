@@ -71,7 +71,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--laws", nargs="*", default=list(TABLE1))
     ap.add_argument("--drive", choices=("brake", "coast"), default="brake")
     ap.add_argument("--pw0", type=int, default=0, help="dead-zone compensation PW0 of eq. (1), ticks of 1023")
+    ap.add_argument("--plant", default="paper", help="plant variant (paper-printed, paper, lab, lab-no-EFFECT) [paper]")
     args = ap.parse_args(argv)
+    from sim_models.params import PlantParamError
+    from sim_models.variants import load_variant, parse_plant
+
+    try:
+        params = load_variant(*parse_plant(args.plant))
+    except PlantParamError as e:
+        print(f"plant_step: {e}", file=sys.stderr)
+        return 2
     args.out.mkdir(parents=True, exist_ok=True)
     results: dict[str, LoopResult] = {}
     rows = []
@@ -79,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
         cfg = LoopConfig(t_end_s=args.t_end, gains=TABLE1[law], drive=args.drive, pw0=args.pw0)
         print(f"[plant_step] {law}: simulating {args.t_end:g} s ...", flush=True)
         t0 = time.monotonic()
-        r = run_loop(cfg, progress=False)
+        r = run_loop(cfg, params, progress=False)
         results[law] = r
         write_csv(args.out / f"step_{law}.csv", r)
         plot(args.out / f"step_{law}.png", law, r, cfg.setpoint_rad)

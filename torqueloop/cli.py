@@ -471,18 +471,20 @@ def cmd_sim(ctx: Ctx) -> int:
         from torqueloop.sim.server import BoardServer
         from torqueloop.sim.simboard import SimBoard
         import sim_models.stepper  # noqa: F401  (the plant; SimBoard imports it when built)
+        from sim_models.variants import parse_plant
     except ImportError as e:   # a host-only install (pip install torqueloop[host])
         raise SimStackMissing(f"the simulated board needs the simulation stack ({e.name} is missing): "
                               f"pip install 'torqueloop[sim]'") from None
+    parse_plant(ctx.args.plant)      # an unknown variant: one line (PlantParamError is a ValueError)
 
     a = ctx.args
     if a.rtl:
         from torqueloop.sim.rtlboard import RtlBoard
 
-        board: Any = RtlBoard(seed=a.seed)
+        board: Any = RtlBoard(seed=a.seed, plant=a.plant)
         what = "RTL board image (Verilator) + plant model, far below real time"
     else:
-        board = SimBoard(build_id=int(a.build_id, 0), seed=a.seed)
+        board = SimBoard(build_id=int(a.build_id, 0), seed=a.seed, plant=a.plant)
         what = f"servo firmware + plant model, build id 0x{board.build_id:08x}"
     srv = BoardServer(board, a.host, a.port, speed=a.speed, hello=a.hello)
     print(f"simulated board on socket://{a.host}:{srv.port} ({what}); Ctrl-C stops it", flush=True)
@@ -599,6 +601,8 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("--hello", action="store_true", help="send *HELLO* on connect, like an RN-XV")
     sp.add_argument("--build-id", default="0x51b00001", help="build id the board reports")
     sp.add_argument("--seed", type=int, default=0, help="plant random seed")
+    sp.add_argument("--plant", default="paper",
+                    help="plant variant: paper-printed, paper or lab (lab-no-EFFECT switches one off) [paper]")
     sp.add_argument("--rtl", action="store_true",
                     help="serve the RTL co-simulation (torqueloop/cosim) instead of the firmware-in-the-loop board")
     sp.set_defaults(fn=cmd_sim)

@@ -83,15 +83,16 @@ class SimBoard:
     """Firmware + PWM + decoder + plant.  One instance per process (the
     firmware's state is the library's statics)."""
 
-    def __init__(self, build_id: int = DEFAULT_BUILD_ID, seed: int = 0) -> None:
+    def __init__(self, build_id: int = DEFAULT_BUILD_ID, seed: int = 0, plant: str = "paper") -> None:
         from sim_models.stepper import TwoAxisPlant
+        from sim_models.variants import load_variant, parse_plant
 
         self._lib = ctypes.CDLL(str(build_library()))
         self._lib.sb_tx_take.restype = ctypes.c_uint32
         self._lib.sb_period_us.restype = ctypes.c_uint32
         self._lib.sb_baud_div.restype = ctypes.c_uint32
         self._lib.sb_bootloader_requested.restype = ctypes.c_int32
-        self.plant = TwoAxisPlant(seed=seed)
+        self.plant = TwoAxisPlant(load_variant(*parse_plant(plant)), seed=seed)
         self.tick = 0                    # 50 MHz clocks since power-up
         self._edge_tick = [0, 0]
         self._edge_interval = [0, 0]     # clocks between the last two encoder counts
