@@ -186,32 +186,20 @@ class FastAxis:
         return s
 
     def _flow(self, s: _ModeSystem, ticks: int) -> np.ndarray:
-        """expm(m * ticks * tick), cached.  A new length is composed from
-        cached flows of its base-16 digits (d * 16^k ticks, each computed
-        once by :func:`expm_balanced`): at most 7 small products instead of
-        a new exponential, and exact because the factors commute."""
+        """expm(m * ticks * tick), cached per length (:meth:`_compose`)."""
         p = s.phi.get(ticks)
         if p is None:
             if len(s.phi) > 4096:
                 s.phi.clear()
-            n, k = ticks, 0
-            while n:
-                d = n & 15
-                if d:
-                    key = (k, d)
-                    f = s.digits.get(key)
-                    if f is None:
-                        f = s.digits[key] = s.expm((d << (4 * k)) * self.tick)
-                    p = f if p is None else p @ f
-                n >>= 4
-                k += 1
-            s.phi[ticks] = p
+            p = s.phi[ticks] = self._compose(s, ticks)
         return p
 
     def _compose(self, s: _ModeSystem, ticks: int) -> np.ndarray:
-        """expm(m * ticks * tick) from the cached digit flows, not cached
-        itself (event times are arbitrary: caching them would only fill
-        the table)."""
+        """expm(m * ticks * tick) composed from the cached flows of its
+        base-16 digits (d * 16^k ticks, each computed once by
+        :func:`expm_balanced`): at most 7 small products instead of a new
+        exponential, and exact because the factors commute.  Not cached itself
+        (event times are arbitrary: :meth:`_flow` caches the lengths that recur)."""
         p = s.phi.get(ticks)
         if p is not None:
             return p

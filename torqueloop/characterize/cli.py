@@ -108,20 +108,27 @@ def cmd_run(args: argparse.Namespace) -> int:
     th = _thresholds(args.set)
     data_dir = Path(args.data_dir)
     results: dict[str, MotorResult] = {}
-    worst = EXIT_OK
     for name, files in _axes(data_dir, args.axis).items():
         try:
             fs, ds = _split(files)
-            r = characterize_motor(fs, ds, th)
+            results[name] = characterize_motor(fs, ds, th)
         except (DataError, MethodError) as e:
             print(f"[{name}] error: {e}", file=sys.stderr)
             return EXIT_ERROR
+    return conclude(results, data_dir, Path(args.out), args.plots, th, args.clk_hz, args.pwm_bits)
+
+
+def conclude(results: dict[str, MotorResult], data_dir: Path, out: Path, plots: str | Path | None,
+             th: Thresholds, clk_hz: int = CLK_HZ, pwm_bits: int = PWM_BITS) -> int:
+    """Steps 2-7's report per axis, the plots, and step 8: the configuration
+    file, written only if every axis passed (the exit status says why not)."""
+    worst = EXIT_OK
+    for name, r in results.items():
         print(report(name, r), flush=True)
-        results[name] = r
-        if args.plots:
+        if plots:
             from .plots import plot_result
 
-            for p in plot_result(r, args.plots, name):
+            for p in plot_result(r, plots, name):
                 print(f"[{name}] plot {p}")
         if r.status == "need_duty_sweep":
             worst = max(worst, EXIT_NEED_SWEEP)
@@ -130,15 +137,14 @@ def cmd_run(args: argparse.Namespace) -> int:
     if worst != EXIT_OK:
         print("no configuration written: not every axis passed", file=sys.stderr)
         return worst
-    axes = {n: axis_config(r, clk_hz=args.clk_hz, pwm_bits=args.pwm_bits, base_dir=data_dir)
-            for n, r in results.items()}
-    cfg = build_config(axes, th, clk_hz=args.clk_hz, pwm_bits=args.pwm_bits)
-    write_config(args.out, cfg)
-    load_config(args.out)  # what we write must be what the readers accept
+    axes = {n: axis_config(r, clk_hz=clk_hz, pwm_bits=pwm_bits, base_dir=data_dir) for n, r in results.items()}
+    cfg = build_config(axes, th, clk_hz=clk_hz, pwm_bits=pwm_bits)
+    write_config(out, cfg)
+    load_config(out)  # what we write must be what the readers accept
     for n, a in cfg.axes.items():
         print(f"[{n}] step 8: {a.pwm_freq_hz:.6g} Hz -> count_max {a.count_max} -> {a.achieved_hz:.6g} Hz "
-              f"({a.freq_error_pct:+.3f} %), PW0 {a.pw0_counts} / PW_F {a.pw_max_counts} counts of {(1 << args.pwm_bits) - 1}")
-    print(f"wrote {args.out}")
+              f"({a.freq_error_pct:+.3f} %), PW0 {a.pw0_counts} / PW_F {a.pw_max_counts} counts of {(1 << pwm_bits) - 1}")
+    print(f"wrote {out}")
     return EXIT_OK
 
 

@@ -32,10 +32,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from torqueloop.spec.charconfig import load_config, write_config
 from torqueloop.spec.pwm import carrier_hz, divider_for
 
-from .config import CLK_HZ, PWM_BITS, axis_config, build_config
+from .config import CLK_HZ, PWM_BITS
 from .method import MotorResult, Thresholds, steps67_linearity
 from .simbench import LabBench, Plant, Waveforms, record_duty_sweep, simulate_lab
 
@@ -130,7 +129,9 @@ def run_study(out: Path, plant: Plant, seeds: int = 10, axes: Sequence[str] = ("
     first = simulate_lab(out / "data", bench, axes, seed=0, wf=wf, th=th)
     for a, r in first.items():
         studies[a].sessions.append(r)
-    status = _write_configuration(out, first, th)
+    from .cli import conclude
+
+    status = conclude(first, out / "data", out / "characterization.json", out / "plots", th)
     if status == 0:
         (out / "inputs.sha256").write_text(inputs_digest(plant, source) + "\n")
 
@@ -180,34 +181,6 @@ def _brief(r: MotorResult) -> str:
     if r.status != "pass":
         return r.status
     return f"{r.chosen.freq_hz:.4g} Hz, PW0 {r.linearity.pw0_pct:.2f} %"  # type: ignore[union-attr]
-
-
-def _write_configuration(out: Path, results: dict[str, MotorResult], th: Thresholds) -> int:
-    from .cli import EXIT_FAIL, EXIT_NEED_SWEEP, EXIT_OK, report
-    from .plots import plot_result
-
-    worst = EXIT_OK
-    for name, r in results.items():
-        print(report(name, r), flush=True)
-        for p in plot_result(r, out / "plots", name):
-            _say(f"plot {p}")
-        if r.status == "need_duty_sweep":
-            worst = max(worst, EXIT_NEED_SWEEP)
-        elif r.status == "fail":
-            worst = max(worst, EXIT_FAIL)
-    if worst != EXIT_OK:
-        _say("no configuration written: not every axis passed")
-        return worst
-    axes = {n: axis_config(r, base_dir=out / "data") for n, r in results.items()}
-    cfg = build_config(axes, th)
-    path = out / "characterization.json"
-    write_config(path, cfg)
-    load_config(path)   # what we write must be what the readers accept
-    for n, a in cfg.axes.items():
-        _say(f"{n}: step 8: {a.pwm_freq_hz:.6g} Hz -> count_max {a.count_max} -> {a.achieved_hz:.6g} Hz, "
-             f"PW0 {a.pw0_counts} counts")
-    _say(f"wrote {path}")
-    return EXIT_OK
 
 
 def _results(plant: Plant, seeds: int, source: str, bench: LabBench, studies: dict[str, AxisStudy],
