@@ -263,12 +263,18 @@ def record_frequency_sweep(measure: Measure, plan: SweepPlan, motor: str, wf: Wa
     )
 
 
+def duty_settings(plan: SweepPlan, freq_hz: float) -> list[tuple[int, int]]:
+    """The (Count_max, duty counts) settings of a duty sweep at the board
+    frequency nearest ``freq_hz``."""
+    m = pwm_full_scale(PWM_BITS)
+    n = divider_for(freq_hz, CLK_HZ, PWM_BITS)
+    return [(n, d) for d in sorted({max(1, min(m - 1, int(round(d / 100.0 * m)))) for d in plan.duty_pcts})]
+
+
 def record_duty_sweep(measure: Measure, plan: SweepPlan, motor: str, freq_hz: float, wf: Waveforms) -> Sweep:
     """Step 6 on the simulated bench at the board frequency nearest ``freq_hz``."""
     m = pwm_full_scale(PWM_BITS)
-    n = divider_for(freq_hz, CLK_HZ, PWM_BITS)
-    duties = sorted({max(1, min(m - 1, int(round(d / 100.0 * m)))) for d in plan.duty_pcts})
-    wfs = wf.get([(n, d) for d in duties])
+    wfs = wf.get(duty_settings(plan, freq_hz))
     rd = [measure(w) for w in wfs]
     bench = BenchConstants(plan.wheel_radius_m, plan.theta_deg, plan.supply_v)
     k = float(bench.torque_nm(1.0))
