@@ -39,8 +39,10 @@ $(STAMP): pyproject.toml scripts/setup.sh $(wildcard */__init__.py)
 sim: $(STAMP) ## all cocotb test benches on every applicable simulator
 	$(PY) -m pytest tb $(PYTEST_K) $(XDIST)
 
-lint: $(STAMP) ## Verilator -Wall, GHDL --std=08, Yosys synth check, VHDL/Verilog equivalence, SAT properties, board constraints, generated files, import layers
+lint: $(STAMP) ## Verilator -Wall, GHDL --std=08, Yosys synth check, VHDL/Verilog equivalence, SAT properties, slang strict front end, Quartus-safety rules, board constraints, generated files, import layers
 	$(PY) scripts/lint.py
+	$(PY) -m torqueloop.flow.strict
+	$(PY) -m torqueloop.flow.hdl_rules
 	$(PY) scripts/check_constraints.py
 	$(PY) -m torqueloop.flow.generate --check
 	$(PY) -m torqueloop.flow.layers

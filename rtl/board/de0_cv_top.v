@@ -22,6 +22,8 @@
 // e-stop, faults); the interlock's own inputs go through sync_2ff here.
 // The SoC's PWM+DIR outputs (for bridges with a direction input) are not
 // used on the IBT-2 and not brought out.
+// the register map's TL_* names (generated; the include guard makes a second include empty)
+`include "regmap.vh"
 `default_nettype none
 
 module de0_cv_top #(

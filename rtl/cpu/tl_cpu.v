@@ -119,11 +119,19 @@ module tl_cpu #(
     assign      pc_plus4 = pc + 32'd4;
     wire [31:0] pc_imm   = pc + imm;          // JAL, branches, AUIPC
     wire [31:0] eff_addr = rs1_val + imm;     // loads, stores (S-imm), JALR
-    wire        jumps    = is_jal || is_jalr || (is_branch && branch_taken);
-    wire [31:0] jump_target = is_jalr ? {eff_addr[31:1], 1'b0} : pc_imm;
+    // The branch comparator's result is the last signal of EXEC to settle,
+    // and the next fetch address depends on it: it joins only at the end -
+    // in the choice between the next pc of a taken branch and of anything
+    // else, and in the taken branch's own misaligned-target trap - so that
+    // nothing else (trap priority, completion, the data bus) waits for it.
+    wire        jumps_always = is_jal || is_jalr;
+    wire        br_taken     = in_exec && is_branch && branch_taken;
+    wire [31:0] jump_target  = is_jalr ? {eff_addr[31:1], 1'b0} : pc_imm;
     // Without the C extension every target must be 4-byte aligned; bit 0 is
-    // already zero for all three kinds of jump.
-    wire        target_misaligned = jumps && jump_target[1];
+    // already zero for all three kinds of jump, pc[1:0] is zero, so a branch
+    // target is misaligned exactly when its immediate's bit 1 is set.
+    wire        jump_misaligned   = jumps_always && jump_target[1];
+    wire        branch_misaligned = pc_imm[1];
 
     // ---- load/store ------------------------------------------------------------
     // The data access and the prefetch of pc+4 run in parallel; whichever
@@ -145,53 +153,66 @@ module tl_cpu #(
     wire [31:0] csr_rdata, trap_target, mepc;
     wire        csr_illegal, irq_pending;
     wire [3:0]  irq_code;
-    reg         trap, trap_irq;
+    // The multiply/divide unit's completion, used by the trap logic below
+    // (Verilog wants a name declared before its first use).
+    wire        md_done;
+    reg         md_done_q;
+    wire        md_fin;
+    reg         trap_early, trap_irq;   // every trap but a taken branch's misaligned target
     reg  [3:0]  trap_code;
-    reg  [31:0] trap_tval;
+    reg  [31:0] trap_tval_early;
 
     wire ex_illegal = dec_illegal || (is_csr && csr_illegal);
     always @(*) begin
-        trap      = 1'b0;
-        trap_irq  = 1'b0;
-        trap_code = 4'd0;
-        trap_tval = 32'd0;
+        trap_early = 1'b0;
+        trap_irq   = 1'b0;
+        trap_code  = 4'd0;
+        trap_tval_early = 32'd0;
         case (state)
             S_FETCH: if (fetch_fault) begin
-                trap = 1'b1; trap_code = 4'd1; trap_tval = pc;
+                trap_early = 1'b1; trap_code = 4'd1; trap_tval_early = pc;
             end
             S_EXEC: begin
-                trap = 1'b1;
+                trap_early = 1'b1;
                 if (irq_pending) begin
                     trap_irq = 1'b1; trap_code = irq_code;
                 end else if (ex_illegal) begin
-                    trap_code = 4'd2; trap_tval = insn;
+                    trap_code = 4'd2; trap_tval_early = insn;
                 end else if (is_ecall) begin
                     trap_code = 4'd11;
                 end else if (is_ebreak) begin
-                    trap_code = 4'd3; trap_tval = pc;
-                end else if (target_misaligned) begin
-                    trap_code = 4'd0; trap_tval = jump_target;
+                    trap_code = 4'd3; trap_tval_early = pc;
+                end else if (jump_misaligned) begin
+                    trap_code  = 4'd0; trap_tval_early = jump_target;
                 end else if ((is_load || is_store) && mem_misaligned) begin
-                    trap_code = is_store ? 4'd6 : 4'd4; trap_tval = eff_addr;
+                    trap_code = is_store ? 4'd6 : 4'd4; trap_tval_early = eff_addr;
                 end else begin
-                    trap = 1'b0;
+                    trap_early = 1'b0;
                 end
             end
             S_MEM: if (d_fin && pf_done && d_error) begin
-                trap = 1'b1; trap_code = is_store ? 4'd7 : 4'd5; trap_tval = eff_addr;
+                trap_early = 1'b1; trap_code = is_store ? 4'd7 : 4'd5; trap_tval_early = eff_addr;
             end
             // An interrupt abandons a multiply/divide still in progress (it
             // is re-executed after mret: mepc = its pc, rd not written), so
             // the interrupt latency does not grow with the divider's 34
             // cycles.  The prefetch must have answered first.
             S_MULDIV: if (irq_pending && pf_done && !md_fin) begin
-                trap = 1'b1; trap_irq = 1'b1; trap_code = irq_code;
+                trap_early = 1'b1; trap_irq = 1'b1; trap_code = irq_code;
             end
             default: ;
         endcase
     end
 
-    wire exec_go  = in_exec && !trap;
+    // A taken branch to a misaligned target (instruction-address-misaligned,
+    // cause 0, tval = the target) ranks after the traps above, none of which
+    // a branch that reached it raises.
+    wire        br_trap   = br_taken && branch_misaligned && !trap_early;
+    wire        trap      = trap_early || br_trap;
+    wire [31:0] trap_tval = br_trap ? pc_imm : trap_tval_early;
+
+    // Loads, stores, multiplies, CSRs and mret are no branches: trap_early decides for them.
+    wire exec_go  = in_exec && !trap_early;
     wire exec_mem = exec_go && (is_load || is_store);
     wire exec_md  = exec_go && is_muldiv;
 
@@ -209,9 +230,7 @@ module tl_cpu #(
         .retire(retire), .mtime(mtime)
     );
 
-    // ---- multiply / divide ------------------------------------------------------
-    wire        md_done;
-    reg         md_done_q;
+    // ---- multiply / divide (md_done, md_done_q, md_fin declared above) ---------
     wire [31:0] md_result;
     /* verilator lint_off PINCONNECTEMPTY */
     tl_cpu_muldiv u_muldiv (
@@ -219,28 +238,28 @@ module tl_cpu #(
         .a(rs1_val), .b(rs2_val), .busy(), .done(md_done), .result(md_result)
     );
     /* verilator lint_on PINCONNECTEMPTY */
-    wire md_fin = md_done || md_done_q;
+    assign md_fin = md_done || md_done_q;
 
     // ---- completion, write-back, next pc --------------------------------------------
     assign prefetch = exec_mem || exec_md;
-    assign complete = trap || (exec_go && !prefetch) ||
+    // (a trapping branch completes as a non-trapping one would: no need for br_trap)
+    assign complete = trap_early || (exec_go && !prefetch) ||
                       (in_mem && d_fin && pf_done) || (in_md && md_fin && pf_done);
     assign retire   = complete && !trap && !rst;
     assign rf_we    = retire && writes_rd;
     // After a load/store/muldiv the prefetched pc+4 goes straight to EXEC;
     // if that prefetch hit a bus error, FETCH asks again and takes the fault.
-    assign to_exec  = retire && (in_mem || in_md) && !pf_bad;
+    assign to_exec  = complete && !trap_early && !rst && (in_mem || in_md) && !pf_bad;   // = retire there
     assign fetch_start = !rst && ((complete && !to_exec) || prefetch || (in_fetch && !fetch_pending));
 
+    wire [31:0] next_pc_seq = trap_early              ? trap_target :
+                              (in_exec && is_mret)    ? mepc :
+                              (in_exec && jumps_always) ? jump_target : pc_plus4;
     always @(*) begin
-        if (trap)
-            next_pc = trap_target;
-        else if (in_exec && is_mret)
-            next_pc = mepc;
-        else if (in_exec && jumps)
-            next_pc = jump_target;
+        if (br_taken && !trap_early)
+            next_pc = branch_misaligned ? trap_target : pc_imm;
         else
-            next_pc = pc_plus4;
+            next_pc = next_pc_seq;
     end
 
     always @(*) begin

@@ -40,9 +40,9 @@ module tl_cpu_muldiv (
     // middle sum only weigh 2^64 and more)
     /* verilator lint_off UNUSEDSIGNAL */
     wire [31:0] pp_ll = ma[15:0] * mb[15:0];
-    wire [33:0] pp_lh = $signed({1'b0, ma[15:0]}) * $signed(mb[32:16]);
-    wire [33:0] pp_hl = $signed(ma[32:16]) * $signed({1'b0, mb[15:0]});
-    wire [33:0] pp_hh = $signed(ma[32:16]) * $signed(mb[32:16]);
+    wire signed [33:0] pp_lh = $signed({1'b0, ma[15:0]}) * $signed(mb[32:16]);
+    wire signed [33:0] pp_hl = $signed(ma[32:16]) * $signed({1'b0, mb[15:0]});
+    wire signed [33:0] pp_hh = $signed(ma[32:16]) * $signed(mb[32:16]);
     /* verilator lint_on UNUSEDSIGNAL */
     reg  [31:0] p_ll, p_hh;
     reg  [34:0] p_mid;

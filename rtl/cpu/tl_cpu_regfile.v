@@ -4,6 +4,10 @@
 // ports with registered (synchronous) reads, as Cyclone V M10K/MLAB blocks
 // provide them.  Each read port has its own copy of the 32 words, since a
 // simple-dual-port block RAM has one read port.
+// Intel template: "Single-Clock Synchronous RAM with Old Data
+// Read-During-Write Behavior" (Quartus Prime Recommended HDL Coding
+// Styles), simple dual port, one per copy, with a read enable (`re`) on the
+// registered read.
 //
 // The core reads in the cycle its instruction register loads (`re`, with
 // the register numbers of the incoming instruction word); rdata holds

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Generated from torqueloop/spec/regmap.toml by torqueloop.flow.generate - do not edit.
-// Listed first in every SoC core's source list (macros are global).
+// Every file that uses these names includes it (`include "regmap.vh"); the guard makes
+// a second include empty, so no file depends on the compile order.
 `ifndef TL_REGMAP_VH
 `define TL_REGMAP_VH
 

@@ -13,6 +13,8 @@
 // The board top (rtl/board/de0_cv_top.v) supplies clk and a synchronous
 // reset (reset_sync) and wires the pins; every asynchronous input is
 // synchronised inside the fabric.
+// the register map's TL_* names (generated; the include guard makes a second include empty)
+`include "regmap.vh"
 `default_nettype none
 
 module tl_soc #(

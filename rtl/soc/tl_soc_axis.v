@@ -10,6 +10,8 @@
 // within a clock and resumes only at a period start after the latch is
 // cleared; soc_safety_gate forces the PWM pins low on top of that.
 // Bus slave: see tl_soc_timer.v.
+// the register map's TL_* names (generated; the include guard makes a second include empty)
+`include "regmap.vh"
 `default_nettype none
 
 module tl_soc_axis (

@@ -23,6 +23,8 @@
 // two cycles (launch, ack) and the next can launch in the cycle after the
 // ack.  The two masters never share a memory port, so they never wait for
 // each other.
+// the register map's TL_* names (generated; the include guard makes a second include empty)
+`include "regmap.vh"
 `default_nettype none
 
 module tl_soc_fabric #(
@@ -98,13 +100,13 @@ module tl_soc_fabric #(
     localparam integer PAGE_BITS = $clog2(N_PAGES);
     localparam integer RQ        = `TL_BUS_REQ_WIDTH;
     localparam integer RS        = `TL_BUS_RSP_WIDTH;
-    localparam [PAGE_BITS-1:0] P_TIMER = `TL_TIMER_PAGE;
-    localparam [PAGE_BITS-1:0] P_INTC  = `TL_INTC_PAGE;
-    localparam [PAGE_BITS-1:0] P_GPIO  = `TL_GPIO_PAGE;
-    localparam [PAGE_BITS-1:0] P_UART  = `TL_UART_PAGE;
-    localparam [PAGE_BITS-1:0] P_AXIS0 = `TL_AXIS0_PAGE;
-    localparam [PAGE_BITS-1:0] P_AXIS1 = `TL_AXIS1_PAGE;
-    localparam [PAGE_BITS-1:0] P_SYS   = `TL_SYS_PAGE;
+    localparam integer         P_TIMER = `TL_TIMER_PAGE;
+    localparam integer         P_INTC  = `TL_INTC_PAGE;
+    localparam integer         P_GPIO  = `TL_GPIO_PAGE;
+    localparam integer         P_UART  = `TL_UART_PAGE;
+    localparam integer         P_AXIS0 = `TL_AXIS0_PAGE;
+    localparam integer         P_AXIS1 = `TL_AXIS1_PAGE;
+    localparam integer         P_SYS   = `TL_SYS_PAGE;
     localparam [N_PAGES-1:0]   PAGE_USED = (1 << P_TIMER) | (1 << P_INTC) | (1 << P_GPIO) | (1 << P_UART)
                                          | (1 << P_AXIS0) | (1 << P_AXIS1) | (1 << P_SYS);
 
@@ -139,7 +141,9 @@ module tl_soc_fabric #(
     wire [RQ*N_PAGES-1:0] page_req;
     /* verilator lint_on UNUSEDSIGNAL */
     /* verilator lint_off UNDRIVEN */      // an empty page has no block: tl_soc_pages answers for it
+    /* verilator lint_off UNUSEDSIGNAL */
     wire [RS*N_PAGES-1:0] page_rsp;
+    /* verilator lint_on UNUSEDSIGNAL */
     /* verilator lint_on UNDRIVEN */
     wire [RS-1:0]         d_rsp;          // this cycle, for the launched access
 

@@ -8,6 +8,8 @@
 // (0->1 after synchronisation) sets KEY_EDGE and pulses key_event for the
 // interrupt controller.  No debouncing: software that cares waits ~20 ms.
 // Bus slave: see tl_soc_timer.v.
+// the register map's TL_* names (generated; the include guard makes a second include empty)
+`include "regmap.vh"
 `default_nettype none
 
 module tl_soc_gpio (

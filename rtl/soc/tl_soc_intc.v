@@ -7,6 +7,8 @@
 // as the clear wins, so clearing cannot swallow a new event.  irq_external
 // is the level |(PENDING & ENABLE).  Bit layout: INTC block of
 // torqueloop/spec/regmap.toml.  Bus slave: see tl_soc_timer.v.
+// the register map's TL_* names (generated; the include guard makes a second include empty)
+`include "regmap.vh"
 `default_nettype none
 
 module tl_soc_intc #(

@@ -8,6 +8,8 @@
 // so its block may be left out.  The caller acknowledges and registers the
 // response (tl_soc_fabric in the SoC, tb/cpu/cpu_sim_top in the CPU's test
 // harness, which use the same blocks at the same pages).
+// the register map's TL_* names (generated; the include guard makes a second include empty)
+`include "regmap.vh"
 `default_nettype none
 
 module tl_soc_pages #(
@@ -23,7 +25,9 @@ module tl_soc_pages #(
     /* verilator lint_on UNUSEDSIGNAL */
     input  wire [31:0]            wdata,
     output wire [N_PAGES*`TL_BUS_REQ_WIDTH-1:0] page_req,   // page p at [p*width +: width]
+    /* verilator lint_off UNUSEDSIGNAL */  // an empty page's slice is not read: no block answers there
     input  wire [N_PAGES*`TL_BUS_RSP_WIDTH-1:0] page_rsp,
+    /* verilator lint_on UNUSEDSIGNAL */
     output wire [`TL_BUS_RSP_WIDTH-1:0]         rsp         // the addressed page's answer
 );
 
@@ -34,9 +38,7 @@ module tl_soc_pages #(
 
     wire [PAGE_BITS-1:0] page  = addr[12 +: PAGE_BITS];
     wire [31:0]          wmask = {{8{be[3]}}, {8{be[2]}}, {8{be[1]}}, {8{be[0]}}};
-    /* verilator lint_off UNUSEDSIGNAL */  // an empty page's block need not answer
     wire [N_PAGES*RS-1:0] answer;
-    /* verilator lint_on UNUSEDSIGNAL */
 
     genvar p;
     generate
@@ -46,11 +48,24 @@ module tl_soc_pages #(
             assign page_req[p*RQ + `TL_BUS_REQ_IDX_LSB   +: 10] = addr[11:2];
             assign page_req[p*RQ + `TL_BUS_REQ_WMASK_LSB +: 32] = wmask;
             assign page_req[p*RQ + `TL_BUS_REQ_WBITS_LSB +: 32] = wdata & wmask;
-            assign answer[p*RS +: RS] = PAGE_USED[p] ? page_rsp[p*RS +: RS] : RSP_NONE;
+            if (PAGE_USED[p]) begin : g_used
+                assign answer[p*RS +: RS] = page_rsp[p*RS +: RS];
+            end else begin : g_empty
+                assign answer[p*RS +: RS] = RSP_NONE;
+            end
         end
     endgenerate
 
-    assign rsp = answer[page*RS +: RS];
+    // The addressed page's answer (a mux over the pages).
+    reg [RS-1:0] selected;
+    integer k;
+    always @(*) begin
+        selected = RSP_NONE;
+        for (k = 0; k < N_PAGES; k = k + 1)
+            if (page == k[PAGE_BITS-1:0])
+                selected = answer[k*RS +: RS];
+    end
+    assign rsp = selected;
 
 endmodule
 

@@ -3,13 +3,21 @@
 //
 // Port A serves the CPU data bus (read/write with byte enables), port B the
 // instruction bus (read only), so a fetch never waits for a load/store.
-// Written in the inference template Quartus maps to M10K blocks in true
-// dual-port mode (one clock, registered read data, byte enables as per-byte
-// conditional writes); $readmemh initialises the blocks in the bitstream.
-// Read-during-write on the other port returns the old word (single clock).
-//
-// tl_soc_fabric writes only on an access it launches and acknowledges every
-// access itself, so the memory is the template and nothing else.
+// Intel template: "True Dual-Port RAM with single clock" (Quartus Prime
+// Recommended HDL Coding Styles, True Dual-Port Synchronous RAM, Verilog),
+// which Quartus maps to M10K blocks in true dual-port mode: one always block
+// per port, registered read data, and no promise for a read during a write:
+// port A reads only when it does not write (a read enable; the fabric never
+// uses read data of a store, so no same-port read-during-write mode is
+// needed, "old data" being one the M10K lacks), and a fetch of a word the
+// data port writes in the same cycle is undefined on the FPGA (the
+// simulators return the old word).  Byte enables are the write expressions
+// with two indexes of the template "RAM with Byte-Enable Signals", one per
+// byte lane.
+// $readmemh in an initial block initialises the blocks in the bitstream
+// ("Specifying Initial Memory Contents at Power-Up").  No reset: block RAM
+// contents survive reset.  tl_soc_fabric writes only on an access it
+// launches and acknowledges every access itself.
 `default_nettype none
 
 module tl_soc_ram #(
@@ -45,18 +53,18 @@ module tl_soc_ram #(
     wire [ADDR_BITS-3:0] a_idx = a_addr[ADDR_BITS-1:2];
     wire [ADDR_BITS-3:0] b_idx = b_addr[ADDR_BITS-1:2];
 
-    // Memory arrays have no reset (block RAM contents survive reset).
-    always @(posedge clk) begin
+    always @(posedge clk) begin        // port A
         if (a_we) begin
             if (a_be[0]) mem[a_idx][7:0]   <= a_wdata[7:0];
             if (a_be[1]) mem[a_idx][15:8]  <= a_wdata[15:8];
             if (a_be[2]) mem[a_idx][23:16] <= a_wdata[23:16];
             if (a_be[3]) mem[a_idx][31:24] <= a_wdata[31:24];
+        end else begin
+            a_rdata <= mem[a_idx];
         end
-        a_rdata <= mem[a_idx];
     end
 
-    always @(posedge clk) begin
+    always @(posedge clk) begin        // port B: the template's port with its write enable tied low
         b_rdata <= mem[b_idx];
     end
 

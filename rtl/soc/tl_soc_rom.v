@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: MIT
 // soc_rom: boot ROM (reset vector at 0), block RAM without a write port,
 // initialised from a hex file, readable by both buses in the same cycle.
-//
+// Intel template: "Dual-Port Synchronous ROM Using readmemb" (Quartus Prime
+// Recommended HDL Coding Styles, Inferring ROM Functions from HDL Code),
+// with $readmemh: both reads registered in one always block, contents from
+// an initial block, which Quartus maps to M10K in ROM mode.
 // tl_soc_fabric acknowledges every access and answers a data-bus write with a
 // bus error (the CPU raises a store access fault) rather than dropping it
 // silently: writing the ROM is always a bug.

@@ -9,6 +9,8 @@
 // bit (W1C) once its cause has gone; it cannot clear a latch while the
 // e-stop is still pressed.  Layout: SYS block of torqueloop/spec/regmap.toml.
 // Bus slave: see tl_soc_timer.v.
+// the register map's TL_* names (generated; the include guard makes a second include empty)
+`include "regmap.vh"
 `default_nettype none
 
 module tl_soc_sys #(

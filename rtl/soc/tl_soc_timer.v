@@ -8,6 +8,8 @@
 // TIMER block of torqueloop/spec/regmap.toml.  Bus slave as every block of
 // the SoC: a request bundle in, the read value and decode error out, in the
 // same cycle; tl_soc_fabric acknowledges (docs/soc.md, Bus).
+// the register map's TL_* names (generated; the include guard makes a second include empty)
+`include "regmap.vh"
 `default_nettype none
 
 module tl_soc_timer (

@@ -8,6 +8,8 @@
 // (the core counts overruns).  A read of RX_DATA pops the byte it returns,
 // in the same clock, so each byte is seen exactly once.
 // Bus slave: see tl_soc_timer.v.
+// the register map's TL_* names (generated; the include guard makes a second include empty)
+`include "regmap.vh"
 `default_nettype none
 
 module tl_soc_uart #(

@@ -5,8 +5,11 @@
 // DEPTH entries (a power of two); the pointers carry one extra bit so that
 // full and empty differ without a separate flag, and `level` (entries held)
 // is their difference.  The read port is asynchronous (m_data shows the
-// oldest entry whenever m_valid is high), which maps to Cyclone V MLAB or
-// flip-flops; depths that want an M10K block would need a registered read.
+// oldest entry whenever m_valid is high).  Intel template: none for block
+// RAM - a memory with an asynchronous read goes to MLAB or registers
+// (Quartus Prime Recommended HDL Coding Styles, "Use Synchronous Memory
+// Blocks"), fine at 16 x 8; depths that want an M10K would need a
+// registered read.
 // A write while full is refused (s_ready low), never overwrites.
 `default_nettype none
 

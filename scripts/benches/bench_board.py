@@ -5,8 +5,9 @@ DE0-CV's 5CEBA4: Yosys synth_intel_alm, with sanity bounds asserted.
 ALMs are estimated from Yosys's cells, since Yosys does not pack ALMs (a
 Cyclone V ALM holds one 6-input LUT or two smaller ones sharing its 8
 inputs, two adder bits and four flip-flops): the packed estimate puts each
-6-input LUT in its own ALM and two smaller LUTs or two carry cells in one;
-the upper bound gives every LUT its own ALM.  The 20 % bound applies to the
+6-input LUT in its own ALM and two smaller LUTs or two carry cells in one
+(and at least one ALM per four flip-flops); the upper bound gives every LUT
+its own ALM.  The 20 % bound applies to the
 packed estimate.
 M10K blocks are Yosys's mapping (it maps a 32-bit true dual-port RAM as
 two blocks per 512 words; Quartus would use about half as many).
@@ -42,7 +43,9 @@ def alm_estimate(row: dict) -> tuple[int, int]:
     lut6 = cells.get("MISTRAL_ALUT6", 0)
     packed = lut6 + math.ceil((row["luts"] - lut6) / 2) + math.ceil(row["carry_cells"] / 2)
     upper = row["luts"] + math.ceil(row["carry_cells"] / 2)
-    return packed, upper
+    # An ALM holds four flip-flops: a register-heavy design needs at least that many.
+    floor = math.ceil(row["ffs"] / 4)
+    return max(packed, floor), max(upper, floor)
 
 
 def main() -> int:
@@ -60,6 +63,7 @@ def main() -> int:
     lo, hi = alm_estimate(row)
     depth = row["lut_levels"]
     print(f"board top {top}: Yosys synth_intel_alm -family cyclonev in {time.monotonic() - t0:.0f} s")
+    print("packing rule: one ALM per 6-input LUT, per two smaller LUTs, per two carry cells, at least one per four FFs")
     print("| resource | used | device | share |")
     print("|---|---:|---:|---:|")
     print(f"| ALMs (packed estimate) | {lo} | {DEVICE_ALMS} | {lo / DEVICE_ALMS:.1%} |")

@@ -1,4 +1,6 @@
 // SPDX-License-Identifier: MIT
+// the register map's TL_* names (generated; the include guard makes a second include empty)
+`include "regmap.vh"
 `default_nettype none
 // Test harness of the CPU (simulation only, not part of the SoC): the core,
 // a two-port RAM, a boot ROM stub, the SoC's own machine timer and interrupt
@@ -119,7 +121,9 @@ module cpu_sim_top #(
     wire [RQ*N_PAGES-1:0] page_req;
     /* verilator lint_on UNUSEDSIGNAL */
     /* verilator lint_off UNDRIVEN */      // pages without a block here: tl_soc_pages answers for them
+    /* verilator lint_off UNUSEDSIGNAL */
     wire [RS*N_PAGES-1:0] page_rsp;
+    /* verilator lint_on UNUSEDSIGNAL */
     /* verilator lint_on UNDRIVEN */
     wire [RS-1:0]         per_rsp;
 

@@ -10,6 +10,8 @@
 //  3. `safe` never falls on its own: only in the cycle after a bus write to
 //     SYS.SAFETY (firmware's acknowledgement), and never straight out of
 //     reset - so a reset or power-up never restarts a drive by itself.
+// the register map's TL_* names (generated; the include guard makes a second include empty)
+`include "regmap.vh"
 `default_nettype none
 
 module soc_safety_props (

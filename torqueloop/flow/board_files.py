@@ -63,6 +63,7 @@ class Board:
     device: str
     top: str
     soc_core: str
+    quartus_top: str
     io_standard: str
     clock_period_ns: float
 
@@ -171,7 +172,7 @@ def load_pin_table(path: Path = PINS_TOML) -> PinTable:
         data = tomllib.load(f)
     b = data["board"]
     board = Board(name=b["name"], family=b["family"], device=b["device"], top=b["top"],
-                  soc_core=b["soc_core"], io_standard=b["io_standard"], clock_period_ns=float(b["clock_period_ns"]))
+                  soc_core=b["soc_core"], quartus_top=b.get("quartus_top", b["top"]), io_standard=b["io_standard"], clock_period_ns=float(b["clock_period_ns"]))
     ports = tuple(
         Port(name=p["name"], dir=p["dir"], timing=p["timing"], role=p.get("role", ""),
              width=int(p["width"]) if "width" in p else None)
@@ -301,9 +302,10 @@ def gen_qsf(table: PinTable, board_pins: dict[str, BoardPin], verilog: list[Path
             extra_files: list[tuple[str, Path]] = ()) -> str:
     """The Quartus settings: device, top, sources, every pin's location and I/O standard.
 
-    ``verilog`` is the board top's source list from rtl/manifest.toml (its
-    dependency order); ``extra_files`` are (assignment name, path) pairs such
-    as ("HEX_FILE", firmware image).
+    ``verilog`` is the Quartus top's source list from rtl/manifest.toml (its
+    dependency order; headers are not compiled as files but found through
+    SEARCH_PATH by the files that include them); ``extra_files`` are
+    (assignment name, path) pairs such as ("HEX_FILE", firmware image).
     """
     b = table.board
     out = [
@@ -315,28 +317,25 @@ def gen_qsf(table: PinTable, board_pins: dict[str, BoardPin], verilog: list[Path
         "",
         f"set_global_assignment -name FAMILY {_qsf_quote(b.family)}",
         f"set_global_assignment -name DEVICE {b.device}",
-        f"set_global_assignment -name TOP_LEVEL_ENTITY {b.top}",
+        f"set_global_assignment -name TOP_LEVEL_ENTITY {b.quartus_top}",
         "set_global_assignment -name PROJECT_OUTPUT_DIRECTORY output_files",
         "# RESET_N (P22) is the DEV_CLRN-capable pin: keep it an ordinary input.",
         "set_global_assignment -name ENABLE_DEVICE_WIDE_RESET OFF",
         "# Pins the design does not use stay inputs, so nothing on the headers is driven by accident.",
         'set_global_assignment -name RESERVE_ALL_UNUSED_PINS_WEAK_PULLUP "AS INPUT TRI-STATED"',
         "",
-        "# Sources (rtl/manifest.toml, core " + b.top + ")",
+        "# Sources (rtl/manifest.toml, core " + b.quartus_top + ")",
     ]
     for p in verilog:
-        out.append(f"set_global_assignment -name VERILOG_FILE {qsf_relpath(p, project_dir)}")
-    # The `define headers are compiled first (listed first); their folders are
-    # also searched, for sources that `include them.
+        if p.suffix != ".vh":
+            out.append(f"set_global_assignment -name VERILOG_FILE {qsf_relpath(p, project_dir)}")
+    # Headers are not compiled on their own: each file that uses their
+    # `define names includes them, found in these folders.
     for d in dict.fromkeys(p.parent for p in verilog if p.suffix == ".vh"):
         out.append(f"set_global_assignment -name SEARCH_PATH {qsf_relpath(d, project_dir)}")
     for name, p in extra_files:
         out.append(f"set_global_assignment -name {name} {qsf_relpath(p, project_dir)}")
     out.append(f"set_global_assignment -name SDC_FILE {qsf_relpath(sdc, project_dir)}")
-    if table.firmware:
-        out += ["", "# Memory images ($readmemh files) of the top's parameters"]
-    for name, image in table.firmware:
-        out.append(f'set_parameter -name {name} "{qsf_relpath(image, project_dir)}"')
     gpio = table.gpio_by_signal()
     for p in table.ports:
         out += ["", f"# {p.name}: {p.role}"]
@@ -472,6 +471,46 @@ def gen_harness_gpio_block(table: PinTable, indent: str = "    ") -> str:
     return "\n".join(lines) + "\n"
 
 
+def quartus_top_v(table: PinTable) -> Path:
+    """The generated Quartus top-level file, beside the board top."""
+    return TOP_V.with_name(f"{table.board.quartus_top}.v")
+
+
+def gen_quartus_top(table: PinTable, project_dir: Path = QUARTUS_DIR) -> str:
+    """The Quartus top-level entity: the board top with the [firmware] memory
+    images as string parameters written in Verilog, relative to the project
+    folder (where Quartus resolves $readmemh names).  Same ports as the board
+    top, one per pin-table port."""
+    b = table.board
+    decl = []
+    for p in table.ports:
+        d = {"in": "input ", "out": "output", "inout": "inout "}[p.dir]
+        rng = f"[{p.width - 1}:0]" if p.width else ""
+        decl.append(f"    {d} wire {rng:<7} {p.name}")
+    params = ", ".join(f'.{name}("{qsf_relpath(image, project_dir)}")' for name, image in table.firmware)
+    conns = ", ".join(f".{p.name}({p.name})" for p in table.ports)
+    return "\n".join([
+        f"// {b.quartus_top}: the Quartus top-level entity of the {b.name} project, {GEN_NOTE};",
+        "// edit there.  It is the board top, rtl/board/" + TOP_V.name + ", with the boot memory",
+        "// images as string parameters in Verilog (paths from the Quartus project folder,",
+        "// where $readmemh looks), since the .qsf's set_parameter is documented only for numbers.",
+        "`default_nettype none",
+        "",
+        f"module {b.quartus_top} (",
+        ",\n".join(decl),
+        ");",
+        "",
+        f"    {b.top} #({params}) u_top (" if params else f"    {b.top} u_top (",
+        f"        {conns}",
+        "    );",
+        "",
+        "endmodule",
+        "",
+        "`default_nettype wire",
+        "",
+    ])
+
+
 def gen_wiring_md(table: PinTable, board_pins: dict[str, BoardPin]) -> str:
     """Markdown wiring table of docs/hardware.md, one row per used header pin."""
     rows = [
@@ -563,16 +602,16 @@ def sdc_port_names(text: str) -> list[str]:
 def top_ports(verilog: Path, top: str, headers: list[Path] = ()) -> dict[str, tuple[str, int | None]]:
     """Ports of the board top as Yosys reads them: name -> (dir, width or None).
 
-    Only the top file is read, after ``headers`` (the `define files it
-    uses); submodules stay unresolved, so this works before the rest of the
-    design elaborates.  A 1-bit port declared without a range is reported as
-    scalar.
+    Only the top file is read, with the folders of ``headers`` (the `define
+    files it includes) as include paths; submodules stay unresolved, so this
+    works before the rest of the design elaborates.  A 1-bit port declared
+    without a range is reported as scalar.
     """
-    files = " ".join(str(h) for h in (*headers, verilog))
+    incdirs = " ".join(f"-I{d}" for d in dict.fromkeys(h.parent for h in headers))
     with tempfile.TemporaryDirectory() as tmp:
         js = Path(tmp) / "top.json"
         proc = subprocess.run(
-            ["yosys", "-q", "-p", f"read_verilog {files}; write_json {js}"],
+            ["yosys", "-q", "-p", f"read_verilog {incdirs} {verilog}; write_json {js}"],
             capture_output=True, text=True, cwd=REPO_ROOT)
         if proc.returncode != 0:
             raise RuntimeError(f"yosys could not read {verilog}:\n{proc.stderr or proc.stdout}")
@@ -587,9 +626,12 @@ def top_ports(verilog: Path, top: str, headers: list[Path] = ()) -> dict[str, tu
     return out
 
 
-def elaborate(files: list[Path], top: str, cwd: Path = REPO_ROOT) -> tuple[bool, str]:
-    """Yosys hierarchy -check over exactly these files: every module resolved."""
+def elaborate(files: list[Path], top: str, cwd: Path = REPO_ROOT,
+              include_dirs: list[Path] = ()) -> tuple[bool, str]:
+    """Yosys hierarchy -check over exactly these files (headers found through
+    ``include_dirs``, as Quartus finds them through SEARCH_PATH): every module resolved."""
     names = " ".join(str(f) for f in files)
-    proc = subprocess.run(["yosys", "-q", "-p", f"read_verilog -defer {names}; hierarchy -check -top {top}"],
+    incdirs = " ".join(f"-I{d}" for d in include_dirs)
+    proc = subprocess.run(["yosys", "-q", "-p", f"read_verilog -defer {incdirs} {names}; hierarchy -check -top {top}"],
                           capture_output=True, text=True, cwd=cwd)
     return proc.returncode == 0, (proc.stdout + proc.stderr).strip()

@@ -89,7 +89,7 @@ def check_qsf_pins(table: board.PinTable, board_pins: dict[str, board.BoardPin],
         return Check(name, False, f"unreadable .qsf: {e}")
     problems = []
     b = table.board
-    expect_globals = {"FAMILY": b.family, "DEVICE": b.device, "TOP_LEVEL_ENTITY": b.top,
+    expect_globals = {"FAMILY": b.family, "DEVICE": b.device, "TOP_LEVEL_ENTITY": b.quartus_top,
                       "ENABLE_DEVICE_WIDE_RESET": "OFF"}
     for k, v in expect_globals.items():
         if s.globals.get(k) != [v]:
@@ -135,19 +135,19 @@ def check_qsf_sources(table: board.PinTable, qsf_text: str, cores: dict[str, Cor
     s = board.parse_qsf(qsf_text)
     files = _qsf_files(s, "VERILOG_FILE", project_dir)
     problems = [f"{f} (named in the .qsf) does not exist" for f in files if not f.is_file()]
-    top = cores.get(table.board.top)
+    top = cores.get(table.board.quartus_top)
     soc = cores.get(table.board.soc_core)
     if top is None:
-        problems.append(f"core {table.board.top} is not in rtl/manifest.toml")
+        problems.append(f"core {table.board.quartus_top} is not in rtl/manifest.toml")
     else:
-        listed = [p.resolve() for p in top.verilog]
+        listed = [p.resolve() for p in top.verilog if p.suffix != ".vh"]
         if files != listed:
             problems.append("VERILOG_FILE list differs from rtl/manifest.toml core "
                             f"{top.name}: qsf {[_rel(f) for f in files]}, manifest {[_rel(f) for f in listed]}")
     if soc is None:
         problems.append(f"SoC core {table.board.soc_core} is not in rtl/manifest.toml")
     else:
-        missing = [p for p in soc.verilog if p.resolve() not in files]
+        missing = [p for p in soc.verilog if p.suffix != ".vh" and p.resolve() not in files]
         problems += [f"SoC source {_rel(p)} is not in the Quartus project" for p in missing]
     for kind in ("SDC_FILE",):
         for f in _qsf_files(s, kind, project_dir):
@@ -156,7 +156,10 @@ def check_qsf_sources(table: board.PinTable, qsf_text: str, cores: dict[str, Cor
     if not s.globals.get("SDC_FILE"):
         problems.append("no SDC_FILE in the .qsf")
     if elaborate and files and not problems:
-        ok, out = board.elaborate(files, table.board.top)
+        # The board top, not the Quartus top: its $readmemh images exist only
+        # after a firmware build (make lint's strict front end elaborates that one).
+        ok, out = board.elaborate(files, table.board.top,
+                                  include_dirs=_qsf_files(s, "SEARCH_PATH", project_dir))
         if not ok:
             problems.append("Yosys cannot elaborate the project's files:\n" + out[-2000:])
     return _result(name, problems)

@@ -57,7 +57,8 @@ def verilator_lint(c: Core, params: Mapping[str, int] | None = None) -> Result:
     params = params if params is not None else c.synth_params
     cmd = [exe, "--lint-only", "-Wall", "--top-module", c.top]
     cmd += [f"-G{k}={v}" for k, v in params.items()]
-    cmd += [str(p) for p in c.verilog]
+    cmd += [f"-I{d}" for d in c.include_dirs]
+    cmd += [str(p) for p in c.verilog_sources]
     rc, out = _run(cmd, cwd=REPO_ROOT, log=BUILD / "lint" / c.name / "verilator.log")
     ok = rc == 0 and "%Warning" not in out and "%Error" not in out
     return Result(ok, f"verilator -Wall {c.name}", out.strip())
@@ -167,10 +168,14 @@ def _yosys(script: str, log: Path) -> tuple[int, str]:
     return _run(["yosys", "-q", "-l", str(log), "-s", str(script_file)], cwd=REPO_ROOT)
 
 
+def _incdirs(c: Core) -> str:
+    return " ".join(f"-I{_rel(d)}" for d in c.include_dirs)
+
+
 def _read_verilog_cmds(c: Core, params: Mapping[str, int]) -> str:
-    files = " ".join(_rel(p) for p in c.verilog)
+    files = " ".join(_rel(p) for p in c.verilog_sources)
     chparams = " ".join(f"-chparam {k} {v}" for k, v in params.items())
-    return f"read_verilog -defer {files}\nhierarchy -check -top {c.top} {chparams}\n"
+    return f"read_verilog -defer {_incdirs(c)} {files}\nhierarchy -check -top {c.top} {chparams}\n"
 
 
 def yosys_check(c: Core) -> Result:
@@ -230,11 +235,11 @@ def prove_properties(c: Core) -> list[Result]:
     """
     results = []
     for chk in c.formal:
-        files = " ".join(_rel(p) for p in (*c.verilog, chk.file))
+        files = " ".join(_rel(p) for p in (*c.verilog_sources, chk.file))
         reset = f"-set-at 1 {chk.reset} 1 " if chk.reset else ""
         script = (
             # memory_map: sat cannot import memories; model them as flip-flops.
-            f"read_verilog -formal {files}\nprep -top {chk.top}\nflatten\nmemory_map\nopt_clean\nasync2sync\n"
+            f"read_verilog -formal {_incdirs(c)} {files}\nprep -top {chk.top}\nflatten\nmemory_map\nopt_clean\nasync2sync\n"
             f"sat -tempinduct -prove-asserts {reset}-seq 1 -maxsteps {chk.depth} -verify\n"
         )
         log = BUILD / "formal" / c.name / f"{chk.top}.log"

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 """Generated views of the register map (torqueloop/spec/regmap.toml):
 
-* ``rtl/soc/regmap.vh``                  Verilog `defines (listed first in the SoC cores' sources)
+* ``rtl/soc/regmap.vh``                  Verilog `defines (included by every file that uses them)
 * ``rtl/soc/regmap_pkg.vhd``             the same constants as a VHDL-2008 package (VHDL twins)
 * ``firmware/include/torqueloop_regs.h`` C11 header for the firmware
 * ``docs/registers.md``                  the data sheet
@@ -31,7 +31,8 @@ def verilog_header(rm: RegMap) -> str:
     masks, per-field LSB/MSB/WIDTH/RESET.  Offsets are per layout (kind), so
     both AXIS instances share one set of register macros.  The peripheral bus
     bundles are vectors with a _LSB/_MSB pair per field."""
-    L = [f"// {_BANNER}", "// Listed first in every SoC core's source list (macros are global).",
+    L = [f"// {_BANNER}", "// Every file that uses these names includes it (`include \"regmap.vh\"); the guard makes",
+         "// a second include empty, so no file depends on the compile order.",
          "`ifndef TL_REGMAP_VH", "`define TL_REGMAP_VH", "",
          f"`define TL_REGMAP_VERSION 32'd{rm.version}",
          f"`define TL_CLK_HZ 32'd{rm.clk_hz}", ""]

@@ -44,6 +44,19 @@ class Core:
     def has_vhdl(self) -> bool:
         return bool(self.vhdl)
 
+    @property
+    def include_dirs(self) -> tuple[Path, ...]:
+        """Folders of the core's Verilog headers (.vh): every tool gets them as
+        include paths, since each file that uses a header's names includes it
+        itself rather than relying on the compile order."""
+        return tuple(dict.fromkeys(p.parent for p in self.verilog if p.suffix == ".vh"))
+
+    @property
+    def verilog_sources(self) -> tuple[Path, ...]:
+        """The Verilog files to compile: the list without the headers, which
+        reach each file through its own `include."""
+        return tuple(p for p in self.verilog if p.suffix != ".vh")
+
 
 def _paths(entries: list[str], core: str) -> tuple[Path, ...]:
     out = []

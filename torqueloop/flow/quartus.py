@@ -46,7 +46,7 @@ def products(table: board.PinTable | None = None,
     problems = board.validate(table, board_pins)
     if problems:
         raise SystemExit("gen_quartus: constraints/pins.toml is inconsistent:\n  " + "\n  ".join(problems))
-    sources = sources if sources is not None else top_sources(table.board.top)
+    sources = sources if sources is not None else top_sources(table.board.quartus_top)
     out = [
         Product(board.QSF, with_licence(board.QSF.name, board.gen_qsf(table, board_pins, sources))),
         Product(board.SDC, with_licence(board.SDC.name, board.gen_sdc(table))),
@@ -54,6 +54,8 @@ def products(table: board.PinTable | None = None,
     top_text = board.TOP_V.read_text()
     out.append(Product(board.TOP_V, board.replace_between(
         top_text, board.TOP_BEGIN, board.TOP_END, board.gen_top_gpio_block(table))))
+    qtop = board.quartus_top_v(table)
+    out.append(Product(qtop, with_licence(qtop.name, board.gen_quartus_top(table))))
     harness = board.gen_harness_gpio_block(table)
     for wrapper in board.HARNESS_V:
         out.append(Product(wrapper, board.replace_between(
@@ -136,3 +138,33 @@ def write_project(project_dir: Path = board.QUARTUS_DIR) -> Path:
         f'PROJECT_REVISION = "{PROJECT}"\n')
     shutil.copyfile(board.QSF, project_dir / f"{PROJECT}.qsf")
     return project_dir / f"{PROJECT}.qpf"
+
+
+def sta_slacks(summary: str) -> list[tuple[str, float]]:
+    """(analysis, worst slack in ns) of every entry of a Quartus timing
+    summary (output_files/<revision>.sta.summary: "Type  : ..." then
+    "Slack : ..." per clock and analysis)."""
+    out: list[tuple[str, float]] = []
+    kind = "?"
+    for line in summary.splitlines():
+        m = re.match(r"\s*Type\s*:\s*(.+?)\s*$", line)
+        if m:
+            kind = m.group(1)
+            continue
+        m = re.match(r"\s*Slack\s*:\s*(-?[0-9.]+)", line)
+        if m:
+            out.append((kind, float(m.group(1))))
+    return out
+
+
+def timing_verdict(summary_path: Path) -> tuple[bool, list[str]]:
+    """(met, report lines) from the timing summary a compile wrote: met when
+    the file lists at least one analysis and no slack is negative."""
+    if not summary_path.exists():
+        return False, [f"no timing summary at {summary_path} (did the compile reach the Timing Analyzer?)"]
+    slacks = sta_slacks(summary_path.read_text())
+    if not slacks:
+        return False, [f"{summary_path.name} lists no slack"]
+    lines = [f"{'FAIL' if v < 0 else 'ok  '} {kind}: slack {v:+.3f} ns" for kind, v in slacks]
+    return all(v >= 0 for _, v in slacks), lines
+

@@ -102,7 +102,8 @@ def run(
     )
     test_kwargs: dict = {}
     if lang == "verilog":
-        build_kwargs["sources"] = [*c.verilog, *extra_verilog]
+        build_kwargs["sources"] = [*c.verilog_sources, *extra_verilog]
+        build_kwargs["includes"] = list(c.include_dirs)
         if sim == "verilator":
             # Lint is make lint's job (-Wall there); here only build.
             build_kwargs["build_args"] = ["-Wno-fatal", "-O2"]

@@ -49,6 +49,7 @@ def _verilator_root() -> str:
 
 
 def sources() -> list[Path]:
+    """Every file of the build, headers included (the stamp hashes them all)."""
     return [REPO_ROOT / p for p in manifest_core("rtl_loop").verilog]   # ends with WRAPPER
 
 
@@ -74,7 +75,8 @@ def build(verbose: bool = False) -> Path:
         shutil.rmtree(obj, ignore_errors=True)
         cmd = [_verilator(), *VFLAGS, "--Mdir", str(obj), "-CFLAGS", "-fPIC -O2",
                f"-GROM_INIT=\"{ROM_HEX}\"", f"-GRAM_INIT=\"{RAM_HEX}\"",
-               *map(str, sources())]
+               *(f"-I{d}" for d in manifest_core("rtl_loop").include_dirs),
+               *(str(p) for p in sources() if p.suffix != ".vh")]
         out = None if verbose else subprocess.DEVNULL
         subprocess.run(cmd, check=True, stdout=out)
         jobs = str(max(1, min(2, os.cpu_count() or 1)))
