@@ -5,7 +5,7 @@
   gen_quartus.py --update     rewrite the committed products of the pin table:
                               constraints/de0_cv_top.qsf and .sdc, the GPIO
                               header block of rtl/board/de0_cv_top.v, the cable
-                              side of the board test wrappers and the wiring
+                              harness of the board test wrappers and the wiring
                               table of docs/hardware.md
   gen_quartus.py --diff       show what --update would change (exit 1 if anything)
   gen_quartus.py --project    create the Quartus project in build/quartus

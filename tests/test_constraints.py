@@ -195,34 +195,34 @@ def test_gpio_block_drives_outputs_reads_inputs_and_tristates_the_rest(table):
     assert all("'bz" in v for k, v in driven.items() if k not in used)
 
 
-def test_harness_block_is_the_mirror_of_the_top_block(table):
-    """The test wrappers' cable side: every header bit the top drives is read
-    into the net of the same name, every bit it reads is driven from it, and
-    spare bits are left alone (so the board bench can see them float)."""
-    block = board.gen_harness_gpio_block(table)
-    pairs = re.findall(r"assign\s+(\S+)\s*=\s*([^;]+);", block)
+def test_cable_module_is_the_mirror_of_the_top_block(table):
+    """The test wrappers' cable harness (de0_cv_cable): every header bit the
+    top drives is read into the port named as the top's net, every bit it
+    reads is driven from it, and spare bits are left alone (so the board
+    bench can see them float)."""
+    text = board.gen_cable_module(table)
+    pairs = re.findall(r"assign\s+(\S+)\s*=\s*([^;]+);", text)
     assert len(pairs) == len(table.gpio)
     got = {(lhs, rhs.strip()) for lhs, rhs in pairs}
     for g in table.gpio:
         assert ((g.net, g.signal) if g.dir == "out" else (g.signal, g.net)) in got, g.signal
-    for name in {board.split_bit(g.net)[0] for g in table.gpio}:
-        assert re.search(rf"wire\s+(\[\d+:0\])?\s*{name};", block), f"net {name} not declared"
+    for name, (d, _) in board.cable_nets(table).items():
+        assert re.search(rf"{'output' if d == 'out' else 'input'}\s+wire\s+(\[\d+:0\])?\s*{name}\b", text), name
 
 
-def test_generate_check_covers_the_harness_wrappers():
-    """The wrappers' pin mapping is a generated product: `python -m
-    torqueloop.flow.generate --check` (make lint) lists both wrappers, and a
-    mapping that differs from the pin table is reported stale."""
+def test_generate_check_covers_the_cable_module():
+    """The cable harness is a generated product: `python -m
+    torqueloop.flow.generate --check` (make lint) lists it, and one that
+    differs from the pin table is reported stale."""
     from torqueloop.flow import generate
 
     prods = generate.products()
-    rels = [str(w.relative_to(REPO_ROOT)) for w in board.HARNESS_V]
-    assert set(rels) <= set(prods)
-    for rel in rels:
-        planted = dict(prods)
-        planted[rel] = prods[rel].replace("= GPIO_0[6];", "= GPIO_0[5];").replace("GPIO_0[6] ", "GPIO_0[5] ")
-        assert planted[rel] != prods[rel]
-        assert rel in generate.stale(planted)
+    rel = str(board.CABLE_V.relative_to(REPO_ROOT))
+    assert rel in prods
+    planted = dict(prods)
+    planted[rel] = prods[rel].replace("= GPIO_0[6];", "= GPIO_0[5];").replace("GPIO_0[6] ", "GPIO_0[5] ")
+    assert planted[rel] != prods[rel]
+    assert rel in generate.stale(planted)
 
 
 # --- the top and the project's sources -------------------------------------------------------------

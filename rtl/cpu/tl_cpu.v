@@ -16,14 +16,20 @@
 //   FETCH  : hold the instruction request (address pc) until ack.
 //   EXEC   : decode the instruction register, read rs1/rs2, ALU / branch /
 //            CSR / trap decision.  Single-cycle instructions complete here
-//            and request the next instruction in the same cycle.
+//            and request the next instruction in the same cycle - except
+//            conditional branches and jalr, whose target depends on the
+//            register values (the comparator, rs1 + imm): they complete
+//            here and their fetch starts in the next cycle from the
+//            registered pc, so no register-file-to-fetch-address path
+//            limits the clock (docs/cpu.md, timing).
 //            Loads and stores raise dbus_req in this cycle already; loads,
 //            stores, multiplies and divides also prefetch pc+4 here.
 //   MEM    : wait for dbus_ack and the prefetch (load write-back, or access fault).
 //   MULDIV : wait for the multiply/divide unit and the prefetch.
 // With a zero-wait-state bus (ack in the cycle after the request) that is
-// 2 cycles per ALU/branch/jump/CSR instruction and per load/store, 4 per
-// multiply and 35 per divide.  The handshake itself sets the floor of 2:
+// 2 cycles per ALU/jal/CSR instruction, word load and store, 3 per
+// conditional branch, jalr and byte/halfword load, 4 per multiply and 35
+// per divide.  The handshake itself sets the floor of 2:
 // a slave cannot accept a new request in its ack cycle.
 // Interrupts are taken in EXEC before the instruction executes (mepc = its
 // pc), or during a multiply/divide, which is then abandoned and re-executed
@@ -67,35 +73,53 @@ module tl_cpu #(
     // ---- fetch -------------------------------------------------------------
     wire        complete, to_exec, fetch_start, prefetch;
     reg  [31:0] next_pc;
-    wire [31:0] insn, pc_plus4;
+    wire [31:0] next_pc_seq;      // next_pc without a taken branch's or jalr's target (below)
+    wire [31:0] insn, insn_next, pc_plus4;
     wire [4:0]  next_rs1, next_rs2;
     wire        insn_load;
     wire        fetched, fetch_fault, fetch_pending, pf_done, pf_bad;
     tl_cpu_fetch u_fetch (
         .clk(clk), .rst(rst), .start(fetch_start),
-        .start_addr(prefetch ? pc_plus4 : (complete ? next_pc : pc)),
+        .start_addr(prefetch ? pc_plus4 : (complete ? next_pc_seq : pc)),
         .waiting(in_fetch), .prefetching(in_mem || in_md), .take_prefetch(to_exec),
         .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
         .ibus_rdata(ibus_rdata), .ibus_err(ibus_err), .pending(fetch_pending),
-        .insn(insn), .insn_load(insn_load), .next_rs1(next_rs1), .next_rs2(next_rs2), .fetched(fetched), .fault(fetch_fault), .pf_done(pf_done), .pf_bad(pf_bad)
+        .insn(insn), .insn_next(insn_next), .insn_load(insn_load), .next_rs1(next_rs1), .next_rs2(next_rs2), .fetched(fetched), .fault(fetch_fault), .pf_done(pf_done), .pf_bad(pf_bad)
     );
 
     // ---- decode and register file --------------------------------------------
+    // The word is decoded as it enters the instruction register (fetch's
+    // insn_next) and the decode is registered beside it, so EXEC starts from
+    // flip-flops rather than from a decoder behind the instruction register
+    // (the core's longest path ran through the immediate decode: docs/cpu.md, Timing).
     wire [4:0]  rd, rs1;
     wire [2:0]  funct3;
     wire [31:0] imm;
     wire is_lui, is_auipc, is_jal, is_jalr, is_branch, is_load, is_store;
     wire alu_use_imm, alu_alt, is_muldiv, is_csr, csr_writes, is_ecall, is_ebreak;
     wire is_mret, writes_rd, dec_illegal;
+    wire [4:0]  rd_d, rs1_d;
+    wire [2:0]  funct3_d;
+    wire [31:0] imm_d;
+    wire [16:0] flags_d;
     tl_cpu_decode u_decode (
-        .insn(insn), .rd(rd), .rs1(rs1), .funct3(funct3), .imm(imm),
-        .is_lui(is_lui), .is_auipc(is_auipc), .is_jal(is_jal), .is_jalr(is_jalr),
-        .is_branch(is_branch), .is_load(is_load), .is_store(is_store),
-        .alu_use_imm(alu_use_imm), .alu_alt(alu_alt), .is_muldiv(is_muldiv),
-        .is_csr(is_csr), .csr_writes(csr_writes), .is_ecall(is_ecall),
-        .is_ebreak(is_ebreak), .is_mret(is_mret),
-        .writes_rd(writes_rd), .illegal(dec_illegal)
+        .insn(insn_next), .rd(rd_d), .rs1(rs1_d), .funct3(funct3_d), .imm(imm_d),
+        .is_lui(flags_d[0]), .is_auipc(flags_d[1]), .is_jal(flags_d[2]), .is_jalr(flags_d[3]),
+        .is_branch(flags_d[4]), .is_load(flags_d[5]), .is_store(flags_d[6]),
+        .alu_use_imm(flags_d[7]), .alu_alt(flags_d[8]), .is_muldiv(flags_d[9]),
+        .is_csr(flags_d[10]), .csr_writes(flags_d[11]), .is_ecall(flags_d[12]),
+        .is_ebreak(flags_d[13]), .is_mret(flags_d[14]),
+        .writes_rd(flags_d[15]), .illegal(flags_d[16])
     );
+    reg [61:0] dec_q;            // {flags, imm, funct3, rs1, rd} of the word in insn
+    always @(posedge clk) begin
+        if (insn_load)
+            dec_q <= {flags_d, imm_d, funct3_d, rs1_d, rd_d};
+    end
+    assign {rd, rs1, funct3, imm} = {dec_q[4:0], dec_q[9:5], dec_q[12:10], dec_q[44:13]};
+    assign {writes_rd, is_mret, is_ebreak, is_ecall, csr_writes, is_csr, is_muldiv, alu_alt,
+            alu_use_imm, is_store, is_load, is_branch, is_jalr, is_jal, is_auipc, is_lui} = dec_q[60:45];
+    assign dec_illegal = dec_q[61];
 
     wire        rf_we;
     reg  [31:0] rf_wdata;
@@ -138,7 +162,13 @@ module tl_cpu #(
     // answers first is remembered until the other one has answered too.
     reg         d_done, d_err_q;
     reg  [31:0] d_rdata_q;
-    wire        d_fin   = d_done || dbus_ack;
+    // A word load (or a store) finishes in the ack cycle, the bus word going
+    // straight to rd; a byte or halfword load finishes a cycle later, its
+    // alignment and extension working on the registered word, so that no
+    // block-RAM output runs through the byte shifter into the register file
+    // in one clock (docs/cpu.md, timing).
+    wire        load_sub = is_load && funct3[1:0] != 2'b10;
+    wire        d_fin   = d_done || (dbus_ack && !load_sub);
     wire        d_error = d_done ? d_err_q : dbus_err;
     wire [31:0] d_rdata = d_done ? d_rdata_q : dbus_rdata;
     wire        mem_misaligned;
@@ -146,7 +176,7 @@ module tl_cpu #(
     tl_cpu_lsu u_lsu (
         .funct3(funct3), .off(eff_addr[1:0]), .store_data(rs2_val),
         .misaligned(mem_misaligned), .be(dbus_be), .wdata(dbus_wdata),
-        .rdata(d_rdata), .load_data(load_data)
+        .rdata(d_rdata_q), .load_data(load_data)
     );
 
     // ---- CSRs and traps -----------------------------------------------------------
@@ -234,7 +264,7 @@ module tl_cpu #(
     wire [31:0] md_result;
     /* verilator lint_off PINCONNECTEMPTY */
     tl_cpu_muldiv u_muldiv (
-        .clk(clk), .rst(rst), .start(exec_md && !rst), .abort(in_md && trap), .funct3(funct3),
+        .clk(clk), .rst(rst), .start(exec_md && !rst), .abort(in_md && trap_early), .funct3(funct3),
         .a(rs1_val), .b(rs2_val), .busy(), .done(md_done), .result(md_result)
     );
     /* verilator lint_on PINCONNECTEMPTY */
@@ -250,21 +280,29 @@ module tl_cpu #(
     // After a load/store/muldiv the prefetched pc+4 goes straight to EXEC;
     // if that prefetch hit a bus error, FETCH asks again and takes the fault.
     assign to_exec  = complete && !trap_early && !rst && (in_mem || in_md) && !pf_bad;   // = retire there
-    assign fetch_start = !rst && ((complete && !to_exec) || prefetch || (in_fetch && !fetch_pending));
+    // A branch or jalr that completes without a trap fetches in the next
+    // cycle, from pc (next_pc registered); so the fetch address never
+    // depends on next_pc's late part, only on next_pc_seq.
+    wire   fetch_later = in_exec && !trap_early && (is_branch || is_jalr);
+    assign fetch_start = !rst && ((complete && !to_exec && !fetch_later) || prefetch || (in_fetch && !fetch_pending));
 
-    wire [31:0] next_pc_seq = trap_early              ? trap_target :
+    // next_pc without the register-dependent targets (taken branch, jalr):
+    // the address of a fetch started in the completing cycle.
+    assign      next_pc_seq = trap_early              ? trap_target :
                               (in_exec && is_mret)    ? mepc :
-                              (in_exec && jumps_always) ? jump_target : pc_plus4;
+                              (in_exec && is_jal)     ? pc_imm : pc_plus4;
     always @(*) begin
         if (br_taken && !trap_early)
             next_pc = branch_misaligned ? trap_target : pc_imm;
+        else if (in_exec && is_jalr && !trap_early)
+            next_pc = jump_target;
         else
             next_pc = next_pc_seq;
     end
 
     always @(*) begin
         if (in_mem)
-            rf_wdata = load_data;
+            rf_wdata = load_sub ? load_data : d_rdata;
         else if (in_md)
             rf_wdata = md_result;
         else if (is_lui)

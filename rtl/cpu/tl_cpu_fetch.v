@@ -33,6 +33,7 @@ module tl_cpu_fetch (
     input  wire        ibus_err,
     output wire        pending,       // a request is outstanding
     output reg  [31:0] insn,
+    output wire [31:0] insn_next,     // the word insn loads at this edge (valid with insn_load)
     output wire        insn_load,     // insn loads a new word at this edge ...
     output wire [4:0]  next_rs1,      // ... whose register numbers these are
     output wire [4:0]  next_rs2,
@@ -55,7 +56,7 @@ module tl_cpu_fetch (
     assign pf_bad    = pend ? ibus_err : pf_err;
     wire [31:0] pf_word = pend ? ibus_rdata : pf_insn;
     assign insn_load = fetched || take_prefetch;
-    wire [31:0] insn_next = fetched ? ibus_rdata : pf_word;
+    assign insn_next = fetched ? ibus_rdata : pf_word;
     assign next_rs1  = insn_next[19:15];
     assign next_rs2  = insn_next[24:20];
 

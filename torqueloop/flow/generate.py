@@ -9,8 +9,8 @@ Sources and their views:
 * ``torqueloop/spec/regmap.toml``   -> Verilog include, VHDL package, C header,
   docs/registers.md (:mod:`.gen_regmap`), the firmware linker script (:mod:`.gen_linker`)
 * ``torqueloop/spec/protocol.toml`` -> C header, docs/protocol.md (:mod:`.gen_protocol`)
-* ``constraints/pins.toml``         -> .qsf, .sdc, the board top's GPIO block, the cable side
-  of the board test wrappers (tb/de0_cv_top, tb/rtl_loop) and docs/hardware.md's wiring
+* ``constraints/pins.toml``         -> .qsf, .sdc, the board top's GPIO block, the cable
+  harness of the board test wrappers (tb/de0_cv_top/de0_cv_cable.v) and docs/hardware.md's wiring
   table (:mod:`.quartus`)
 
 ``make lint`` runs the check, so a stale generated file cannot land.

@@ -135,8 +135,10 @@ def read_report(design: str, part: str, report: Path) -> Timing:
 
 
 def run(c: Core, part: str, params: dict[str, object] | None = None, mhz: float = 50.0,
-        seed: int = 1) -> Timing:
-    """Synthesise, place and route one core; its Fmax and critical path."""
+        seeds: tuple[int, ...] = (1,)) -> list[Timing]:
+    """Synthesise one core once, place and route it with each placer seed;
+    its Fmax and critical path per seed (placement alone moves Fmax by
+    several percent, so one seed is no figure)."""
     work = BUILD / c.name
     netlist = synthesise(c, dict(params or {}), work)
-    return read_report(c.name, part, place_and_route(netlist, part, mhz, seed, work))
+    return [read_report(c.name, part, place_and_route(netlist, part, mhz, s, work)) for s in seeds]

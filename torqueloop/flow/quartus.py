@@ -56,10 +56,7 @@ def products(table: board.PinTable | None = None,
         top_text, board.TOP_BEGIN, board.TOP_END, board.gen_top_gpio_block(table))))
     qtop = board.quartus_top_v(table)
     out.append(Product(qtop, with_licence(qtop.name, board.gen_quartus_top(table))))
-    harness = board.gen_harness_gpio_block(table)
-    for wrapper in board.HARNESS_V:
-        out.append(Product(wrapper, board.replace_between(
-            wrapper.read_text(), board.HARNESS_BEGIN, board.HARNESS_END, harness)))
+    out.append(Product(board.CABLE_V, with_licence(board.CABLE_V.name, board.gen_cable_module(table))))
     if board.HARDWARE_MD.exists():
         md = board.HARDWARE_MD.read_text()
         out.append(Product(board.HARDWARE_MD, board.replace_between(
