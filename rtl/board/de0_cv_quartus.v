@@ -6,19 +6,10 @@
 `default_nettype none
 
 module de0_cv_quartus (
-    input  wire         CLOCK_50,
-    input  wire         RESET_N,
-    input  wire [3:0]   KEY,
-    input  wire [9:0]   SW,
-    output wire [9:0]   LEDR,
-    output wire [6:0]   HEX0,
-    output wire [6:0]   HEX1,
-    output wire [6:0]   HEX2,
-    output wire [6:0]   HEX3,
-    output wire [6:0]   HEX4,
-    output wire [6:0]   HEX5,
-    inout  wire [35:0]  GPIO_0,
-    inout  wire [35:0]  GPIO_1
+    input wire CLOCK_50, input wire RESET_N, input wire [3:0] KEY, input wire [9:0] SW,
+    output wire [9:0] LEDR, output wire [6:0] HEX0, output wire [6:0] HEX1, output wire [6:0] HEX2,
+    output wire [6:0] HEX3, output wire [6:0] HEX4, output wire [6:0] HEX5, inout wire [35:0] GPIO_0,
+    inout wire [35:0] GPIO_1
 );
 
     de0_cv_top #(.ROM_INIT("../firmware/boot/boot_rom.hex")) u_top (

@@ -491,11 +491,13 @@ def gen_quartus_top(table: PinTable, project_dir: Path = QUARTUS_DIR) -> str:
     folder (where Quartus resolves $readmemh names).  Same ports as the board
     top, one per pin-table port."""
     b = table.board
-    decl = []
+    items = []
     for p in table.ports:
-        d = {"in": "input ", "out": "output", "inout": "inout "}[p.dir]
-        rng = f"[{p.width - 1}:0]" if p.width else ""
-        decl.append(f"    {d} wire {rng:<7} {p.name}")
+        d = {"in": "input", "out": "output", "inout": "inout"}[p.dir]
+        rng = f"[{p.width - 1}:0] " if p.width else ""
+        items.append(f"{d} wire {rng}{p.name}")
+    # Four to a line: the ports are the pin table's, stated in full in the board top.
+    decl = ["    " + ", ".join(items[i:i + 4]) for i in range(0, len(items), 4)]
     params = ", ".join(f'.{name}("{qsf_relpath(image, project_dir)}")' for name, image in table.firmware)
     conns = ", ".join(f".{p.name}({p.name})" for p in table.ports)
     return "\n".join([
