@@ -75,7 +75,30 @@ class DocBoard:
         return out
 
 
-class ScriptedLink:
+class FakeSerial:
+    """The serial-port side both fake links share: ``pending`` bytes to read;
+    an empty read advances the fake clock by the poll interval."""
+
+    pending: bytes
+    clock: FakeClock
+    timeout: float
+
+    @property
+    def in_waiting(self) -> int:
+        return len(self.pending)
+
+    def read(self, size: int = 1) -> bytes:
+        if not self.pending:
+            self.clock.t += self.timeout
+            return b""
+        out, self.pending = self.pending[:size], self.pending[size:]
+        return out
+
+    def close(self) -> None:
+        pass
+
+
+class ScriptedLink(FakeSerial):
     """Each write goes through ``script`` (one action per written frame, then
     'ok'): ok, drop_request, drop_reply, corrupt_request, corrupt_reply,
     hello (``*HELLO*`` before the reply).  Reads return what is pending;
@@ -113,19 +136,6 @@ class ScriptedLink:
         self.pending += rep
         return len(data)
 
-    @property
-    def in_waiting(self) -> int:
-        return len(self.pending)
-
-    def read(self, size: int = 1) -> bytes:
-        if not self.pending:
-            self.clock.t += self.timeout
-            return b""
-        out, self.pending = self.pending[:size], self.pending[size:]
-        return out
-
-    def close(self) -> None:
-        pass
 
 
 def make(script: list[str] | None = None, board: DocBoard | None = None, kind: str = "tcp"):
@@ -280,7 +290,7 @@ def test_telemetry_between_replies_is_queued() -> None:
 
 # ---- random lossy channel around the real firmware ------------------------------
 
-class LossyLink:
+class LossyLink(FakeSerial):
     """Drops, flips bits in, or injects text into whole frames, both directions,
     in front of the simulated board's firmware (no simulated time passes)."""
 
@@ -312,19 +322,6 @@ class LossyLink:
         self.pending += self._mangle(out) if out else b""
         return len(data)
 
-    @property
-    def in_waiting(self) -> int:
-        return len(self.pending)
-
-    def read(self, size: int = 1) -> bytes:
-        if not self.pending:
-            self.clock.t += self.timeout
-            return b""
-        out, self.pending = self.pending[:size], self.pending[size:]
-        return out
-
-    def close(self) -> None:
-        pass
 
 
 def test_random_lossy_link_never_runs_a_command_twice() -> None:

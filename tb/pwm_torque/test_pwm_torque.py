@@ -313,7 +313,7 @@ async def full_width_duty_table(dut):
 
 @cocotb.test()
 async def chain_carrier_matches_ref(dut):
-    """freq_div driving pwm_torque (pwm_chain_top): the carrier period and pulse
+    """freq_div driving pwm_torque (char_bench_top / pwm_chain_top.vhd): the carrier period and pulse
     width on RPWM, timed in ns, equal torqueloop.models.freq_div.carrier_hz() and
     map_duty() for the reset default (eq. 4 Count_max) and written divisors."""
     p = FreqDivParams(clk_hz=int(dut.CLK_HZ.value), pwm_bits=int(dut.PWM_BITS.value),
@@ -389,8 +389,10 @@ CHAIN_DIR = REPO_ROOT / "tb" / "pwm_torque"
 @pytest.mark.parametrize("sim", [s for s in sims_for("pwm_torque") if s != "verilator"])
 def test_pwm_torque_chain(sim):
     """freq_div + pwm_torque together (Icarus and GHDL: a cheap build each)."""
-    run("pwm_torque", sim, "test_pwm_torque", toplevel="pwm_chain_top",
+    from torqueloop.characterize.simbench import CHAR_BENCH_TOP   # the chain the characterisation bench drives
+
+    run("pwm_torque", sim, "test_pwm_torque", toplevel="pwm_chain_top" if sim == "ghdl" else CHAR_BENCH_TOP.stem,
         parameters={"PWM_BITS": 6, "DEFAULT_DIV": count_max(20_000, pwm_bits=6)},
-        extra_verilog=[REPO_ROOT / "rtl" / "motion" / "tl_freq_div.v", CHAIN_DIR / "pwm_chain_top.v"],
+        extra_verilog=[REPO_ROOT / "rtl" / "motion" / "tl_freq_div.v", CHAR_BENCH_TOP],
         extra_vhdl=[REPO_ROOT / "rtl" / "motion" / "tl_freq_div.vhd", CHAIN_DIR / "pwm_chain_top.vhd"],
         testcase="chain_carrier_matches_ref")

@@ -5,12 +5,15 @@
 // cocotb bench in this folder sets Count_max and the duty, watches the pins
 // and hands their waveform to the plant's dynamometer model.
 // Forward drive (dir_mode 0: PWM on RPWM, LPWM low), brake as the safe state.
+// tb/pwm_torque's chain test runs the same module (its VHDL twin there is
+// pwm_chain_top.vhd).
 `default_nettype none
 
 module char_bench_top #(
     parameter integer CLK_HZ   = 50_000_000,  // DE0-CV CLOCK_50
     parameter integer PWM_BITS = 10,          // gamma = 2^10 (eq. 2)
-    parameter integer DIV_BITS = 16           // freq_div divisor register width
+    parameter integer DIV_BITS = 16,          // freq_div divisor register width
+    parameter integer DEFAULT_DIV = 109       // divisor after reset (109: 448 Hz at 10 bits)
 ) (
     input  wire                clk,
     input  wire                rst,
@@ -35,7 +38,7 @@ module char_bench_top #(
     /* verilator lint_on UNUSEDSIGNAL */
 
     tl_freq_div #(
-        .DIV_BITS(DIV_BITS)
+        .DIV_BITS(DIV_BITS), .DEFAULT_DIV(DEFAULT_DIV)
     ) u_div (
         .clk(clk), .rst(rst), .div_we(div_we), .div_in(div_in), .div(div), .tick(tick)
     );

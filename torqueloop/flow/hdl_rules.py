@@ -32,6 +32,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from torqueloop.flow.checks import finish
 from torqueloop.flow.manifest import REPO_ROOT, load_manifest
 
 #: what synthesised code may call
@@ -272,11 +273,8 @@ def check(all_files: list[Path] | None = None, rtl_files: list[Path] | None = No
 def main() -> int:
     all_files, rtl_files = project_files()
     found = check(all_files, rtl_files)
-    for f in found:
-        print(f"[hdl-rules] {f}")
-    print(f"[hdl-rules] {'ok  ' if not found else 'FAIL'} Quartus-safety rules on {len(all_files)} files "
-          f"({len(rtl_files)} synthesised): {len(found)} finding(s)")
-    return 1 if found else 0
+    return finish("hdl-rules", found, f"Quartus-safety rules on {len(all_files)} files "
+                                      f"({len(rtl_files)} synthesised): {len(found)} finding(s)")
 
 
 if __name__ == "__main__":

@@ -24,6 +24,7 @@ import ast
 from dataclasses import dataclass
 from pathlib import Path
 
+from torqueloop.flow.checks import finish
 from torqueloop.spec.repo import REPO_ROOT
 
 #: layer -> the layers it may import (besides itself)
@@ -141,11 +142,7 @@ def violations(root: Path = REPO_ROOT, packages: tuple[str, ...] = PACKAGES) -> 
 
 def main() -> int:
     bad = violations()
-    for v in bad:
-        print(f"[layers] {v}")
-    print(f"[layers] {'FAIL' if bad else 'ok  '} import direction of torqueloop/ and sim_models/ "
-          f"({len(bad)} violations)")
-    return 1 if bad else 0
+    return finish("layers", bad, f"import direction of torqueloop/ and sim_models/ ({len(bad)} violations)")
 
 
 if __name__ == "__main__":
