@@ -109,16 +109,17 @@ def test_rom_image_layout():
     assert words == ["04030201", "00000005"]
 
 
-def _elf(segments: list[tuple[int, bytes]], entry: int) -> bytes:
+def _elf(segments: list[tuple[int, bytes]], entry: int, *, cls: int = 1, order: int = 1, etype: int = 2,
+         machine: int = 243, flags: int = 0, bss: int = 16) -> bytes:
     """A minimal ELF32 RISC-V file with PT_LOAD segments (written here
     independently of bootproto's reader)."""
     phoff, phent = 52, 32
     data_off = phoff + phent * len(segments)
-    hdr = b"\x7fELF\x01\x01\x01" + bytes(9)
-    hdr += struct.pack("<HHIIIIIHHHHHH", 2, 243, 1, entry, phoff, 0, 0, 52, phent, len(segments), 40, 0, 0)
+    hdr = b"\x7fELF" + bytes([cls, order, 1]) + bytes(9)
+    hdr += struct.pack("<HHIIIIIHHHHHH", etype, machine, 1, entry, phoff, 0, flags, 52, phent, len(segments), 40, 0, 0)
     ph, body = b"", b""
     for addr, d in segments:
-        ph += struct.pack("<8I", 1, data_off + len(body), addr, addr, len(d), len(d) + 16, 7, 4)
+        ph += struct.pack("<8I", 1, data_off + len(body), addr, addr, len(d), len(d) + bss, 7, 4)
         body += d
     return hdr + ph + body
 
@@ -134,9 +135,43 @@ def test_image_from_elf(tmp_path):
     for cut in (10, 40, 60, len(raw) - 2):                  # truncated anywhere: ImageError, never struct.error
         with pytest.raises(bp.ImageError):
             bp.image_from_elf(raw[:cut])
-    p = tmp_path / "x.bin"
-    p.write_bytes(b"\x13\x00\x00\x00")
-    assert bp.load_image(p) == b"\x13\x00\x00\x00"
+
+
+
+def test_only_firmware_for_this_board_is_uploaded(tmp_path):
+    """Issue 17: `torqueloop upload` took a 12-byte text file and 3 kB of random
+    bytes as raw images.  Now: an RV32 ELF inside program RAM, or a raw binary
+    with --raw and the firmware image header; anything else is refused."""
+    base, end = regs.RAM_BASE, regs.RAM_BASE + regs.RAM_SIZE
+    good = [(base, b"AAAA")]
+    refused = {
+        "64-bit ELF": _elf(good, base, cls=2),
+        "big-endian ELF": _elf(good, base, order=2),
+        "x86 ELF": _elf(good, base, machine=62),
+        "shared object": _elf(good, base, etype=3),
+        "compressed instructions": _elf(good, base, flags=1),
+        "hard-float ABI": _elf(good, base, flags=4),
+        "segment past the end of RAM": _elf([(base, b"AAAA"), (end - 4, b"BBBBBBBB")], base),
+        "bss past the end of RAM": _elf([(base, b"AAAA"), (end - 8, b"BB")], base, bss=16),
+        "segment in the ROM": _elf([(0, b"AAAA"), (base, b"BBBB")], base),
+    }
+    for why, raw in refused.items():
+        with pytest.raises(bp.ImageError):
+            bp.image_from_elf(raw)
+            pytest.fail(why)
+    assert bp.image_from_elf(_elf(good, base)) == b"AAAA"
+    header = b"\x6f\x00\xc0\x00" + struct.pack("<II", bp.IMAGE_MAGIC, bp.IMAGE_MAP_VERSION)
+    files = {"text.txt": b"hello world\n", "random.bin": bytes(random.Random(3).randrange(256) for _ in range(3000)),
+             "image.bin": header + bytes(100), "old_map.bin": header[:8] + struct.pack("<I", 99) + bytes(100)}
+    for name, data in files.items():
+        (tmp_path / name).write_bytes(data)
+    for name in files:                              # without --raw nothing but an ELF
+        with pytest.raises(bp.ImageError, match="--raw"):
+            bp.load_image(tmp_path / name)
+    for name in ("text.txt", "random.bin", "old_map.bin"):
+        with pytest.raises(bp.ImageError):
+            bp.load_image(tmp_path / name, raw_ok=True)
+    assert bp.load_image(tmp_path / "image.bin", raw_ok=True) == files["image.bin"]
 
 
 def test_c_header_carries_the_protocol():
@@ -228,11 +263,13 @@ def test_upload_reports_a_lost_link():
 
 def test_upload_script_over_tcp(tmp_path, capsys):
     image = tmp_path / "app.bin"
-    image.write_bytes(random.Random(500).randbytes(500))
+    header = b"\x6f\x00\xc0\x00" + struct.pack("<II", bp.IMAGE_MAGIC, bp.IMAGE_MAP_VERSION)
+    image.write_bytes(header + random.Random(500).randbytes(500 - len(header)))
+    assert upload.main([str(image), "--port", "socket://127.0.0.1:9"]) == 2, "a raw image needs --raw"
     fake = FakeBoot(wait_enter=False)
     fake.start()
     rc = upload.main([str(image), "--port", f"socket://127.0.0.1:{fake.port}", "--baud", "1000000",
-                                "--wait", "5"])
+                                "--wait", "5", "--raw"])
     out = capsys.readouterr()
     assert rc == 0, out
     assert fake.received == bp.encode_frame(image.read_bytes())

@@ -132,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--window-ms", type=int, default=bootproto.WINDOW_MS)
     ap.add_argument("--out", type=Path, default=REPO / "build" / "firmware" / "boot")
     args = ap.parse_args(argv)
-    factory = None if args.no_factory else (bootproto.load_image(args.factory) if args.factory else _servo_image())
+    factory = None if args.no_factory else (bootproto.load_image(args.factory, raw_ok=True) if args.factory else _servo_image())
     cfg = BootConfig(window_cycles=bootproto.ms_to_cycles(args.window_ms))
     path = build_rom(factory, cfg, args.out)
     code = (args.out / "boot.bin").stat().st_size

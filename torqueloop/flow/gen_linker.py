@@ -10,6 +10,7 @@ the RAM region; the boot ROM region is left to the boot code.
 
 from __future__ import annotations
 
+from torqueloop.spec import bootproto
 from torqueloop.spec.regmap import RegMap, load
 
 STACK_BYTES = 4096
@@ -63,6 +64,10 @@ SECTIONS
     __global_pointer$ = __data_start + 0x800;
     __boot_rom_reset = ORIGIN(BOOT_ROM);
 }}
+
+/* The firmware image header crt0.S puts after its first jump (torqueloop/spec/bootproto.py). */
+__tl_image_magic = 0x{bootproto.IMAGE_MAGIC:08X};
+__tl_image_map_version = {rm.version};
 """
 
 

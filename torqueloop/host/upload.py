@@ -45,14 +45,23 @@ class UploadReport:
     seconds: float
 
 
-def load_image(path: str | Path) -> bytes:
+class ImageRefused(ValueError):
+    """The file is not a firmware image for this board; nothing was sent."""
+
+
+def load_image(path: str | Path, raw_ok: bool = False) -> bytes:
+    """The image to upload, or ImageRefused with one line saying why not
+    (bootproto.load_image: an RV32 ELF inside program RAM, or with ``raw_ok``
+    a binary carrying the firmware image header)."""
     try:
-        image = bp.load_image(path)
+        image = bp.load_image(path, raw_ok=raw_ok)
         bp.encode_frame(image)           # size limits, before anything is sent
-    except (bp.ImageError, bp.FrameError, OSError) as e:
-        raise ProtocolError(f"{path}: {e}") from None
-    except struct.error as e:   # bootproto.image_from_elf reads a truncated ELF header unchecked
-        raise ProtocolError(f"{path}: damaged ELF ({e})") from None
+    except (bp.ImageError, bp.FrameError) as e:
+        raise ImageRefused(f"{path}: refused: {e}") from None
+    except OSError as e:
+        raise ImageRefused(f"{path}: cannot read ({e.strerror or e})") from None
+    except struct.error as e:   # a header field that points past the end of a damaged ELF
+        raise ImageRefused(f"{path}: refused: damaged ELF ({e})") from None
     return image
 
 
@@ -226,13 +235,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--baud", type=int, default=bp.BAUD, help="UART rate (also paces TCP writes)")
     ap.add_argument("--enter", action="store_true", help="send the servo firmware's BOOTLOADER command first")
     ap.add_argument("--wait", type=float, default=30.0, help="seconds to wait for the window (TLBW)")
+    ap.add_argument("--raw", action="store_true", help="the file is a flat binary with the firmware image header")
     args = ap.parse_args(argv)
 
     try:
-        image = bp.load_image(args.image)
-    except (OSError, bp.ImageError) as e:
+        image = load_image(args.image, raw_ok=args.raw)
+    except ImageRefused as e:
         print(f"upload: {e}", file=sys.stderr)
-        return 1
+        return 2
     print(f"{args.image}: {len(image)} bytes, CRC-32 0x{bp.crc32(image):08x}, "
           f"{len(image) + bp.FRAME_OVERHEAD} bytes on the wire (~{(len(image) + bp.FRAME_OVERHEAD) * 10 / args.baud:.1f} s)")
 

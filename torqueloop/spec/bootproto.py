@@ -40,6 +40,21 @@ FACTORY_OFS = BOOT_CODE_BYTES
 FACTORY_IMAGE_OFS = FACTORY_OFS + struct.calcsize(FACTORY_DESC_FMT)
 FACTORY_MAX_BYTES = min(regs.BOOT_ROM_SIZE - FACTORY_IMAGE_OFS, MAX_IMAGE_BYTES)
 
+# Firmware image header: every image built with firmware/common/crt0.S starts
+# with a jump over two words - this magic and the register-map version it was
+# built for (firmware/common/link.ld gets both from here).  A raw image is
+# uploaded only if it carries them (``torqueloop upload --raw``).
+IMAGE_MAGIC = 0x4D494C54                 # 'TLIM' little-endian
+IMAGE_MAGIC_OFS = 4
+IMAGE_MAP_VERSION = regs.REGMAP_VERSION
+IMAGE_HEADER_END = IMAGE_MAGIC_OFS + 8
+# ELF: RV32 (class 32, little-endian, EM_RISCV), an executable, no compressed
+# instructions (the CPU is RV32IM) and the soft-float ABI.
+EM_RISCV = 243
+ET_EXEC = 2
+EF_RISCV_RVC = 0x1
+EF_RISCV_FLOAT_ABI = 0x6
+
 REPLY_PREFIX = b"TLB"
 REPLY_BYTES = len(REPLY_PREFIX) + 2      # prefix, code, newline
 
@@ -156,19 +171,35 @@ class ImageError(ValueError):
 def image_from_elf(raw: bytes) -> bytes:
     """Flat RAM image of a RAM-linked RV32 ELF: its PT_LOAD file bytes from
     the load address, gaps zero-filled (.bss has no file bytes and is left to
-    the image's crt0).  Refuses an ELF that does not start and enter at the
-    RAM base, since the bootloader jumps there."""
-    if len(raw) < 52 or raw[:4] != b"\x7fELF" or raw[4] != 1 or raw[5] != 1:
-        raise ImageError("not a 32-bit little-endian ELF")
-    (_t, machine, _v, entry, phoff, _sh, _fl, _eh, phentsize, phnum) = struct.unpack_from("<HHIIIIIHHH", raw, 16)
-    if machine != 243:
+    the image's crt0).  Refuses anything that is not a firmware image for this
+    board: not RV32 (class, byte order, machine, compressed or float ABI), not
+    an executable, a segment outside program RAM, or not starting and entering
+    at the RAM base (the bootloader jumps there)."""
+    if len(raw) < 52 or raw[:4] != b"\x7fELF":
+        raise ImageError("not an ELF file")
+    if raw[4] != 1 or raw[5] != 1:
+        raise ImageError("not a 32-bit little-endian ELF (the board runs RV32)")
+    (etype, machine, _v, entry, phoff, _sh, flags, _eh, phentsize, phnum) = struct.unpack_from("<HHIIIIIHHH", raw, 16)
+    if machine != EM_RISCV:
         raise ImageError(f"ELF machine {machine} is not RISC-V")
+    if etype != ET_EXEC:
+        raise ImageError(f"ELF type {etype} is not an executable (link it with firmware/common/link.ld)")
+    if flags & EF_RISCV_RVC:
+        raise ImageError("ELF uses compressed instructions (RVC); the board's CPU is RV32IM: build with -march=rv32im")
+    if flags & EF_RISCV_FLOAT_ABI:
+        raise ImageError("ELF uses a hardware-float ABI; the board's CPU has no FPU: build with -mabi=ilp32")
     if phentsize < 32 or phoff + phnum * phentsize > len(raw):
         raise ImageError("truncated ELF: program headers run past the end of the file")
     segs = []
+    ram_end = regs.RAM_BASE + regs.RAM_SIZE
     for i in range(phnum):
-        p_type, off, _va, paddr, filesz, _mem, _f, _a = struct.unpack_from("<8I", raw, phoff + i * phentsize)
-        if p_type == 1 and filesz:
+        p_type, off, _va, paddr, filesz, memsz, _f, _a = struct.unpack_from("<8I", raw, phoff + i * phentsize)
+        if p_type != 1 or not memsz:
+            continue
+        if not (regs.RAM_BASE <= paddr and paddr + max(memsz, filesz) <= ram_end):
+            raise ImageError(f"segment at 0x{paddr:08x}..0x{paddr + max(memsz, filesz):08x} lies outside program "
+                             f"RAM 0x{regs.RAM_BASE:08x}..0x{ram_end:08x}")
+        if filesz:
             if off + filesz > len(raw):
                 raise ImageError("truncated ELF")
             segs.append((paddr, raw[off:off + filesz]))
@@ -187,14 +218,35 @@ def image_from_elf(raw: bytes) -> bytes:
     return bytes(out)
 
 
-def load_image(path: str | Path) -> bytes:
-    """An ELF (converted) or a flat .bin (taken as the RAM image at LOAD_ADDR)."""
-    raw = Path(path).read_bytes()
-    img = image_from_elf(raw) if raw[:4] == b"\x7fELF" else raw
+def check_header(img: bytes) -> None:
+    """A raw image must carry the firmware image header (firmware/common/crt0.S)."""
+    if len(img) < IMAGE_HEADER_END:
+        raise ImageError(f"{len(img)} bytes: too short for a firmware image")
+    magic, version = struct.unpack_from("<II", img, IMAGE_MAGIC_OFS)
+    if magic != IMAGE_MAGIC:
+        raise ImageError(f"no firmware image header (magic 0x{IMAGE_MAGIC:08x} at byte {IMAGE_MAGIC_OFS}, "
+                         f"found 0x{magic:08x}): not a torqueloop firmware image")
+    if version != IMAGE_MAP_VERSION:
+        raise ImageError(f"image built for register map version {version}, this board's is {IMAGE_MAP_VERSION}")
+
+
+def load_image(path: str | Path, raw_ok: bool = False) -> bytes:
+    """The RAM image to upload: an ELF (checked and converted), or with
+    ``raw_ok`` a flat binary that carries the firmware image header.  Raises
+    ImageError with one line saying why anything else is refused."""
+    data = Path(path).read_bytes()
+    if data[:4] == b"\x7fELF":
+        img = image_from_elf(data)
+    elif raw_ok:
+        check_header(data)
+        img = data
+    else:
+        raise ImageError("not an ELF file; a raw binary is uploaded only with --raw (and must carry the "
+                         "firmware image header)")
     if not img:
-        raise ImageError(f"{path}: empty image")
+        raise ImageError("empty image")
     if len(img) > MAX_IMAGE_BYTES:
-        raise ImageError(f"{path}: {len(img)} bytes, the bootloader takes at most {MAX_IMAGE_BYTES}")
+        raise ImageError(f"{len(img)} bytes, the bootloader takes at most {MAX_IMAGE_BYTES}")
     return img
 
 
