@@ -49,7 +49,11 @@ def test_host_unit_tests(host_tests: Path) -> None:
     assert ", 0 failures" in r.stdout
 
 
-def _random_run(rng: random.Random) -> tuple[list[str], list[tuple[int, int, int, int]]]:
+def _i32(x: int) -> int:
+    return ((x + (1 << 31)) & 0xFFFF_FFFF) - (1 << 31)
+
+
+def _random_run(rng: random.Random, start: int | None = None) -> tuple[list[str], list[tuple[int, int, int, int]]]:
     p = AxisParams(law=rng.randrange(4), kp_q16=rng.choice([0, rng.randrange(2**31)]) if rng.random() < 0.1
                    else rng.randrange(400_000), kd_q16=rng.randrange(5000), ki_q16=rng.randrange(2_000_000),
                    deadband_q16=rng.choice([0, 0x8000, rng.randrange(0x40000)]), cmd_limit=rng.randrange(1, 1024),
@@ -58,19 +62,19 @@ def _random_run(rng: random.Random) -> tuple[list[str], list[tuple[int, int, int
     ax = Axis(p, period)
     lines = [f"P {p.law} {p.kp_q16} {p.kd_q16} {p.ki_q16} {p.deadband_q16} {p.cmd_limit} {p.vel_mode} "
              f"{p.vmax_cps} {p.amax_cps2} {period}"]
-    pos, t, edge = rng.randrange(-10**6, 10**6), rng.randrange(2**32), 0
+    pos, t, edge = rng.randrange(-10**6, 10**6) if start is None else start, rng.randrange(2**32), 0
     ax.reset(pos, t)
     lines.append(f"R {pos} {t}")
     edge = t
     expect = []
     for _ in range(rng.randrange(20, 200)):
         if rng.random() < 0.05:
-            tgt, trap = pos + rng.randrange(-20000, 20000), rng.randrange(2)
+            tgt, trap = _i32(pos + rng.randrange(-20000, 20000)), rng.randrange(2)
             ax.move(tgt, bool(trap))
             lines.append(f"M {tgt} {trap}")
         t = (t + period * 50 + rng.randrange(-100, 100)) & 0xFFFFFFFF
         if rng.random() < 0.6:
-            pos += rng.randrange(-300, 300)
+            pos = _i32(pos + rng.randrange(-300, 300))   # the decoder's 32-bit counter wraps
             edge = (t - rng.randrange(period * 50)) & 0xFFFFFFFF
         run = int(rng.random() < 0.9)
         interval = rng.randrange(1, period * 50)
@@ -92,6 +96,23 @@ def test_control_matches_the_reference_model(host_tests: Path) -> None:
     assert len(got) == len(want)
     for i, (g, w) in enumerate(zip(got, want)):
         assert g == w, f"seed {seed}, step {i}: C (cmd, sp_q16, vel_q8, integ_q32) = {g}, reference {w}"
+
+
+def test_control_matches_the_reference_across_the_encoder_wrap(host_tests: Path) -> None:
+    """Runs that start next to the 32-bit counter's wrap and cross it: the C
+    (UBSan aborts on a signed overflow) and the reference agree on the velocity."""
+    seed = int(os.environ.get("TL_SEED", random.randrange(1, 2**32)))
+    print(f"seed {seed}")
+    rng = random.Random(seed)
+    runs = [_random_run(rng, start=rng.choice([2**31 - 1 - rng.randrange(2000), -2**31 + rng.randrange(2000)]))
+            for _ in range(40)]
+    script = "\n".join(line for lines, _ in runs for line in lines) + "\n"
+    out = subprocess.run([str(host_tests), "ctl"], input=script, capture_output=True, text=True)
+    assert out.returncode == 0, f"seed {seed}: {out.stderr[-2000:]}"
+    got = [tuple(int(x) for x in ln.split()) for ln in out.stdout.splitlines()]
+    want = [e for _, exp in runs for e in exp]
+    assert got == want, f"seed {seed}: first difference at step " \
+        f"{next(i for i, (g, w) in enumerate(zip(got, want)) if g != w)}"
 
 
 def test_gain_conversion_matches_python(host_tests: Path) -> None:

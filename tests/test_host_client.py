@@ -60,7 +60,8 @@ class DocBoard:
             if c.name == "IDENTIFY":
                 rep = struct.pack(c.rep_fmt, 0, P.PROTO_VERSION, 0x100, 0xB11D, 2, self.last, 50_000_000)
             elif c.name == "STATUS":
-                rep = struct.pack(c.rep_fmt, 0, 1, 0, 0, 1234, 1234, 0, 0, 0, 0, 0, 0)
+                vals = {"enabled": 1, "home": 2, "position": 1234, "setpoint": 1234}
+                rep = struct.pack(c.rep_fmt, *(vals.get(n, 0) for n, _ in c.rep))
             elif c.name == "MOVE":
                 self.moves.append(args["target"])
                 rep = b"\x00"

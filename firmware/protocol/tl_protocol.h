@@ -5,7 +5,7 @@
 
 #include <stdint.h>
 
-#define TLP_VERSION 0x1u
+#define TLP_VERSION 0x2u
 #define TLP_MAX_PAYLOAD 0x40u
 #define TLP_HEADER_BYTES 0x4u
 #define TLP_CRC_BYTES 0x2u
@@ -29,48 +29,86 @@
 #define TLP_ST_RANGE 7u
 #define TLP_ST_REPLAY 8u
 #define TLP_ST_STATE 9u
+#define TLP_ST_LOOSEN 10u
+#define TLP_ST_NOT_HOMED 11u
 
-#define TLP_FAULT_ESTOP 0x01u
-#define TLP_FAULT_BRIDGE 0x02u
-#define TLP_FAULT_FOLLOWING 0x04u
-#define TLP_FAULT_SOFT_LIMIT 0x08u
-#define TLP_FAULT_LINK 0x10u
-#define TLP_FAULT_ENCODER 0x20u
-#define TLP_FAULT_HW_SAFE 0x40u
+#define TLP_FAULT_ESTOP 0x0001u
+#define TLP_FAULT_BRIDGE 0x0002u
+#define TLP_FAULT_FOLLOWING 0x0004u
+#define TLP_FAULT_SOFT_LIMIT 0x0008u
+#define TLP_FAULT_LINK 0x0010u
+#define TLP_FAULT_ENCODER 0x0020u
+#define TLP_FAULT_HW_SAFE 0x0040u
+#define TLP_FAULT_RUNAWAY 0x0080u
+#define TLP_FAULT_LIMIT_NEG 0x0100u
+#define TLP_FAULT_LIMIT_POS 0x0200u
+/* faults that only block motion toward their end: ENABLE is allowed with them latched */
+#define TLP_FAULT_DIRECTIONAL 0x0300u
 
 #define TLP_CMD_IDENTIFY 0x01u
 #define TLP_CMD_IDENTIFY_REQ_LEN 0u
 #define TLP_CMD_IDENTIFY_REP_LEN 15u
+#define TLP_CMD_IDENTIFY_FEEDS_LINK 0u
 #define TLP_CMD_GET_PARAM 0x02u
 #define TLP_CMD_GET_PARAM_REQ_LEN 2u
 #define TLP_CMD_GET_PARAM_REP_LEN 5u
+#define TLP_CMD_GET_PARAM_FEEDS_LINK 0u
 #define TLP_CMD_SET_PARAM 0x03u
 #define TLP_CMD_SET_PARAM_REQ_LEN 6u
 #define TLP_CMD_SET_PARAM_REP_LEN 5u
+#define TLP_CMD_SET_PARAM_FEEDS_LINK 0u
 #define TLP_CMD_ENABLE 0x04u
 #define TLP_CMD_ENABLE_REQ_LEN 2u
 #define TLP_CMD_ENABLE_REP_LEN 1u
+#define TLP_CMD_ENABLE_FEEDS_LINK 1u
 #define TLP_CMD_MOVE 0x05u
 #define TLP_CMD_MOVE_REQ_LEN 6u
 #define TLP_CMD_MOVE_REP_LEN 1u
+#define TLP_CMD_MOVE_FEEDS_LINK 1u
 #define TLP_CMD_STOP 0x06u
 #define TLP_CMD_STOP_REQ_LEN 1u
 #define TLP_CMD_STOP_REP_LEN 1u
+#define TLP_CMD_STOP_FEEDS_LINK 1u
 #define TLP_CMD_STATUS 0x07u
 #define TLP_CMD_STATUS_REQ_LEN 1u
-#define TLP_CMD_STATUS_REP_LEN 30u
+#define TLP_CMD_STATUS_REP_LEN 33u
+#define TLP_CMD_STATUS_FEEDS_LINK 0u
 #define TLP_CMD_TELEMETRY 0x08u
 #define TLP_CMD_TELEMETRY_REQ_LEN 2u
 #define TLP_CMD_TELEMETRY_REP_LEN 1u
+#define TLP_CMD_TELEMETRY_FEEDS_LINK 0u
 #define TLP_CMD_CLEAR_FAULT 0x09u
 #define TLP_CMD_CLEAR_FAULT_REQ_LEN 1u
-#define TLP_CMD_CLEAR_FAULT_REP_LEN 3u
+#define TLP_CMD_CLEAR_FAULT_REP_LEN 5u
+#define TLP_CMD_CLEAR_FAULT_FEEDS_LINK 0u
 #define TLP_CMD_BOOTLOADER 0x0Au
 #define TLP_CMD_BOOTLOADER_REQ_LEN 4u
 #define TLP_CMD_BOOTLOADER_REP_LEN 1u
+#define TLP_CMD_BOOTLOADER_FEEDS_LINK 0u
 #define TLP_CMD_COUNTERS 0x0Bu
 #define TLP_CMD_COUNTERS_REQ_LEN 0u
 #define TLP_CMD_COUNTERS_REP_LEN 19u
+#define TLP_CMD_COUNTERS_FEEDS_LINK 0u
+#define TLP_CMD_HEARTBEAT 0x0Cu
+#define TLP_CMD_HEARTBEAT_REQ_LEN 0u
+#define TLP_CMD_HEARTBEAT_REP_LEN 1u
+#define TLP_CMD_HEARTBEAT_FEEDS_LINK 1u
+#define TLP_CMD_HOME 0x0Du
+#define TLP_CMD_HOME_REQ_LEN 3u
+#define TLP_CMD_HOME_REP_LEN 1u
+#define TLP_CMD_HOME_FEEDS_LINK 1u
+/* bit cmd set: that command, executed, feeds the link watchdog */
+#define TLP_LINK_FEED_MASK ((1u << TLP_CMD_ENABLE) | (1u << TLP_CMD_MOVE) | (1u << TLP_CMD_STOP) | (1u << TLP_CMD_HEARTBEAT) | (1u << TLP_CMD_HOME))
+#define TLP_MOVE_TRAPEZOID 0x01u
+#define TLP_MOVE_UNHOMED 0x80u
+#define TLP_HOME_MODE_NEG 0u
+#define TLP_HOME_MODE_POS 1u
+#define TLP_HOME_MODE_HERE 2u
+#define TLP_HOME_STATE_NOT_HOMED 0u
+#define TLP_HOME_STATE_HOMING 1u
+#define TLP_HOME_STATE_HOMED 2u
+#define TLP_LIMIT_NEG 0x01u
+#define TLP_LIMIT_POS 0x02u
 
 /* Field offsets in the payloads (little-endian). */
 #define TLP_IDENTIFY_REP_STATUS 0u
@@ -102,21 +140,23 @@
 #define TLP_STATUS_REP_STATUS 0u
 #define TLP_STATUS_REP_ENABLED 1u
 #define TLP_STATUS_REP_FAULTS 2u
-#define TLP_STATUS_REP_MOVING 3u
-#define TLP_STATUS_REP_POSITION 4u
-#define TLP_STATUS_REP_SETPOINT 8u
-#define TLP_STATUS_REP_VELOCITY_Q8 12u
-#define TLP_STATUS_REP_PWM_CMD 16u
-#define TLP_STATUS_REP_SAFETY 18u
-#define TLP_STATUS_REP_RX_ERRORS 20u
-#define TLP_STATUS_REP_LOOP_CYCLES_MAX 22u
-#define TLP_STATUS_REP_JITTER_CYCLES_MAX 26u
+#define TLP_STATUS_REP_MOVING 4u
+#define TLP_STATUS_REP_HOME 5u
+#define TLP_STATUS_REP_LIMITS 6u
+#define TLP_STATUS_REP_POSITION 7u
+#define TLP_STATUS_REP_SETPOINT 11u
+#define TLP_STATUS_REP_VELOCITY_Q8 15u
+#define TLP_STATUS_REP_PWM_CMD 19u
+#define TLP_STATUS_REP_SAFETY 21u
+#define TLP_STATUS_REP_RX_ERRORS 23u
+#define TLP_STATUS_REP_LOOP_CYCLES_MAX 25u
+#define TLP_STATUS_REP_JITTER_CYCLES_MAX 29u
 #define TLP_TELEMETRY_REQ_EVERY 0u
 #define TLP_TELEMETRY_REP_STATUS 0u
 #define TLP_CLEAR_FAULT_REQ_MASK 0u
 #define TLP_CLEAR_FAULT_REP_STATUS 0u
 #define TLP_CLEAR_FAULT_REP_FAULTS0 1u
-#define TLP_CLEAR_FAULT_REP_FAULTS1 2u
+#define TLP_CLEAR_FAULT_REP_FAULTS1 3u
 #define TLP_BOOTLOADER_REQ_MAGIC 0u
 #define TLP_BOOTLOADER_REP_STATUS 0u
 #define TLP_COUNTERS_REP_STATUS 0u
@@ -129,6 +169,11 @@
 #define TLP_COUNTERS_REP_REPLAY 13u
 #define TLP_COUNTERS_REP_REJECTED 15u
 #define TLP_COUNTERS_REP_TX_DROPPED 17u
+#define TLP_HEARTBEAT_REP_STATUS 0u
+#define TLP_HOME_REQ_AXIS 0u
+#define TLP_HOME_REQ_MODE 1u
+#define TLP_HOME_REQ_INDEX 2u
+#define TLP_HOME_REP_STATUS 0u
 #define TLP_TELEM_TIME_US 0u
 #define TLP_TELEM_HEAD_LEN 4u
 #define TLP_TELEM_AX_SETPOINT 0u
@@ -137,9 +182,9 @@
 #define TLP_TELEM_AX_ERROR 12u
 #define TLP_TELEM_AX_PWM_CMD 16u
 #define TLP_TELEM_AX_FAULTS 18u
-#define TLP_TELEM_AX_ENABLED 19u
-#define TLP_TELEM_AX_LEN 20u
-#define TLP_TELEM_LEN 44u
+#define TLP_TELEM_AX_ENABLED 20u
+#define TLP_TELEM_AX_LEN 21u
+#define TLP_TELEM_LEN 46u
 
 #define TLP_GLOBAL_AXIS 0xFFu
 #define TLP_P_LAW 0u
@@ -164,40 +209,53 @@
 #define TLP_P_AMAX 19u
 #define TLP_P_VEL_MODE 20u
 #define TLP_P_BRAKE 21u
+#define TLP_P_STALL_CMD 22u
+#define TLP_P_STALL_MS 23u
+#define TLP_P_LIMIT_SW 24u
+#define TLP_P_HOME_VEL 25u
+#define TLP_P_HOME_POS 26u
 #define TLP_P_PERIOD_US 64u
 #define TLP_P_LINK_TIMEOUT_MS 65u
 #define TLP_P_BAUD_DIV 66u
+#define TLP_P_PWM_MAX_HZ 67u
 
 #define TLP_AXIS_COUNT 2u
-/* dflt[axis]: a global parameter's default is dflt[0] */
-typedef struct { uint8_t id; uint8_t global; int32_t min; int32_t max; int32_t dflt[TLP_AXIS_COUNT]; } tlp_param_info_t;
-#define TLP_PARAM_COUNT 25u
+/* dflt[axis]: a global parameter's default is dflt[0]; tighten: +1 / -1 = while an axis is
+   enabled the value may only rise / fall (a safety limit), 0 = free */
+typedef struct { uint8_t id; uint8_t global; int8_t tighten; int32_t min; int32_t max; int32_t dflt[TLP_AXIS_COUNT]; } tlp_param_info_t;
+#define TLP_PARAM_COUNT 31u
 static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {
-    {0u, 0u, 0L, 3L, {1L, 1L}},  /* LAW */
-    {1u, 0u, 0L, 2147483647L, {17134L, 23145L}},  /* KP_Q16 */
-    {2u, 0u, 0L, 2147483647L, {0L, 0L}},  /* KD_Q16 */
-    {3u, 0u, 0L, 2147483647L, {0L, 0L}},  /* KI_Q16 */
-    {4u, 0u, 0L, 100000000L, {820000L, 960000L}},  /* KP_UNM_RAD */
-    {5u, 0u, 0L, 100000000L, {0L, 0L}},  /* KD_UNMS_RAD */
-    {6u, 0u, 0L, 100000000L, {0L, 0L}},  /* KI_UNM_RADS */
-    {7u, 0u, 1L, 1000000L, {2400L, 2080L}},  /* TAU_MAX_MNM */
-    {8u, 0u, 1L, 1000000L, {8400L, 8400L}},  /* COUNTS_PER_REV */
-    {9u, 0u, 1L, 1000000L, {4000L, 4000L}},  /* PITCH_UM */
-    {10u, 0u, 0L, 1023L, {1023L, 1023L}},  /* CMD_LIMIT */
-    {11u, 0u, 0L, 1023L, {0L, 0L}},  /* PW0 */
-    {12u, 0u, 0L, 1023L, {1023L, 1023L}},  /* PWMAX */
-    {13u, 0u, 1L, 65535L, {109L, 244L}},  /* FDIV */
-    {14u, 0u, 0L, 2147483647L, {32768L, 32768L}},  /* DEADBAND_Q16 */
-    {15u, 0u, 1L, 2147483647L, {16800L, 16800L}},  /* FOLLOW_LIMIT */
-    {16u, 0u, (-2147483647L), 2147483647L, {(-1000000L), (-1000000L)}},  /* SOFT_MIN */
-    {17u, 0u, (-2147483647L), 2147483647L, {1000000L, 1000000L}},  /* SOFT_MAX */
-    {18u, 0u, 1L, 10000000L, {8400L, 8400L}},  /* VMAX */
-    {19u, 0u, 1L, 100000000L, {16800L, 16800L}},  /* AMAX */
-    {20u, 0u, 0L, 1L, {1L, 1L}},  /* VEL_MODE */
-    {21u, 0u, 0L, 1L, {1L, 1L}},  /* BRAKE */
-    {64u, 1u, 200L, 25000L, {25000L, 25000L}},  /* PERIOD_US */
-    {65u, 1u, 10L, 60000L, {500L, 500L}},  /* LINK_TIMEOUT_MS */
-    {66u, 1u, 15L, 65535L, {433L, 433L}},  /* BAUD_DIV */
+    {0u, 0u, 0, 0L, 3L, {1L, 1L}},  /* LAW */
+    {1u, 0u, 0, 0L, 2147483647L, {17134L, 23145L}},  /* KP_Q16 */
+    {2u, 0u, 0, 0L, 2147483647L, {0L, 0L}},  /* KD_Q16 */
+    {3u, 0u, 0, 0L, 2147483647L, {0L, 0L}},  /* KI_Q16 */
+    {4u, 0u, 0, 0L, 100000000L, {820000L, 960000L}},  /* KP_UNM_RAD */
+    {5u, 0u, 0, 0L, 100000000L, {0L, 0L}},  /* KD_UNMS_RAD */
+    {6u, 0u, 0, 0L, 100000000L, {0L, 0L}},  /* KI_UNM_RADS */
+    {7u, 0u, 0, 1L, 1000000L, {2400L, 2080L}},  /* TAU_MAX_MNM */
+    {8u, 0u, 0, 1L, 1000000L, {8400L, 8400L}},  /* COUNTS_PER_REV */
+    {9u, 0u, 0, 1L, 1000000L, {4000L, 4000L}},  /* PITCH_UM */
+    {10u, 0u, -1, 0L, 1023L, {1023L, 1023L}},  /* CMD_LIMIT */
+    {11u, 0u, -1, 0L, 1023L, {0L, 0L}},  /* PW0 */
+    {12u, 0u, -1, 0L, 1023L, {1023L, 1023L}},  /* PWMAX */
+    {13u, 0u, 1, 1L, 65535L, {109L, 244L}},  /* FDIV */
+    {14u, 0u, 0, 0L, 2147483647L, {32768L, 32768L}},  /* DEADBAND_Q16 */
+    {15u, 0u, -1, 1L, 2147483647L, {16800L, 16800L}},  /* FOLLOW_LIMIT */
+    {16u, 0u, 1, (-2147483647L), 2147483647L, {(-1000000L), (-1000000L)}},  /* SOFT_MIN */
+    {17u, 0u, -1, (-2147483647L), 2147483647L, {1000000L, 1000000L}},  /* SOFT_MAX */
+    {18u, 0u, 0, 1L, 10000000L, {8400L, 8400L}},  /* VMAX */
+    {19u, 0u, 0, 1L, 100000000L, {16800L, 16800L}},  /* AMAX */
+    {20u, 0u, 0, 0L, 1L, {1L, 1L}},  /* VEL_MODE */
+    {21u, 0u, 0, 0L, 1L, {1L, 1L}},  /* BRAKE */
+    {22u, 0u, -1, 1L, 1023L, {100L, 100L}},  /* STALL_CMD */
+    {23u, 0u, -1, 10L, 10000L, {500L, 500L}},  /* STALL_MS */
+    {24u, 0u, 1, 0L, 1L, {1L, 1L}},  /* LIMIT_SW */
+    {25u, 0u, 0, 1L, 1000000L, {2100L, 2100L}},  /* HOME_VEL */
+    {26u, 0u, 0, (-2147483647L), 2147483647L, {0L, 0L}},  /* HOME_POS */
+    {64u, 1u, 0, 200L, 25000L, {25000L, 25000L}},  /* PERIOD_US */
+    {65u, 1u, -1, 10L, 60000L, {500L, 500L}},  /* LINK_TIMEOUT_MS */
+    {66u, 1u, 0, 15L, 65535L, {433L, 433L}},  /* BAUD_DIV */
+    {67u, 1u, -1, 1L, 25000L, {25000L, 25000L}},  /* PWM_MAX_HZ */
 };
 
 #endif

@@ -14,6 +14,9 @@
 
 static int64_t clamp64(int64_t v, int64_t lo, int64_t hi) { return v < lo ? lo : (v > hi ? hi : v); }
 static int64_t abs64(int64_t v) { return v < 0 ? -v : v; }
+/* Counts between two decoder readings: the 32-bit counter wraps, so the
+ * difference is taken modulo 2^32 (a signed subtraction would overflow). */
+static int32_t count_diff(int32_t a, int32_t b) { return (int32_t)((uint32_t)a - (uint32_t)b); }
 
 void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now)
 {
@@ -130,14 +133,14 @@ static void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_
 {
     if (p->vel_mode == 0u) {
         /* The paper: Euler difference over T_s, low-pass weight 1/2 (torqueloop/sim/model_loop.py). */
-        int64_t euler = (int64_t)(pos - c->pos_prev) * 256 * 1000000 / (int64_t)c->period_us;
+        int64_t euler = (int64_t)count_diff(pos, c->pos_prev) * 256 * 1000000 / (int64_t)c->period_us;
         c->vel_q8 = (int32_t)clamp64((euler + c->vel_q8) / 2, -0x7FFFFFFF, 0x7FFFFFFF);
     } else if (pos != c->pos_ref) {
         /* Moving since the last sample: distance over the time between the decoder's edge
          * timestamps - the exact average speed, free of sampling quantisation.  First counts
          * after a silent sample: the old reference edge dates from before the standstill,
          * so take one count over the decoder's last edge interval instead. */
-        int64_t d = pos - c->pos_ref;
+        int64_t d = count_diff(pos, c->pos_ref);
         uint32_t dt = edge_time - c->t_ref;
         if (!c->moved_last) {
             d = d > 0 ? 1 : -1;

@@ -14,7 +14,11 @@ typedef struct {
     uint32_t interval;      /* decoder clock cycles between the last two counts */
     uint32_t illegal;       /* illegal-transition count */
     bool bridge_fault;      /* bridge fault input now */
+    uint8_t limits;         /* limit switches open now (synchronised, debounced): TL_HAL_LIM_* */
 } tl_enc_sample_t;
+
+#define TL_HAL_LIM_NEG 0x01u        /* negative-end switch open (tripped or wire broken) */
+#define TL_HAL_LIM_POS 0x02u
 
 /* SoC safety latch bits as the servo core sees them (a subset of SYS.SAFETY). */
 #define TL_HAL_SAFE_FORCED 0x01u    /* drives forced safe now */
@@ -26,6 +30,12 @@ typedef struct {
 
 void hal_enc_read(uint32_t axis, tl_enc_sample_t *s);
 void hal_enc_clear_illegal(uint32_t axis);
+/* Encoder index latch: arm it, then poll; true once an index pulse latched *pos (encoder counts). */
+void hal_enc_index_arm(uint32_t axis);
+bool hal_enc_index(uint32_t axis, int32_t *pos);
+/* Hardware limit block: while on, the bridge side that drives toward an open
+ * limit switch is held off in the SoC (LIMIT_SW = 1); off for an axis without switches. */
+void hal_limit_block(uint32_t axis, bool on);
 void hal_pwm_cmd(uint32_t axis, int32_t cmd);
 void hal_pwm_enable(uint32_t axis, bool on, bool brake);
 void hal_pwm_config(uint32_t axis, uint32_t fdiv, uint32_t pw0, uint32_t pwmax);

@@ -22,9 +22,26 @@ void hal_enc_read(uint32_t axis, tl_enc_sample_t *s)
     s->now = AX(axis, ENC_TIMESTAMP);
     s->illegal = AX(axis, ENC_ILLEGAL) & TL_AXIS_ENC_ILLEGAL_COUNT_MSK;
     s->bridge_fault = (AX(axis, PWM_STATUS) & TL_AXIS_PWM_STATUS_BRIDGE_FAULT_MSK) != 0u;
+    s->limits = 0;   /* the SoC has no limit-switch inputs yet */
 }
 
 void hal_enc_clear_illegal(uint32_t axis) { AX(axis, ENC_CMD) = TL_AXIS_ENC_CMD_ILLEGAL_CLEAR_MSK; }
+
+void hal_enc_index_arm(uint32_t axis) { AX(axis, ENC_CMD) = TL_AXIS_ENC_CMD_INDEX_ARM_MSK; }
+
+bool hal_enc_index(uint32_t axis, int32_t *pos)
+{
+    if (!(AX(axis, ENC_STATUS) & TL_AXIS_ENC_STATUS_INDEX_SEEN_MSK))
+        return false;
+    *pos = (int32_t)AX(axis, ENC_INDEX_POS);
+    return true;
+}
+
+void hal_limit_block(uint32_t axis, bool on)
+{
+    (void)axis;   /* the SoC has no limit-switch inputs yet */
+    (void)on;
+}
 
 void hal_pwm_cmd(uint32_t axis, int32_t cmd) { AX(axis, PWM_CMD) = (uint32_t)cmd & TL_AXIS_PWM_CMD_CMD_MSK; }
 

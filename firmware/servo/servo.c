@@ -1,13 +1,18 @@
 /* SPDX-License-Identifier: MIT */
 /* Servo application core (servo.h): parameters, safety and the command
- * handler.  The safety rules (docs/firmware.md, "Safety"):
+ * handler.  The safety rules (docs/safety.md, docs/firmware.md "Safety"):
  *  - power-up: both axes disabled; the SoC's reset-time ESTOP latch bit is
  *    acknowledged only by an ENABLE command;
- *  - e-stop, bridge fault, illegal encoder transitions, following error, soft
- *    limits, link silence and a hardware-forced safe state each disable the
- *    axis in the same control period and latch a fault bit; only CLEAR_FAULT
- *    (when the cause is gone) clears it, and the axis then stays disabled
- *    until ENABLE;
+ *  - every fault (docs/protocol.md, "Fault flags") disables the axis in the
+ *    same control period and latches a bit; only CLEAR_FAULT (when the cause
+ *    is gone) clears it.  The limit-switch faults only block motion toward
+ *    their end: the axis may be enabled again and driven back out;
+ *  - a SoC safety latch bit is recorded as a fault of every axis it stopped
+ *    before anything acknowledges it, and only the bits read are
+ *    acknowledged, so no fault of one axis is lost by a command for the other;
+ *  - a safety limit (a tighten-only parameter) can only be made stricter while
+ *    any axis is enabled;
+ *  - only commands that show the host in control feed the link watchdog;
  *  - a frame that fails any check, or a replayed one, is counted and answered
  *    with an error and changes nothing. */
 #include "servo.h"
@@ -15,6 +20,17 @@
 #include "hal.h"
 
 #define IDX_NONE (-1)
+#define LATCH_BITS (TL_HAL_SAFE_ESTOP | TL_HAL_SAFE_FAULT0 | TL_HAL_SAFE_FAULT1 | TL_HAL_SAFE_WDOG)
+/* Largest physical gain (KP_UNM_RAD, KD_UNMS_RAD, KI_UNM_RADS share the range). */
+#define GAIN_PHYS_MAX 100000000
+_Static_assert(TL_HAL_LIM_NEG == TLP_LIMIT_NEG && TL_HAL_LIM_POS == TLP_LIMIT_POS, "limit bits");
+
+/* Homing: SEEK the switch at HOME_VEL, SETTLE on it, (CREEP back onto it if
+ * the stop bounced off), BACK OFF until it closes, (on to the INDEX).  The
+ * final approach runs at a sixteenth of HOME_VEL: the switch is sampled once
+ * per period, so the slower the approach, the more repeatable the home point. */
+enum { HOME_SEEK, HOME_SETTLE, HOME_CREEP, HOME_BACKOFF, HOME_INDEX };
+#define HOME_SLOW_SHIFT 4
 
 /* id -> index into TLP_PARAM_INFO, built once: the control iteration reads
  * parameters by id, and a search per read cost ~1000 cycles per iteration. */
@@ -53,8 +69,18 @@ static void sync_axis(tl_servo_t *s, uint32_t i)
     s->link_timeout_ticks = (uint32_t)gv(s, TLP_P_LINK_TIMEOUT_MS) * 1000u / (uint32_t)gv(s, TLP_P_PERIOD_US);
     if (s->link_timeout_ticks == 0u)
         s->link_timeout_ticks = 1u;
+    uint32_t period_us = (uint32_t)gv(s, TLP_P_PERIOD_US);
+    a->stall_limit_ticks = ((uint32_t)pv(a, TLP_P_STALL_MS) * 1000u + period_us - 1u) / period_us;
+    /* counts/s * us * 2^16 / 1e6 = x * 1024 / 15625, as control.c's vmax */
+    a->home_step_q16 = (int64_t)pv(a, TLP_P_HOME_VEL) * (int64_t)period_us * 1024 / 15625;
+    if (a->home_step_q16 < (1 << HOME_SLOW_SHIFT))
+        a->home_step_q16 = 1 << HOME_SLOW_SHIFT;
     hal_pwm_config(i, (uint32_t)pv(a, TLP_P_FDIV), (uint32_t)pv(a, TLP_P_PW0), (uint32_t)pv(a, TLP_P_PWMAX));
+    hal_limit_block(i, pv(a, TLP_P_LIMIT_SW) != 0);
 }
+
+/* Positions wrap modulo 2^32 like the decoder's counter: no signed overflow. */
+static int32_t wrap_add(int32_t x, int32_t y) { return (int32_t)((uint32_t)x + (uint32_t)y); }
 
 static void disable_axis(tl_servo_t *s, uint32_t i)
 {
@@ -62,8 +88,62 @@ static void disable_axis(tl_servo_t *s, uint32_t i)
     hal_pwm_enable(i, false, pv(a, TLP_P_BRAKE) != 0);
     hal_pwm_cmd(i, 0);
     a->enabled = false;
+    a->cmd = 0;
+    if (a->home == TLP_HOME_STATE_HOMING)
+        a->home = TLP_HOME_STATE_NOT_HOMED;
     tl_ctl_hold(&a->c, a->pos);
     a->c.cmd = 0;
+}
+
+static bool any_enabled(const tl_servo_t *s)
+{
+    for (uint32_t i = 0; i < TL_AXES; i++)
+        if (s->ax[i].enabled)
+            return true;
+    return false;
+}
+
+/* Faults the SoC safety latch bits mean for axis i: its own bridge bit always
+ * (a bridge fault is a fault of that axis whatever it was doing), the shared
+ * e-stop and watchdog bits for an axis they stopped (enabled). */
+static uint16_t latch_faults(const tl_axis_t *a, uint32_t i, uint32_t safety)
+{
+    uint16_t f = (safety & (i == 0u ? TL_HAL_SAFE_FAULT0 : TL_HAL_SAFE_FAULT1)) ? TLP_FAULT_BRIDGE : 0u;
+    if (a->enabled) {
+        if (safety & TL_HAL_SAFE_ESTOP)
+            f |= TLP_FAULT_ESTOP;
+        if (safety & TL_HAL_SAFE_WDOG)
+            f |= TLP_FAULT_HW_SAFE;
+    }
+    return f;
+}
+
+/* Record every latched SoC bit as a fault of the axes it stopped (those axes
+ * are disabled), and return the bits read: only they may be acknowledged,
+ * since a bit set after the read has not been recorded.  Interrupts off. */
+static uint32_t fold_latch(tl_servo_t *s)
+{
+    uint32_t safety = hal_safety();
+    for (uint32_t i = 0; i < TL_AXES; i++) {
+        tl_axis_t *a = &s->ax[i];
+        uint16_t f = latch_faults(a, i, safety);
+        a->faults |= f;
+        if (f && a->enabled)
+            disable_axis(s, i);
+    }
+    return safety & LATCH_BITS;
+}
+
+/* Home point found at position ref: from now on it reads HOME_POS, and the
+ * controller holds where the axis is, in the new coordinates. */
+static void home_finish(tl_axis_t *a, int32_t ref, uint32_t now)
+{
+    int32_t delta = (int32_t)((uint32_t)pv(a, TLP_P_HOME_POS) - (uint32_t)ref);
+    a->offset = wrap_add(a->offset, delta);
+    a->pos = wrap_add(a->pos, delta);
+    a->stall_dir = 0;
+    tl_ctl_reset(&a->c, a->pos, now);
+    a->home = TLP_HOME_STATE_HOMED;
 }
 
 void tl_servo_init(tl_servo_t *s)
@@ -100,8 +180,14 @@ void tl_servo_init(tl_servo_t *s)
         tl_enc_sample_t e;
         hal_enc_read(i, &e);
         a->pos = e.pos;
+        a->offset = 0;
         a->illegal_seen = e.illegal;
         a->faults = 0;
+        a->cmd = 0;
+        a->limits = 0;
+        a->recover = 0;
+        a->home = TLP_HOME_STATE_NOT_HOMED;
+        a->stall_dir = 0;
         tl_ctl_reset(&a->c, e.pos, e.now);
         sync_axis(s, i);
         disable_axis(s, i);
@@ -112,10 +198,161 @@ void tl_servo_init(tl_servo_t *s)
 uint32_t tl_servo_period_cycles(const tl_servo_t *s) { return s->period_cycles; }
 
 
+/* Runaway / encoder loss.  A command of STALL_CMD or more must, within
+ * STALL_MS, either move the position past a reference in its direction or
+ * raise the velocity in its direction by STALL_DV_Q8 over a reference; each
+ * time it does, the references move up to where the axis is.  An axis that
+ * accelerates, cruises, or is braked from the other direction satisfies it
+ * every few periods; a frozen encoder, one that counts the wrong way (the
+ * measured motion runs away against the command) or one channel flickering
+ * never does.  A compare and a counter per period: no division, no history. */
+#define STALL_DV_Q8 (20 * 256)   /* 20 counts/s */
+static uint16_t stall_check(tl_axis_t *a)
+{
+    int32_t lim = pv(a, TLP_P_STALL_CMD);
+    int8_t dir = a->cmd >= lim ? 1 : (a->cmd <= -lim ? -1 : 0);
+    if (dir == 0 || dir != a->stall_dir) {
+        a->stall_dir = dir;
+        a->stall_ref = a->pos;
+        a->stall_vel_q8 = a->c.vel_q8;
+        a->stall_ticks = 0;
+        return 0;
+    }
+    /* each reference only ever moves on in dir */
+    int32_t moved = (int32_t)((uint32_t)a->pos - (uint32_t)a->stall_ref);
+    int64_t dv = (int64_t)a->c.vel_q8 - a->stall_vel_q8;
+    bool progress = false;
+    if (dir > 0 ? moved > 0 : moved < 0) {
+        a->stall_ref = a->pos;
+        progress = true;
+    }
+    if (dir > 0 ? dv > STALL_DV_Q8 : dv < -STALL_DV_Q8) {
+        a->stall_vel_q8 = a->c.vel_q8;
+        progress = true;
+    }
+    if (progress) {
+        a->stall_ticks = 0;
+        return 0;
+    }
+    return ++a->stall_ticks >= a->stall_limit_ticks ? TLP_FAULT_RUNAWAY : 0u;
+}
+
+/* The switch homing is looking for does not trip a limit fault. */
+static uint8_t home_switch(const tl_axis_t *a)
+{
+    if (a->home != TLP_HOME_STATE_HOMING)
+        return 0;
+    return a->home_dir < 0 ? TLP_LIMIT_NEG : TLP_LIMIT_POS;
+}
+
+/* Every check of one axis for this period; returns the faults that tripped. */
+static uint16_t axis_checks(tl_servo_t *s, uint32_t i, const tl_enc_sample_t *e, uint32_t safety)
+{
+    tl_axis_t *a = &s->ax[i];
+    uint16_t f = latch_faults(a, i, safety);
+    if (safety & TL_HAL_SAFE_ESTOP_IN)
+        f |= TLP_FAULT_ESTOP;
+    if (e->bridge_fault)
+        f |= TLP_FAULT_BRIDGE;
+    if (e->illegal != a->illegal_seen) {
+        f |= TLP_FAULT_ENCODER;
+        a->illegal_seen = e->illegal;
+    }
+    a->limits = pv(a, TLP_P_LIMIT_SW) ? (uint8_t)(e->limits & (TLP_LIMIT_NEG | TLP_LIMIT_POS)) : 0u;
+    uint8_t lim = a->limits & (uint8_t)~home_switch(a);
+    if (lim & TLP_LIMIT_NEG)
+        f |= TLP_FAULT_LIMIT_NEG;
+    if (lim & TLP_LIMIT_POS)
+        f |= TLP_FAULT_LIMIT_POS;
+    if (!a->enabled)
+        return f;
+    if ((safety & TL_HAL_SAFE_FORCED) && f == 0u)
+        f |= TLP_FAULT_HW_SAFE;   /* forced off by a cause not seen above */
+    if (s->link_idle_ticks > s->link_timeout_ticks)
+        f |= TLP_FAULT_LINK;
+    int64_t ferr = (a->c.sp_q16 >> 16) - (int64_t)a->pos;
+    if (ferr > pv(a, TLP_P_FOLLOW_LIMIT) || -ferr > pv(a, TLP_P_FOLLOW_LIMIT))
+        f |= TLP_FAULT_FOLLOWING;
+    /* Outside the soft limits: a fault unless the axis was enabled out there
+     * (it may then only come back in); back inside, that allowance ends. */
+    uint8_t out = a->pos < pv(a, TLP_P_SOFT_MIN) ? TLP_LIMIT_NEG : (a->pos > pv(a, TLP_P_SOFT_MAX) ? TLP_LIMIT_POS : 0u);
+    a->recover &= out;
+    if (out & (uint8_t)~a->recover)
+        f |= TLP_FAULT_SOFT_LIMIT;
+    return f | stall_check(a);
+}
+
+/* Sides toward which the axis must not be driven: a latched limit fault, a
+ * limit switch open now, or a position outside the soft limits. */
+static uint8_t blocked(const tl_axis_t *a)
+{
+    uint8_t b = a->limits;
+    if (a->faults & TLP_FAULT_LIMIT_NEG)
+        b |= TLP_LIMIT_NEG;
+    if (a->faults & TLP_FAULT_LIMIT_POS)
+        b |= TLP_LIMIT_POS;
+    if (a->pos < pv(a, TLP_P_SOFT_MIN))
+        b |= TLP_LIMIT_NEG;
+    if (a->pos > pv(a, TLP_P_SOFT_MAX))
+        b |= TLP_LIMIT_POS;
+    return b;
+}
+
+/* One period of homing (the phases above); the point found reads HOME_POS. */
+static void home_tick(tl_axis_t *a, uint32_t i, uint32_t now)
+{
+    uint8_t sw = a->home_dir < 0 ? TLP_LIMIT_NEG : TLP_LIMIT_POS;
+    bool open = (a->limits & sw) != 0u;
+    int64_t fast = a->home_step_q16, slow = a->home_step_q16 >> HOME_SLOW_SHIFT;
+    int64_t step;   /* set-point motion this period, toward the switch (negative: away) */
+    switch (a->home_phase) {
+    case HOME_SEEK:
+    case HOME_CREEP:
+        if (open) {
+            tl_ctl_hold(&a->c, a->pos);
+            a->home_sp_q16 = (int64_t)a->pos * 65536;
+            a->home_phase = HOME_SETTLE;
+            return;
+        }
+        step = a->home_phase == HOME_SEEK ? fast : slow;
+        break;
+    case HOME_SETTLE: {
+        int64_t v = a->c.vel_q8 < 0 ? -(int64_t)a->c.vel_q8 : a->c.vel_q8;
+        if (v > (int64_t)pv(a, TLP_P_HOME_VEL) * (256 >> HOME_SLOW_SHIFT))
+            return;   /* still moving: hold */
+        tl_ctl_hold(&a->c, a->pos);   /* the slow approach starts where the axis came to rest */
+        a->home_sp_q16 = (int64_t)a->pos * 65536;
+        a->home_phase = open ? HOME_BACKOFF : HOME_CREEP;
+        return;
+    }
+    case HOME_BACKOFF:
+        if (!open) {
+            if (!a->home_index) {
+                home_finish(a, a->pos, now);
+                return;
+            }
+            hal_enc_index_arm(i);
+            a->home_phase = HOME_INDEX;
+        }
+        step = -slow;
+        break;
+    default: {
+        int32_t ip;
+        if (hal_enc_index(i, &ip)) {
+            home_finish(a, wrap_add(ip, a->offset), now);
+            return;
+        }
+        step = -slow;
+        break;
+    }
+    }
+    a->home_sp_q16 += a->home_dir < 0 ? -step : step;
+    tl_ctl_move(&a->c, (int32_t)(a->home_sp_q16 >> 16), false);
+}
+
 void tl_servo_tick(tl_servo_t *s)
 {
     uint32_t safety = hal_safety();
-    uint32_t timeout = s->link_timeout_ticks;
     s->ticks++;
     if (s->link_idle_ticks != 0xFFFFFFFFu)
         s->link_idle_ticks++;
@@ -123,36 +360,23 @@ void tl_servo_tick(tl_servo_t *s)
         tl_axis_t *a = &s->ax[i];
         tl_enc_sample_t e;
         hal_enc_read(i, &e);
-        a->pos = e.pos;
-        uint8_t f = 0;
-        if (safety & TL_HAL_SAFE_ESTOP_IN)
-            f |= TLP_FAULT_ESTOP;
-        if (e.bridge_fault)
-            f |= TLP_FAULT_BRIDGE;
-        if (e.illegal != a->illegal_seen) {
-            f |= TLP_FAULT_ENCODER;
-            a->illegal_seen = e.illegal;
-        }
-        if (a->enabled) {
-            if (safety & TL_HAL_SAFE_ESTOP)
-                f |= TLP_FAULT_ESTOP;
-            if (safety & (i == 0u ? TL_HAL_SAFE_FAULT0 : TL_HAL_SAFE_FAULT1))
-                f |= TLP_FAULT_BRIDGE;
-            if ((safety & TL_HAL_SAFE_WDOG) || ((safety & TL_HAL_SAFE_FORCED) && f == 0u))
-                f |= TLP_FAULT_HW_SAFE;
-            if (s->link_idle_ticks > timeout)
-                f |= TLP_FAULT_LINK;
-            int64_t ferr = (a->c.sp_q16 >> 16) - (int64_t)e.pos;
-            if (ferr > pv(a, TLP_P_FOLLOW_LIMIT) || -ferr > pv(a, TLP_P_FOLLOW_LIMIT))
-                f |= TLP_FAULT_FOLLOWING;
-            if (e.pos < pv(a, TLP_P_SOFT_MIN) || e.pos > pv(a, TLP_P_SOFT_MAX))
-                f |= TLP_FAULT_SOFT_LIMIT;
-        }
+        a->pos = wrap_add(e.pos, a->offset);
+        uint16_t f = axis_checks(s, i, &e, safety);
+        uint16_t fresh = f & (uint16_t)~a->faults;
         a->faults |= f;
-        if (a->enabled && a->faults)
+        if (f & (TLP_FAULT_ENCODER | TLP_FAULT_RUNAWAY))
+            a->home = TLP_HOME_STATE_NOT_HOMED;   /* the position is no longer trusted */
+        /* A new fault stops the axis; an old direction-blocking one lets it be driven out. */
+        if (a->enabled && (fresh || (a->faults & (uint16_t)~TLP_FAULT_DIRECTIONAL)))
             disable_axis(s, i);
-        int32_t cmd = tl_ctl_step(&a->c, &a->ctl, e.pos, e.edge_time, e.now, e.interval, a->enabled);
-        hal_pwm_cmd(i, a->enabled ? cmd : 0);
+        if (a->home == TLP_HOME_STATE_HOMING)
+            home_tick(a, i, e.now);
+        int32_t cmd = tl_ctl_step(&a->c, &a->ctl, a->pos, e.edge_time, e.now, e.interval, a->enabled);
+        uint8_t b = blocked(a);
+        if (((b & TLP_LIMIT_NEG) && cmd < 0) || ((b & TLP_LIMIT_POS) && cmd > 0))
+            cmd = 0;
+        a->cmd = a->enabled ? cmd : 0;
+        hal_pwm_cmd(i, a->cmd);
     }
     if (s->telem_every && (s->ticks % s->telem_every) == 0u)
         s->telem_due = true;
@@ -205,6 +429,64 @@ static uint8_t get_param(const tl_servo_t *s, uint8_t axis, uint8_t id, int32_t 
     return TLP_ST_OK;
 }
 
+/* The raw gain of the largest physical gain: a larger raw gain has no
+ * physical value GET could report (it would read back saturated). */
+static int32_t raw_gain_max(int32_t tau, int32_t cpr) { return tl_gain_raw_from_phys(GAIN_PHYS_MAX, tau, cpr); }
+
+static bool gains_fit(const tl_axis_t *a, int32_t tau, int32_t cpr)
+{
+    int32_t m = raw_gain_max(tau, cpr);
+    return pv(a, TLP_P_KP_Q16) <= m && pv(a, TLP_P_KD_Q16) <= m && pv(a, TLP_P_KI_Q16) <= m;
+}
+
+/* PWM carrier CLK / (FDIV * 1023) at most max_hz. */
+static bool carrier_ok(const tl_servo_t *s, int32_t fdiv, int32_t max_hz)
+{
+    return (uint64_t)(uint32_t)fdiv * TL_PWM_FULL * (uint32_t)max_hz >= s->clk_hz;
+}
+
+/* Bounds between parameters and the tighten-only rule; TLP_ST_OK if v may be stored. */
+static uint8_t param_allowed(const tl_servo_t *s, uint8_t axis, uint8_t id, int k, int32_t v)
+{
+    const tlp_param_info_t *info = &TLP_PARAM_INFO[k];
+    if (v < info->min || v > info->max)
+        return TLP_ST_RANGE;
+    if (info->tighten && any_enabled(s)) {
+        int32_t cur = info->global ? s->g[k] : s->ax[axis].p[k];
+        if (info->tighten > 0 ? v < cur : v > cur)
+            return TLP_ST_LOOSEN;
+    }
+    if (info->global) {
+        if (id == TLP_P_PWM_MAX_HZ)
+            for (uint32_t i = 0; i < TL_AXES; i++)
+                if (!carrier_ok(s, pv(&s->ax[i], TLP_P_FDIV), v))
+                    return TLP_ST_RANGE;
+        return TLP_ST_OK;
+    }
+    const tl_axis_t *a = &s->ax[axis];
+    int32_t tau = pv(a, TLP_P_TAU_MAX_MNM), cpr = pv(a, TLP_P_COUNTS_PER_REV);
+    switch (id) {
+    case TLP_P_SOFT_MIN: return v > pv(a, TLP_P_SOFT_MAX) ? TLP_ST_RANGE : TLP_ST_OK;
+    case TLP_P_SOFT_MAX: return v < pv(a, TLP_P_SOFT_MIN) ? TLP_ST_RANGE : TLP_ST_OK;
+    case TLP_P_PW0: return v > pv(a, TLP_P_PWMAX) ? TLP_ST_RANGE : TLP_ST_OK;
+    case TLP_P_PWMAX: return v < pv(a, TLP_P_PW0) ? TLP_ST_RANGE : TLP_ST_OK;
+    case TLP_P_FDIV: return carrier_ok(s, v, gv(s, TLP_P_PWM_MAX_HZ)) ? TLP_ST_OK : TLP_ST_RANGE;
+    case TLP_P_KP_Q16:
+    case TLP_P_KD_Q16:
+    case TLP_P_KI_Q16: return v <= raw_gain_max(tau, cpr) ? TLP_ST_OK : TLP_ST_RANGE;
+    case TLP_P_KP_UNM_RAD:
+    case TLP_P_KD_UNMS_RAD:
+    case TLP_P_KI_UNM_RADS: {
+        /* a raw gain that saturated would read back as a smaller physical gain */
+        int32_t raw = tl_gain_raw_from_phys(v, tau, cpr);
+        return (raw == 0x7FFFFFFF && tl_gain_phys_from_raw(raw, tau, cpr) < v) ? TLP_ST_RANGE : TLP_ST_OK;
+    }
+    case TLP_P_TAU_MAX_MNM: return gains_fit(a, v, cpr) ? TLP_ST_OK : TLP_ST_RANGE;
+    case TLP_P_COUNTS_PER_REV: return gains_fit(a, tau, v) ? TLP_ST_OK : TLP_ST_RANGE;
+    default: return TLP_ST_OK;
+    }
+}
+
 static uint8_t set_param(tl_servo_t *s, uint8_t axis, uint8_t id, int32_t v)
 {
     int k = tl_param_index(id);
@@ -213,13 +495,12 @@ static uint8_t set_param(tl_servo_t *s, uint8_t axis, uint8_t id, int32_t v)
     const tlp_param_info_t *info = &TLP_PARAM_INFO[k];
     if ((info->global && axis != TLP_GLOBAL_AXIS) || (!info->global && axis >= TL_AXES))
         return TLP_ST_BAD_ARG;
-    if (v < info->min || v > info->max)
-        return TLP_ST_RANGE;
-    if (id == TLP_P_SOFT_MIN && v > pv(&s->ax[axis], TLP_P_SOFT_MAX))
-        return TLP_ST_RANGE;
-    if (id == TLP_P_SOFT_MAX && v < pv(&s->ax[axis], TLP_P_SOFT_MIN))
-        return TLP_ST_RANGE;
     hal_irq_off();
+    uint8_t st = param_allowed(s, axis, id, k, v);
+    if (st != TLP_ST_OK) {
+        hal_irq_on();
+        return st;
+    }
     if (info->global) {
         if (id == TLP_P_BAUD_DIV)
             s->baud_div_pending = (uint32_t)v;
@@ -247,32 +528,44 @@ static uint8_t do_enable(tl_servo_t *s, uint8_t mask, uint8_t on)
 {
     if (!axis_mask_ok(mask) || on > 1u)
         return TLP_ST_BAD_ARG;
+    hal_irq_off();
     if (!on) {
-        hal_irq_off();
         for (uint32_t i = 0; i < TL_AXES; i++)
             if (mask & (1u << i))
                 disable_axis(s, i);
         hal_irq_on();
         return TLP_ST_OK;
     }
+    uint32_t latched = fold_latch(s);
+    uint8_t st = TLP_ST_OK;
     for (uint32_t i = 0; i < TL_AXES; i++)
-        if ((mask & (1u << i)) && s->ax[i].faults)
-            return TLP_ST_STATE;
+        if ((mask & (1u << i)) && (s->ax[i].faults & (uint16_t)~TLP_FAULT_DIRECTIONAL))
+            st = TLP_ST_STATE;
     if (hal_safety() & TL_HAL_SAFE_ESTOP_IN)
-        return TLP_ST_STATE;
-    /* The SoC latch (reset-time ESTOP, or a cause that has gone) is acknowledged here and only here. */
-    hal_safety_ack(TL_HAL_SAFE_ESTOP | TL_HAL_SAFE_FAULT0 | TL_HAL_SAFE_FAULT1 | TL_HAL_SAFE_WDOG);
-    if (hal_safety() & TL_HAL_SAFE_FORCED)
-        return TLP_ST_STATE;
-    hal_irq_off();
+        st = TLP_ST_STATE;
+    if (st == TLP_ST_OK) {
+        /* The SoC latch (the reset-time ESTOP, or causes now recorded as faults) is
+         * acknowledged here and by CLEAR_FAULT only. */
+        hal_safety_ack(latched);
+        if (hal_safety() & TL_HAL_SAFE_FORCED)
+            st = TLP_ST_STATE;
+    }
+    if (st != TLP_ST_OK) {
+        hal_irq_on();
+        return st;
+    }
     for (uint32_t i = 0; i < TL_AXES; i++) {
         if (!(mask & (1u << i)) || s->ax[i].enabled)
             continue;
         tl_axis_t *a = &s->ax[i];
         tl_enc_sample_t e;
         hal_enc_read(i, &e);
-        a->pos = e.pos;
-        tl_ctl_reset(&a->c, e.pos, e.now);   /* set-point = where it is: no jump */
+        a->pos = wrap_add(e.pos, a->offset);
+        tl_ctl_reset(&a->c, a->pos, e.now);   /* set-point = where it is: no jump */
+        a->recover = a->pos < pv(a, TLP_P_SOFT_MIN) ? TLP_LIMIT_NEG
+                   : (a->pos > pv(a, TLP_P_SOFT_MAX) ? TLP_LIMIT_POS : 0u);
+        a->stall_dir = 0;
+        a->cmd = 0;
         a->enabled = true;
         hal_pwm_cmd(i, 0);
         hal_pwm_enable(i, true, pv(a, TLP_P_BRAKE) != 0);
@@ -286,20 +579,26 @@ static uint8_t do_clear(tl_servo_t *s, uint8_t mask)
 {
     if (!axis_mask_ok(mask))
         return TLP_ST_BAD_ARG;
-    uint32_t safety = hal_safety();
     bool left = false;
     hal_irq_off();
+    uint32_t latched = fold_latch(s);
+    uint32_t safety = hal_safety();
     for (uint32_t i = 0; i < TL_AXES; i++) {
         if (!(mask & (1u << i)))
             continue;
         tl_axis_t *a = &s->ax[i];
         tl_enc_sample_t e;
         hal_enc_read(i, &e);
-        uint8_t keep = 0;
+        uint16_t keep = 0;
         if (safety & TL_HAL_SAFE_ESTOP_IN)
             keep |= TLP_FAULT_ESTOP;
         if (e.bridge_fault)
             keep |= TLP_FAULT_BRIDGE;
+        uint8_t lim = pv(a, TLP_P_LIMIT_SW) ? e.limits : 0u;
+        if (lim & TLP_LIMIT_NEG)
+            keep |= TLP_FAULT_LIMIT_NEG;
+        if (lim & TLP_LIMIT_POS)
+            keep |= TLP_FAULT_LIMIT_POS;
         if (a->faults & TLP_FAULT_ENCODER) {
             hal_enc_clear_illegal(i);
             a->illegal_seen = 0;
@@ -307,10 +606,63 @@ static uint8_t do_clear(tl_servo_t *s, uint8_t mask)
         a->faults &= keep;
         left = left || a->faults;
     }
-    hal_irq_on();
     if (!(safety & TL_HAL_SAFE_ESTOP_IN))
-        hal_safety_ack(TL_HAL_SAFE_ESTOP | TL_HAL_SAFE_FAULT0 | TL_HAL_SAFE_FAULT1 | TL_HAL_SAFE_WDOG);
+        hal_safety_ack(latched);
+    hal_irq_on();
     return left ? TLP_ST_STATE : TLP_ST_OK;
+}
+
+static uint8_t do_move(tl_servo_t *s, uint8_t axis, uint8_t mode, int32_t target)
+{
+    if (axis >= TL_AXES || (mode & (uint8_t)~(TLP_MOVE_TRAPEZOID | TLP_MOVE_UNHOMED)))
+        return TLP_ST_BAD_ARG;
+    tl_axis_t *a = &s->ax[axis];
+    if (!a->enabled || a->home == TLP_HOME_STATE_HOMING)
+        return TLP_ST_STATE;
+    if (a->home != TLP_HOME_STATE_HOMED && !(mode & TLP_MOVE_UNHOMED))
+        return TLP_ST_NOT_HOMED;
+    if (target < pv(a, TLP_P_SOFT_MIN) || target > pv(a, TLP_P_SOFT_MAX))
+        return TLP_ST_RANGE;
+    uint8_t b = blocked(a);
+    if (((b & TLP_LIMIT_NEG) && target < a->pos) || ((b & TLP_LIMIT_POS) && target > a->pos))
+        return TLP_ST_RANGE;
+    int64_t d = (int64_t)target - a->pos;
+    if (!(mode & TLP_MOVE_TRAPEZOID) && (d > pv(a, TLP_P_FOLLOW_LIMIT) || -d > pv(a, TLP_P_FOLLOW_LIMIT)))
+        return TLP_ST_RANGE;   /* a step that far would trip the following error at once */
+    hal_irq_off();
+    tl_ctl_move(&a->c, target, (mode & TLP_MOVE_TRAPEZOID) != 0u);
+    hal_irq_on();
+    return TLP_ST_OK;
+}
+
+static uint8_t do_home(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index)
+{
+    if (axis >= TL_AXES || mode > TLP_HOME_MODE_HERE || index > 1u)
+        return TLP_ST_BAD_ARG;
+    tl_axis_t *a = &s->ax[axis];
+    if (a->home == TLP_HOME_STATE_HOMING)
+        return TLP_ST_STATE;
+    hal_irq_off();
+    if (mode == TLP_HOME_MODE_HERE) {
+        tl_enc_sample_t e;
+        hal_enc_read(axis, &e);
+        a->pos = wrap_add(e.pos, a->offset);
+        home_finish(a, a->pos, e.now);
+        hal_irq_on();
+        return TLP_ST_OK;
+    }
+    if (!a->enabled || a->faults || !pv(a, TLP_P_LIMIT_SW)) {
+        hal_irq_on();
+        return TLP_ST_STATE;
+    }
+    a->home = TLP_HOME_STATE_HOMING;
+    a->home_phase = HOME_SEEK;
+    a->home_dir = mode == TLP_HOME_MODE_NEG ? -1 : 1;
+    a->home_index = index != 0u;
+    a->home_sp_q16 = (int64_t)a->pos * 65536;
+    tl_ctl_hold(&a->c, a->pos);
+    hal_irq_on();
+    return TLP_ST_OK;
 }
 
 static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
@@ -330,6 +682,8 @@ static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
     case TLP_CMD_CLEAR_FAULT: need = TLP_CMD_CLEAR_FAULT_REQ_LEN; break;
     case TLP_CMD_BOOTLOADER: need = TLP_CMD_BOOTLOADER_REQ_LEN; break;
     case TLP_CMD_COUNTERS: need = TLP_CMD_COUNTERS_REQ_LEN; break;
+    case TLP_CMD_HEARTBEAT: need = TLP_CMD_HEARTBEAT_REQ_LEN; break;
+    case TLP_CMD_HOME: need = TLP_CMD_HOME_REQ_LEN; break;
     default:
         sat_inc(&s->cnt.unknown);
         send_status(s, tx, f->seq, rc, TLP_ST_UNKNOWN_CMD);
@@ -349,7 +703,6 @@ static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
         tl_seq_accept(&s->seq, f->seq);
     }
     sat_inc(&s->cnt.frames_ok);
-    s->link_idle_ticks = 0;
     const uint8_t *q = f->payload;
     uint8_t st = TLP_ST_OK;
     uint8_t n = 1;
@@ -383,22 +736,9 @@ static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
     case TLP_CMD_ENABLE:
         st = do_enable(s, q[TLP_ENABLE_REQ_MASK], q[TLP_ENABLE_REQ_ENABLE]);
         break;
-    case TLP_CMD_MOVE: {
-        uint8_t axis = q[TLP_MOVE_REQ_AXIS], mode = q[TLP_MOVE_REQ_MODE];
-        int32_t target = (int32_t)tl_get_u32(&q[TLP_MOVE_REQ_TARGET]);
-        if (axis >= TL_AXES || mode > 1u)
-            st = TLP_ST_BAD_ARG;
-        else if (!s->ax[axis].enabled)
-            st = TLP_ST_STATE;
-        else if (target < pv(&s->ax[axis], TLP_P_SOFT_MIN) || target > pv(&s->ax[axis], TLP_P_SOFT_MAX))
-            st = TLP_ST_RANGE;
-        else {
-            hal_irq_off();
-            tl_ctl_move(&s->ax[axis].c, target, mode == 1u);
-            hal_irq_on();
-        }
+    case TLP_CMD_MOVE:
+        st = do_move(s, q[TLP_MOVE_REQ_AXIS], q[TLP_MOVE_REQ_MODE], (int32_t)tl_get_u32(&q[TLP_MOVE_REQ_TARGET]));
         break;
-    }
     case TLP_CMD_STOP: {
         uint8_t m = q[TLP_STOP_REQ_MASK];
         if (!axis_mask_ok(m)) {
@@ -407,11 +747,19 @@ static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
         }
         hal_irq_off();
         for (uint32_t i = 0; i < TL_AXES; i++)
-            if (m & (1u << i))
+            if (m & (1u << i)) {
+                if (s->ax[i].home == TLP_HOME_STATE_HOMING)
+                    s->ax[i].home = TLP_HOME_STATE_NOT_HOMED;
                 tl_ctl_hold(&s->ax[i].c, s->ax[i].pos);
+            }
         hal_irq_on();
         break;
     }
+    case TLP_CMD_HEARTBEAT:
+        break;
+    case TLP_CMD_HOME:
+        st = do_home(s, q[TLP_HOME_REQ_AXIS], q[TLP_HOME_REQ_MODE], q[TLP_HOME_REQ_INDEX]);
+        break;
     case TLP_CMD_STATUS: {
         uint8_t axis = q[TLP_STATUS_REQ_AXIS];
         if (axis >= TL_AXES) {
@@ -420,12 +768,14 @@ static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
         }
         const tl_axis_t *a = &s->ax[axis];
         rep[TLP_STATUS_REP_ENABLED] = a->enabled;
-        rep[TLP_STATUS_REP_FAULTS] = a->faults;
-        rep[TLP_STATUS_REP_MOVING] = a->c.moving;
+        tl_put_u16(&rep[TLP_STATUS_REP_FAULTS], a->faults);
+        rep[TLP_STATUS_REP_MOVING] = a->c.moving || a->home == TLP_HOME_STATE_HOMING;
+        rep[TLP_STATUS_REP_HOME] = a->home;
+        rep[TLP_STATUS_REP_LIMITS] = a->limits;
         tl_put_u32(&rep[TLP_STATUS_REP_POSITION], (uint32_t)a->pos);
         tl_put_u32(&rep[TLP_STATUS_REP_SETPOINT], (uint32_t)(int32_t)(a->c.sp_q16 >> 16));
         tl_put_u32(&rep[TLP_STATUS_REP_VELOCITY_Q8], (uint32_t)a->c.vel_q8);
-        tl_put_u16(&rep[TLP_STATUS_REP_PWM_CMD], (uint16_t)(int16_t)a->c.cmd);
+        tl_put_u16(&rep[TLP_STATUS_REP_PWM_CMD], (uint16_t)(int16_t)a->cmd);
         tl_put_u16(&rep[TLP_STATUS_REP_SAFETY], (uint16_t)hal_safety());
         uint32_t errs = (uint32_t)s->cnt.crc + s->cnt.framing + s->cnt.length + s->cnt.oversize;
         tl_put_u16(&rep[TLP_STATUS_REP_RX_ERRORS], (uint16_t)(errs > 0xFFFFu ? 0xFFFFu : errs));
@@ -439,8 +789,8 @@ static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
         break;
     case TLP_CMD_CLEAR_FAULT:
         st = do_clear(s, q[TLP_CLEAR_FAULT_REQ_MASK]);
-        rep[TLP_CLEAR_FAULT_REP_FAULTS0] = s->ax[0].faults;
-        rep[TLP_CLEAR_FAULT_REP_FAULTS1] = s->ax[1].faults;
+        tl_put_u16(&rep[TLP_CLEAR_FAULT_REP_FAULTS0], s->ax[0].faults);
+        tl_put_u16(&rep[TLP_CLEAR_FAULT_REP_FAULTS1], s->ax[1].faults);
         n = TLP_CMD_CLEAR_FAULT_REP_LEN;
         break;
     case TLP_CMD_BOOTLOADER:
@@ -468,6 +818,8 @@ static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
     if (st != TLP_ST_OK) {
         sat_inc(&s->cnt.rejected);
         n = 1;
+    } else if (f->cmd < 32u && ((TLP_LINK_FEED_MASK >> f->cmd) & 1u)) {
+        s->link_idle_ticks = 0;   /* the host is in control (read-only commands never feed it) */
     }
     rep[0] = st;
     send(s, tx, f->seq, rc, rep, n);
@@ -505,8 +857,8 @@ void tl_servo_telemetry(const tl_servo_t *s, uint8_t *p)
         tl_put_u32(&r[TLP_TELEM_AX_POSITION], (uint32_t)a->pos);
         tl_put_u32(&r[TLP_TELEM_AX_VELOCITY_Q8], (uint32_t)a->c.vel_q8);
         tl_put_u32(&r[TLP_TELEM_AX_ERROR], (uint32_t)a->c.err_counts);
-        tl_put_u16(&r[TLP_TELEM_AX_PWM_CMD], (uint16_t)(int16_t)a->c.cmd);
-        r[TLP_TELEM_AX_FAULTS] = a->faults;
+        tl_put_u16(&r[TLP_TELEM_AX_PWM_CMD], (uint16_t)(int16_t)a->cmd);
+        tl_put_u16(&r[TLP_TELEM_AX_FAULTS], a->faults);
         r[TLP_TELEM_AX_ENABLED] = a->enabled;
     }
 }

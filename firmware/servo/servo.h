@@ -20,9 +20,24 @@ typedef struct {
     tl_ctl_params_t ctl;          /* control view of the same values */
     tl_ctl_t c;
     bool enabled;
-    uint8_t faults;               /* TLP_FAULT_* latched */
+    uint16_t faults;              /* TLP_FAULT_* latched */
     uint32_t illegal_seen;
-    int32_t pos;
+    int32_t pos;                  /* encoder count + offset, counts (absolute once homed) */
+    int32_t offset;               /* set by homing */
+    int32_t cmd;                  /* PWM command applied since the last tick (direction blocks included) */
+    uint8_t limits;               /* TLP_LIMIT_* switches open at the last tick (0 with LIMIT_SW = 0) */
+    uint8_t recover;              /* TLP_LIMIT_* soft-limit side the axis was enabled outside of */
+    uint8_t home;                 /* TLP_HOME_STATE_* */
+    uint8_t home_phase;
+    int8_t home_dir;              /* toward the switch: -1 negative end, +1 positive end */
+    bool home_index;              /* go on to the encoder index after the switch */
+    int64_t home_sp_q16;          /* homing set-point, counts q16 */
+    int8_t stall_dir;             /* runaway check: sign of a command >= STALL_CMD, 0 none */
+    int32_t stall_ref;            /* position the axis must pass in stall_dir */
+    int32_t stall_vel_q8;         /* velocity (counts/s q8) it must exceed in stall_dir */
+    uint32_t stall_ticks;         /* periods without passing it */
+    uint32_t stall_limit_ticks;   /* derived: STALL_MS in periods */
+    int64_t home_step_q16;        /* derived: HOME_VEL per period, counts q16 */
 } tl_axis_t;
 
 typedef struct {

@@ -17,6 +17,17 @@ void hal_enc_clear_illegal(uint32_t axis)
     hal_fake.enc[axis].illegal = 0;
     hal_fake.illegal_clears++;
 }
+void hal_enc_index_arm(uint32_t axis)
+{
+    hal_fake.index_armed[axis] = true;
+    hal_fake.index_seen[axis] = false;
+}
+bool hal_enc_index(uint32_t axis, int32_t *pos)
+{
+    *pos = hal_fake.index_pos[axis];
+    return hal_fake.index_seen[axis];
+}
+void hal_limit_block(uint32_t axis, bool on) { hal_fake.limit_block[axis] = on; }
 void hal_pwm_cmd(uint32_t axis, int32_t cmd) { hal_fake.pwm_cmd[axis] = cmd; }
 void hal_pwm_enable(uint32_t axis, bool on, bool brake)
 {
@@ -29,11 +40,24 @@ void hal_pwm_config(uint32_t axis, uint32_t fdiv, uint32_t pw0, uint32_t pwmax)
     hal_fake.pw0[axis] = pw0;
     hal_fake.pwmax[axis] = pwmax;
 }
-uint32_t hal_safety(void) { return hal_fake.safety; }
+uint32_t hal_safety(void)
+{
+    uint32_t v = hal_fake.safety;
+    /* a cause latching between the firmware's read and its acknowledgement */
+    if (hal_fake.latch_after_read) {
+        hal_fake.safety |= hal_fake.latch_after_read | TL_HAL_SAFE_FORCED;
+        hal_fake.latch_after_read = 0;
+    }
+    return v;
+}
 void hal_safety_ack(uint32_t bits)
 {
-    /* W1C; a cause still present (e-stop input) keeps its bit, as in soc_sys */
+    /* W1C; a cause still present (e-stop input, bridge fault input) keeps its bit, as in soc_sys */
     uint32_t keep = (hal_fake.safety & TL_HAL_SAFE_ESTOP_IN) ? TL_HAL_SAFE_ESTOP : 0u;
+    if (hal_fake.enc[0].bridge_fault)
+        keep |= TL_HAL_SAFE_FAULT0;
+    if (hal_fake.enc[1].bridge_fault)
+        keep |= TL_HAL_SAFE_FAULT1;
     hal_fake.safety &= ~(bits & ~keep);
     if (!(hal_fake.safety & (TL_HAL_SAFE_ESTOP | TL_HAL_SAFE_FAULT0 | TL_HAL_SAFE_FAULT1 | TL_HAL_SAFE_WDOG |
                              TL_HAL_SAFE_ESTOP_IN)))

@@ -14,6 +14,10 @@ typedef struct {
     uint32_t safety;          /* TL_HAL_SAFE_* */
     uint32_t baud_div;
     uint32_t illegal_clears;
+    bool limit_block[2];
+    bool index_armed[2], index_seen[2];
+    int32_t index_pos[2];
+    uint32_t latch_after_read;   /* set these SYS latch bits right after the next hal_safety() read */
     int irq_depth;
 } hal_fake_t;
 

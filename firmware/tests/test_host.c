@@ -177,6 +177,8 @@ static uint8_t enable(uint8_t mask, uint8_t on)
     return send_cmd(TLP_CMD_ENABLE, p, 2);
 }
 
+#define U TLP_MOVE_UNHOMED
+
 static uint8_t move(uint8_t axis, uint8_t mode, int32_t target)
 {
     uint8_t p[6] = {axis, mode};
@@ -204,7 +206,7 @@ static void test_servo_safety(void)
 {
     fresh();
     CHECK(!hal_fake.pwm_on[0] && !hal_fake.pwm_on[1], "power-up: drives disabled");
-    CHECK(move(0, 0, 100) == TLP_ST_STATE, "move while disabled refused");
+    CHECK(move(0, U, 100) == TLP_ST_STATE, "move while disabled refused");
     ticks(5);
     CHECK(!hal_fake.pwm_on[0] && sv.ax[0].faults == 0, "power-up latch is not a fault");
 
@@ -213,19 +215,20 @@ static void test_servo_safety(void)
     CHECK(enable(1, 1) == TLP_ST_OK && hal_fake.pwm_on[0] && !(hal_fake.safety & TL_HAL_SAFE_FORCED), "enable");
     ticks(1);
     CHECK(hal_fake.pwm_cmd[0] == 0, "no jump on enable: cmd %" PRId32, hal_fake.pwm_cmd[0]);
-    CHECK(move(0, 0, 1334) == TLP_ST_OK, "move");
+    CHECK(move(0, 0, 1334) == TLP_ST_NOT_HOMED, "a move before homing needs the UNHOMED flag");
+    CHECK(move(0, U, 1334) == TLP_ST_OK, "move");
     ticks(1);
     int32_t expect = (int32_t)(((((int64_t)sv.ax[0].ctl.kp_q16 * 100 * 65536) >> 16) + 32768) >> 16);
     CHECK(hal_fake.pwm_cmd[0] == expect, "P command %" PRId32 " expected %" PRId32, hal_fake.pwm_cmd[0], expect);
 
     /* replay: the same frame again is refused and not executed */
-    uint8_t p[6] = {0, 0};
+    uint8_t p[6] = {0, U};
     tl_put_u32(&p[2], 2000);
     uint8_t wire[TLP_MAX_WIRE];
     size_t wl = tl_frame_encode(++host_seq, TLP_CMD_MOVE, p, 6, wire, sizeof wire);
     feed(wire, wl);
     CHECK(last_reply[1] == TLP_ST_OK, "first copy executed");
-    (void)move(0, 0, 1334);
+    (void)move(0, U, 1334);
     feed(wire, wl);
     CHECK(last_reply[1] == TLP_ST_REPLAY && (sv.ax[0].c.target_q16 >> 16) == 1334, "replay refused");
 
@@ -248,14 +251,18 @@ static void test_servo_safety(void)
     CHECK(!hal_fake.pwm_on[0] && (sv.ax[0].faults & TLP_FAULT_LINK), "link silent -> stop");
     CHECK(clear(1) == TLP_ST_OK && enable(1, 1) == TLP_ST_OK, "recover");
 
-    /* following error and soft limits */
+    /* following error (the axis pushed away from its set-point) and soft limits */
     CHECK(set_param(0, TLP_P_FOLLOW_LIMIT, 50) == TLP_ST_OK, "follow limit");
-    CHECK(move(0, 0, 1234 + 51) == TLP_ST_OK, "move");
+    CHECK(move(0, U, 1234 + 51) == TLP_ST_RANGE, "a step beyond the following limit is refused up front");
+    CHECK(move(0, U | TLP_MOVE_TRAPEZOID, 1234 + 51) == TLP_ST_OK, "a profiled move that far is fine");
+    CHECK(move(0, U, 1234) == TLP_ST_OK, "back");
+    hal_fake.enc[0].pos = 1234 - 51;
     ticks(1);
     CHECK(!hal_fake.pwm_on[0] && (sv.ax[0].faults & TLP_FAULT_FOLLOWING), "following");
+    hal_fake.enc[0].pos = 1234;
     CHECK(clear(1) == TLP_ST_OK && enable(1, 1) == TLP_ST_OK, "recover");
     CHECK(set_param(0, TLP_P_SOFT_MAX, 1300) == TLP_ST_OK, "soft max");
-    CHECK(move(0, 0, 1301) == TLP_ST_RANGE, "target beyond the soft limit");
+    CHECK(move(0, U, 1301) == TLP_ST_RANGE, "target beyond the soft limit");
     CHECK(set_param(0, TLP_P_SOFT_MIN, 1400) == TLP_ST_RANGE, "min above max refused");
     hal_fake.enc[0].pos = 1301;
     ticks(1);
@@ -288,6 +295,366 @@ static void test_servo_safety(void)
           "9600 baud pending");
     CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_BAUD_DIV, 14) == TLP_ST_RANGE && sv.baud_div_pending == 5207u,
           "divisor below the UART's minimum refused");
+}
+
+
+static uint8_t get_param(uint8_t axis, uint8_t id, int32_t *v)
+{
+    uint8_t p[2] = {axis, id};
+    uint8_t st = send_cmd(TLP_CMD_GET_PARAM, p, 2);
+    *v = (int32_t)tl_get_u32(&last_reply[2]);
+    return st;
+}
+
+static uint8_t status_of(uint8_t axis) { return send_cmd(TLP_CMD_STATUS, &axis, 1); }
+
+static uint8_t home(uint8_t axis, uint8_t mode, uint8_t index)
+{
+    uint8_t p[3] = {axis, mode, index};
+    return send_cmd(TLP_CMD_HOME, p, 3);
+}
+
+/* Issue 17, "a fault can be lost": axis 1's bridge fault latched in the SoC
+ * but not yet seen by a control tick; a command for axis 0 must not
+ * acknowledge it away (axis 1 would drive on), and a cause latching between
+ * the firmware's read and its acknowledgement must survive. */
+static void test_fault_race(void)
+{
+    for (int which = 0; which < 2; which++) {
+        fresh();
+        CHECK(enable(3, 1) == TLP_ST_OK, "enable both");
+        ticks(1);
+        hal_fake.safety |= TL_HAL_SAFE_FAULT1 | TL_HAL_SAFE_FORCED;   /* a glitch: latched, input gone */
+        if (which == 0)
+            CHECK(clear(1) == TLP_ST_OK, "CLEAR_FAULT for axis 0");
+        else
+            CHECK(enable(1, 1) == TLP_ST_OK, "ENABLE for axis 0");
+        ticks(1);
+        CHECK(!sv.ax[1].enabled && !hal_fake.pwm_on[1] && (sv.ax[1].faults & TLP_FAULT_BRIDGE),
+              "%s for axis 0 lost axis 1's latched bridge fault: enabled %d faults 0x%x",
+              which ? "ENABLE" : "CLEAR_FAULT", sv.ax[1].enabled, sv.ax[1].faults);
+        CHECK(enable(2, 1) == TLP_ST_STATE, "axis 1 stays off until its own CLEAR_FAULT");
+    }
+    /* a latch bit set after the read is not acknowledged by the write that follows */
+    fresh();
+    CHECK(enable(3, 1) == TLP_ST_OK, "enable both");
+    hal_fake.latch_after_read = TL_HAL_SAFE_FAULT0;
+    CHECK(clear(2) == TLP_ST_OK, "clear axis 1");
+    CHECK(hal_fake.safety & TL_HAL_SAFE_FAULT0, "a bit latched after the read was acknowledged unseen");
+    ticks(1);
+    CHECK(!sv.ax[0].enabled && (sv.ax[0].faults & TLP_FAULT_BRIDGE), "axis 0 records it at the next tick");
+    CHECK(hal_fake.irq_depth == 0, "critical sections balanced");
+}
+
+/* Encoder loss and runaway: a frozen, a reversed and a flickering encoder
+ * trip RUNAWAY within STALL_MS (+ a period or two); an axis that follows does not. */
+static void test_runaway(void)
+{
+    enum { PERIOD = 1000, STALL_MS = 50 };
+    const char *kinds[] = {"frozen", "reversed", "flickering", "following"};
+    for (int kind = 0; kind < 4; kind++) {
+        fresh();
+        CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_PERIOD_US, PERIOD) == TLP_ST_OK, "period");
+        CHECK(set_param(0, TLP_P_STALL_MS, STALL_MS) == TLP_ST_OK, "stall ms");
+        CHECK(set_param(0, TLP_P_KP_Q16, 65536) == TLP_ST_OK, "kp 1 step per count");
+        CHECK(set_param(0, TLP_P_LAW, 3) == TLP_ST_OK && set_param(0, TLP_P_KI_Q16, 65536 * 4) == TLP_ST_OK, "pid");
+        CHECK(enable(1, 1) == TLP_ST_OK, "enable");
+        CHECK(move(0, U, 400) == TLP_ST_OK, "move 400 counts: command 400 > STALL_CMD 300");
+        int n = 0;
+        for (; n < 200 && sv.ax[0].enabled; n++) {
+            if (n % 10 == 0)
+                CHECK(send_cmd(TLP_CMD_HEARTBEAT, NULL, 0) == TLP_ST_OK, "heartbeat");
+            int32_t c = hal_fake.pwm_cmd[0], before = hal_fake.enc[0].pos;
+            if (kind == 1)
+                hal_fake.enc[0].pos -= c > 0 ? 3 : (c < 0 ? -3 : 0);
+            else if (kind == 2)
+                hal_fake.enc[0].pos = (n & 1) ? 1 : 0;
+            else if (kind == 3 && hal_fake.enc[0].pos < 400)
+                hal_fake.enc[0].pos += 2;
+            /* the decoder's clock and edge times (50 MHz) */
+            hal_fake.enc[0].now += PERIOD * 50u;
+            if (hal_fake.enc[0].pos != before) {
+                hal_fake.enc[0].interval = hal_fake.enc[0].now - hal_fake.enc[0].edge_time;
+                hal_fake.enc[0].edge_time = hal_fake.enc[0].now;
+            }
+            ticks(1);
+        }
+        if (kind == 3) {
+            CHECK(sv.ax[0].enabled && sv.ax[0].faults == 0, "following axis: no fault (0x%x)", sv.ax[0].faults);
+        } else {
+            CHECK(!sv.ax[0].enabled && !hal_fake.pwm_on[0] && sv.ax[0].faults == TLP_FAULT_RUNAWAY,
+                  "%s encoder: faults 0x%x", kinds[kind], sv.ax[0].faults);
+            CHECK(n >= STALL_MS * 1000 / PERIOD && n <= STALL_MS * 1000 / PERIOD + 8,
+                  "%s encoder tripped after %d periods, STALL_MS is %d", kinds[kind], n, STALL_MS * 1000 / PERIOD);
+        }
+    }
+}
+
+/* Safety limits may only be made stricter while an axis is enabled. */
+static void test_tighten_only(void)
+{
+    /* the issue's list must all be tighten-only */
+    static const uint8_t must[] = {TLP_P_FOLLOW_LIMIT, TLP_P_SOFT_MIN, TLP_P_SOFT_MAX, TLP_P_LINK_TIMEOUT_MS,
+                                   TLP_P_FDIV, TLP_P_PW0, TLP_P_PWMAX, TLP_P_CMD_LIMIT, TLP_P_PWM_MAX_HZ,
+                                   TLP_P_STALL_CMD, TLP_P_STALL_MS, TLP_P_LIMIT_SW};
+    for (unsigned k = 0; k < sizeof must; k++)
+        CHECK(TLP_PARAM_INFO[tl_param_index(must[k])].tighten != 0, "param %u is not tighten-only", must[k]);
+    for (uint32_t k = 0; k < TLP_PARAM_COUNT; k++) {
+        const tlp_param_info_t *in = &TLP_PARAM_INFO[k];
+        if (!in->tighten)
+            continue;
+        uint8_t ax = in->global ? TLP_GLOBAL_AXIS : 0;
+        fresh();
+        /* a value one step inside the range from the default, both ways where possible */
+        int32_t d = in->dflt[0];
+        int32_t looser = in->tighten > 0 ? d - 1 : d + 1, stricter = in->tighten > 0 ? d + 1 : d - 1;
+        if (in->id == TLP_P_FDIV) {
+            looser = d - 10;
+            stricter = d + 10;
+        }
+        if (in->id == TLP_P_PW0) {   /* default 0: make room first */
+            CHECK(set_param(ax, TLP_P_PW0, 100) == TLP_ST_OK, "pw0 100");
+            d = 100, looser = 101, stricter = 99;
+        }
+        bool can_loosen = looser >= in->min && looser <= in->max;
+        CHECK(enable(2, 1) == TLP_ST_OK, "enable axis 1");
+        if (can_loosen)
+            CHECK(set_param(ax, in->id, looser) == TLP_ST_LOOSEN, "param %u: loosening to %" PRId32 " while enabled",
+                  in->id, looser);
+        int32_t v;
+        CHECK(get_param(ax, in->id, &v) == TLP_ST_OK && v == d, "param %u unchanged: %" PRId32, in->id, v);
+        if (stricter >= in->min && stricter <= in->max)
+            CHECK(set_param(ax, in->id, stricter) == TLP_ST_OK, "param %u: tightening while enabled", in->id);
+        CHECK(enable(3, 0) == TLP_ST_OK, "disable");
+        if (can_loosen)
+            CHECK(set_param(ax, in->id, looser) == TLP_ST_OK, "param %u: loosening while disabled", in->id);
+    }
+    /* the PWM carrier ceiling (IBT-2 25 kHz) and PW0 <= PWMAX */
+    fresh();
+    CHECK(set_param(0, TLP_P_FDIV, 1) == TLP_ST_RANGE, "FDIV 1 = 48.9 kHz is above the bridge's 25 kHz");
+    CHECK(set_param(0, TLP_P_FDIV, 2) == TLP_ST_OK, "FDIV 2 = 24.4 kHz");
+    CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_PWM_MAX_HZ, 20000) == TLP_ST_RANGE, "ceiling below axis 0's carrier");
+    CHECK(set_param(0, TLP_P_FDIV, 3) == TLP_ST_OK && set_param(TLP_GLOBAL_AXIS, TLP_P_PWM_MAX_HZ, 20000) == TLP_ST_OK,
+          "lower ceiling");
+    CHECK(set_param(1, TLP_P_FDIV, 2) == TLP_ST_RANGE, "FDIV 2 above the lowered ceiling");
+    CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_PWM_MAX_HZ, 25001) == TLP_ST_RANGE, "ceiling above the rating");
+    CHECK(set_param(0, TLP_P_PWMAX, 500) == TLP_ST_OK && set_param(0, TLP_P_PW0, 501) == TLP_ST_RANGE, "PW0 > PWMAX");
+    CHECK(set_param(0, TLP_P_PW0, 200) == TLP_ST_OK && set_param(0, TLP_P_PWMAX, 199) == TLP_ST_RANGE, "PWMAX < PW0");
+    CHECK(hal_fake.fdiv[0] == 3 && hal_fake.pw0[0] == 200 && hal_fake.pwmax[0] == 500, "hardware has the stored values");
+}
+
+/* The link watchdog is fed only by commands that show the host in control. */
+static void test_link_feed(void)
+{
+    fresh();
+    CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_PERIOD_US, 1000) == TLP_ST_OK, "period");
+    CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_LINK_TIMEOUT_MS, 20) == TLP_ST_OK, "timeout");
+    CHECK(enable(1, 1) == TLP_ST_OK, "enable");
+    int32_t v;
+    for (int n = 0; n < 30 && sv.ax[0].enabled; n++) {
+        /* a monitor that only polls, with fresh seqs, and IDENTIFY at any seq */
+        (void)status_of(0);
+        (void)get_param(0, TLP_P_LAW, &v);
+        (void)send_cmd(TLP_CMD_COUNTERS, NULL, 0);
+        (void)send_cmd(TLP_CMD_IDENTIFY, NULL, 0);
+        ticks(1);
+    }
+    CHECK(!sv.ax[0].enabled && (sv.ax[0].faults & TLP_FAULT_LINK), "polls kept the axis enabled: faults 0x%x",
+          sv.ax[0].faults);
+    CHECK(clear(1) == TLP_ST_OK && enable(1, 1) == TLP_ST_OK, "recover");
+    uint8_t wire[TLP_MAX_WIRE];
+    size_t wl = tl_frame_encode(++host_seq, TLP_CMD_HEARTBEAT, NULL, 0, wire, sizeof wire);
+    for (int n = 0; n < 60; n++) {
+        if (n % 10 == 0)
+            CHECK(send_cmd(TLP_CMD_HEARTBEAT, NULL, 0) == TLP_ST_OK, "heartbeat");
+        ticks(1);
+    }
+    CHECK(sv.ax[0].enabled && sv.ax[0].faults == 0, "heartbeats keep it enabled");
+    for (int n = 0; n < 30 && sv.ax[0].enabled; n++) {
+        last_reply_len = -1;
+        feed(wire, wl);   /* the same heartbeat replayed */
+        CHECK(last_reply_len >= 1 && last_reply[1] == TLP_ST_REPLAY, "replayed heartbeat refused");
+        ticks(1);
+    }
+    CHECK(!sv.ax[0].enabled && (sv.ax[0].faults & TLP_FAULT_LINK), "a replayed heartbeat fed the watchdog");
+}
+
+/* A soft-limit fault can be cleared while outside; the axis may then be enabled and
+ * driven back in, never further out; once inside, the limits apply again. */
+static void test_soft_limit_recovery(void)
+{
+    fresh();
+    CHECK(set_param(0, TLP_P_SOFT_MAX, 1000) == TLP_ST_OK, "soft max");
+    CHECK(enable(1, 1) == TLP_ST_OK, "enable");
+    hal_fake.enc[0].pos = 1010;
+    ticks(1);
+    CHECK(!sv.ax[0].enabled && sv.ax[0].faults == TLP_FAULT_SOFT_LIMIT, "soft limit");
+    CHECK(clear(1) == TLP_ST_OK && enable(1, 1) == TLP_ST_OK, "cleared and enabled outside the limit");
+    CHECK(move(0, U, 1020) == TLP_ST_RANGE, "further out refused");
+    CHECK(move(0, U | TLP_MOVE_TRAPEZOID, 990) == TLP_ST_OK, "back inside accepted");
+    ticks(1);
+    CHECK(sv.ax[0].enabled && sv.ax[0].faults == 0 && hal_fake.pwm_cmd[0] < 0, "driven back: cmd %" PRId32,
+          hal_fake.pwm_cmd[0]);
+    CHECK(move(0, U, 1000) == TLP_ST_OK, "step to the limit");
+    hal_fake.enc[0].pos = 1015;    /* pushed further out: nothing drives outward */
+    ticks(1);
+    CHECK(sv.ax[0].enabled && hal_fake.pwm_cmd[0] <= 0, "no command outward: %" PRId32, hal_fake.pwm_cmd[0]);
+    hal_fake.enc[0].pos = 995;     /* back inside */
+    ticks(1);
+    hal_fake.enc[0].pos = 1001;    /* out again: that is a fault */
+    ticks(1);
+    CHECK(!sv.ax[0].enabled && sv.ax[0].faults == TLP_FAULT_SOFT_LIMIT, "soft limit after the recovery");
+}
+
+/* Limit switches: a trip disables the axis and blocks only its direction. */
+static void test_limit_switches(void)
+{
+    fresh();
+    CHECK(hal_fake.limit_block[0] && hal_fake.limit_block[1], "hardware limit block on by default (LIMIT_SW 1)");
+    CHECK(enable(1, 1) == TLP_ST_OK, "enable");
+    CHECK(move(0, U, 100) == TLP_ST_OK, "move");
+    ticks(1);
+    CHECK(hal_fake.pwm_cmd[0] > 0, "driving positive");
+    hal_fake.enc[0].limits = TL_HAL_LIM_POS;
+    ticks(1);
+    CHECK(!sv.ax[0].enabled && sv.ax[0].faults == TLP_FAULT_LIMIT_POS && hal_fake.pwm_cmd[0] == 0, "limit trips");
+    CHECK(status_of(0) == TLP_ST_OK && last_reply[1 + TLP_STATUS_REP_LIMITS] == TLP_LIMIT_POS, "STATUS shows the switch");
+    CHECK(clear(1) == TLP_ST_STATE && sv.ax[0].faults == TLP_FAULT_LIMIT_POS, "clear refused while the switch is open");
+    CHECK(enable(1, 1) == TLP_ST_OK, "enable with a direction fault");
+    ticks(3);
+    CHECK(sv.ax[0].enabled, "the latched direction fault does not stop it again");
+    CHECK(move(0, U, 50) == TLP_ST_RANGE, "toward the switch refused");
+    CHECK(move(0, U, -50) == TLP_ST_OK, "away from it accepted");
+    ticks(1);
+    CHECK(hal_fake.pwm_cmd[0] < 0 && sv.ax[0].enabled, "driven out");
+    hal_fake.enc[0].pos = -10;
+    hal_fake.enc[0].limits = 0;
+    ticks(1);
+    CHECK(move(0, U, 40) == TLP_ST_RANGE, "still blocked until cleared");
+    CHECK(clear(1) == TLP_ST_OK && sv.ax[0].faults == 0, "cleared once out");
+    CHECK(enable(1, 1) == TLP_ST_OK && move(0, U, 40) == TLP_ST_OK, "free again");
+    /* an axis without switches ignores its inputs */
+    CHECK(enable(1, 0) == TLP_ST_OK && set_param(0, TLP_P_LIMIT_SW, 0) == TLP_ST_OK, "no switches");
+    CHECK(!hal_fake.limit_block[0], "hardware block off");
+    hal_fake.enc[0].limits = TL_HAL_LIM_NEG | TL_HAL_LIM_POS;
+    ticks(1);
+    CHECK(sv.ax[0].faults == 0, "inputs ignored with LIMIT_SW 0");
+    CHECK(enable(1, 1) == TLP_ST_OK && set_param(0, TLP_P_LIMIT_SW, 1) == TLP_ST_OK, "switches back on (tighter)");
+    ticks(1);
+    CHECK(!sv.ax[0].enabled && sv.ax[0].faults == (TLP_FAULT_LIMIT_NEG | TLP_FAULT_LIMIT_POS), "unwired reads open");
+}
+
+/* Homing: moves need it (or the UNHOMED flag); to a switch, then optionally the
+ * index; afterwards positions and soft limits are absolute. */
+static void test_homing(void)
+{
+    for (int index = 0; index < 2; index++) {
+        fresh();
+        CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_PERIOD_US, 1000) == TLP_ST_OK, "period");
+        CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_LINK_TIMEOUT_MS, 60000) == TLP_ST_OK, "timeout");
+        CHECK(set_param(0, TLP_P_HOME_VEL, 20000) == TLP_ST_OK && set_param(0, TLP_P_HOME_POS, -7) == TLP_ST_OK, "home");
+        hal_fake.enc[0].pos = 5000;
+        CHECK(home(0, TLP_HOME_MODE_NEG, (uint8_t)index) == TLP_ST_STATE, "homing needs the axis enabled");
+        CHECK(enable(1, 1) == TLP_ST_OK, "enable");
+        CHECK(move(0, 0, 5100) == TLP_ST_NOT_HOMED, "not homed");
+        CHECK(home(0, TLP_HOME_MODE_NEG, (uint8_t)index) == TLP_ST_OK, "home toward the negative switch");
+        CHECK(move(0, U, 5100) == TLP_ST_STATE, "no move while homing");
+        /* the stage: follows its set-point; the switch opens below raw count 1000,
+         * an index every 400 counts */
+        int32_t last = hal_fake.enc[0].pos;
+        int n = 0;
+        for (; n < 20000 && sv.ax[0].home == TLP_HOME_STATE_HOMING; n++) {
+            int32_t sp = (int32_t)(sv.ax[0].c.sp_q16 >> 16) - sv.ax[0].offset;
+            hal_fake.enc[0].pos = sp;
+            hal_fake.enc[0].limits = sp < 1000 ? TL_HAL_LIM_NEG : 0u;
+            if (hal_fake.index_armed[0] && sp / 400 != last / 400 && !hal_fake.index_seen[0]) {
+                hal_fake.index_seen[0] = true;
+                hal_fake.index_pos[0] = sp > last ? sp / 400 * 400 : last / 400 * 400;
+            }
+            last = sp;
+            ticks(1);
+        }
+        CHECK(sv.ax[0].home == TLP_HOME_STATE_HOMED && sv.ax[0].faults == 0 && sv.ax[0].enabled,
+              "homed (index %d) after %d periods: state %u faults 0x%x", index, n, sv.ax[0].home, sv.ax[0].faults);
+        int32_t ref = index ? 1200 : 1000;   /* the switch closes at 1000; the next index above is 1200 */
+        CHECK(sv.ax[0].pos - (hal_fake.enc[0].pos - ref) == -7, "home point reads HOME_POS: pos %" PRId32 " raw %" PRId32,
+              sv.ax[0].pos, hal_fake.enc[0].pos);
+        CHECK(status_of(0) == TLP_ST_OK && last_reply[1 + TLP_STATUS_REP_HOME] == TLP_HOME_STATE_HOMED, "STATUS homed");
+        CHECK(move(0, 0, 100) == TLP_ST_OK, "moves without the flag once homed");
+        /* soft limits are absolute now */
+        CHECK(set_param(0, TLP_P_SOFT_MIN, -10) == TLP_ST_OK, "soft min");
+        CHECK(move(0, 0, -11) == TLP_ST_RANGE, "below the absolute soft limit");
+    }
+    /* no switches: home here */
+    fresh();
+    CHECK(set_param(0, TLP_P_LIMIT_SW, 0) == TLP_ST_OK, "no switches");
+    hal_fake.enc[0].pos = 777;
+    CHECK(enable(1, 1) == TLP_ST_OK, "enable");
+    CHECK(home(0, TLP_HOME_MODE_NEG, 0) == TLP_ST_STATE, "switch homing without switches refused");
+    CHECK(home(0, TLP_HOME_MODE_HERE, 0) == TLP_ST_OK && sv.ax[0].pos == 0 && sv.ax[0].home == TLP_HOME_STATE_HOMED,
+          "home here: %" PRId32, sv.ax[0].pos);
+    ticks(2);
+    CHECK(hal_fake.pwm_cmd[0] == 0 && sv.ax[0].faults == 0, "no jump after homing here");
+    /* an encoder fault loses the home */
+    hal_fake.enc[0].illegal = 1;
+    ticks(1);
+    CHECK(sv.ax[0].home == TLP_HOME_STATE_NOT_HOMED, "encoder fault: not homed any more");
+}
+
+/* GET reads back what SET stored, at every gain the firmware accepts. */
+static void test_gain_readback(void)
+{
+    fresh();
+    int32_t v;
+    int32_t tau = TLP_PARAM_INFO[tl_param_index(TLP_P_TAU_MAX_MNM)].dflt[0];
+    int32_t cpr = TLP_PARAM_INFO[tl_param_index(TLP_P_COUNTS_PER_REV)].dflt[0];
+    int32_t rmax = tl_gain_raw_from_phys(100000000, tau, cpr);
+    CHECK(set_param(0, TLP_P_KP_Q16, rmax + 1) == TLP_ST_RANGE, "a raw gain beyond 100 N m/rad refused");
+    CHECK(set_param(0, TLP_P_KP_Q16, 0x7FFFFFFF) == TLP_ST_RANGE, "the largest raw gain refused");
+    CHECK(set_param(0, TLP_P_KP_Q16, rmax) == TLP_ST_OK && get_param(0, TLP_P_KP_UNM_RAD, &v) == TLP_ST_OK &&
+              llabs((long long)v - 100000000) < 100, "raw max reads about 100 N m/rad: %" PRId32, v);
+    CHECK(set_param(0, TLP_P_TAU_MAX_MNM, tau + 1000) == TLP_ST_RANGE, "tau change that pushes the gain out of range");
+    for (int n = 0; n < 200; n++) {
+        int32_t g = (int32_t)(rnd() % 100000001u);
+        uint8_t id = (uint8_t)(TLP_P_KP_UNM_RAD + rnd() % 3);
+        (void)set_param(0, TLP_P_TAU_MAX_MNM, (int32_t)(1 + rnd() % 100000));   /* refused if a gain no longer fits */
+        uint8_t st = set_param(0, id, g);
+        int32_t echo = (int32_t)tl_get_u32(&last_reply[2]);
+        if (st != TLP_ST_OK)
+            continue;
+        CHECK(get_param(0, id, &v) == TLP_ST_OK && v == echo, "GET %" PRId32 " != SET echo %" PRId32, v, echo);
+        CHECK(llabs((long long)echo - g) <= (long long)g / 1000 + 20000, "stored %" PRId32 " for %" PRId32, echo, g);
+        CHECK(set_param(0, id, 0) == TLP_ST_OK, "zero");
+    }
+}
+
+/* The encoder count wraps at 2^32 without undefined behaviour (UBSan in this build). */
+static void test_encoder_wrap(void)
+{
+    for (uint32_t mode = 0; mode < 2; mode++) {
+        tl_ctl_params_t p = {.law = 1, .kp_q16 = 1000, .cmd_limit = 1023, .vel_mode = mode, .vmax_cps = 1000,
+                             .amax_cps2 = 1000};
+        tl_ctl_t c;
+        tl_ctl_derive(&c, &p, 1000, 50000000u);
+        int32_t pos = INT32_MAX - 20;
+        tl_ctl_reset(&c, pos, 0);
+        uint32_t t = 0;
+        for (int k = 0; k < 8; k++) {
+            pos = (int32_t)((uint32_t)pos + 10u);   /* 10 counts per 1 ms: 10000 counts/s */
+            t += 50000u;
+            (void)tl_ctl_step(&c, &p, pos, t, t, 5000u, false);
+        }
+        CHECK(pos < 0 && c.vel_q8 > 0 && llabs((long long)c.vel_q8 - 10000 * 256) < 10000 * 256 / 10,
+              "velocity across the wrap (mode %u): %" PRId32, mode, c.vel_q8);
+    }
+    fresh();
+    hal_fake.enc[0].pos = INT32_MAX - 2;
+    CHECK(enable(1, 1) == TLP_ST_OK && home(0, TLP_HOME_MODE_HERE, 0) == TLP_ST_OK, "home near the wrap");
+    CHECK(set_param(0, TLP_P_HOME_POS, INT32_MAX) == TLP_ST_OK && home(0, TLP_HOME_MODE_HERE, 0) == TLP_ST_OK, "re-home");
+    hal_fake.enc[0].pos = INT32_MIN + 2;    /* 5 counts on, across the wrap */
+    ticks(3);
+    CHECK(sv.ax[0].pos == INT32_MIN + 4 && (sv.ax[0].faults & TLP_FAULT_FOLLOWING) && !sv.ax[0].enabled,
+          "offset arithmetic wraps: %" PRId32 ", faults 0x%x", sv.ax[0].pos, sv.ax[0].faults);
 }
 
 /* Random and corrupted traffic: no parameter, enable or set-point changes. */
@@ -416,6 +783,15 @@ int main(int argc, char **argv)
     printf("seed %" PRIu64 "\n", seed);
     test_link();
     test_servo_safety();
+    test_fault_race();
+    test_runaway();
+    test_tighten_only();
+    test_link_feed();
+    test_soft_limit_recovery();
+    test_limit_switches();
+    test_homing();
+    test_gain_readback();
+    test_encoder_wrap();
     test_servo_flood();
     test_profile();
     printf("%u checks, %u failures\n", checks, failures);

@@ -39,6 +39,9 @@ PERIOD_US = 500
 DEFINES = {"TL_DEFAULT_PERIOD_US": PERIOD_US, "TL_DEFAULT_BAUD_DIV": BAUD_DIV}
 STEP_NS = 4000                     # encoder state time: well above the 3 us filter
 QUAD = [(0, 0), (1, 0), (1, 1), (0, 1)]   # A leads B: counts up
+FAST_FDIV = 2                      # 24.4 kHz: the fastest carrier under the IBT-2's 25 kHz rating (PWM_MAX_HZ)
+PWM_PERIOD_US = FAST_FDIV * 1023 * CLK_NS / 1000
+U = P.MOVE_UNHOMED                 # positions relative to power-up: these tests do not home
 
 
 def now_ns() -> float:
@@ -159,8 +162,9 @@ class TB:
                 high_since = None
 
     async def fast_pwm(self) -> None:
+        await self.set(0, "FDIV", 1, expect=P.STATUS["RANGE"])   # 48.9 kHz: above the bridge's rating
         for ax in (0, 1):
-            await self.set(ax, "FDIV", 1)     # 1023-clock PWM period: many periods per test
+            await self.set(ax, "FDIV", FAST_FDIV)     # 2046-clock PWM period: many periods per test
 
 
 async def _enable(tb: TB, mask: int = 3) -> None:
@@ -177,7 +181,11 @@ async def identify_parameters_and_errors(dut):
     assert r["axis_count"] == 2 and r["clk_hz"] == 50_000_000
     # a sample of parameters (all of them: tests/test_firmware_host.py): a random in-range value
     # stored and read back, out of range rejected with nothing changed
-    others = [n for n in P.PARAMS if n not in ("BAUD_DIV", "LAW", "KP_UNM_RAD", "PERIOD_US", "SOFT_MIN")]
+    # parameters bounded by others (carrier ceiling, PW0 <= PWMAX, gains that must fit their
+    # physical range) have their own checks (firmware host tests); the sample takes the free ones
+    bounded = {"FDIV", "PW0", "PWMAX", "PWM_MAX_HZ", "TAU_MAX_MNM", "COUNTS_PER_REV", "KP_Q16", "KD_Q16", "KI_Q16",
+               "KD_UNMS_RAD", "KI_UNM_RADS"}
+    others = [n for n in P.PARAMS if n not in ("BAUD_DIV", "LAW", "KP_UNM_RAD", "PERIOD_US", "SOFT_MIN") + tuple(bounded)]
     sample = ["LAW", "KP_UNM_RAD", "PERIOD_US", "SOFT_MIN"] + random.sample(others, 3)
     for p in (P.PARAMS[n] for n in sample):
         axes = [P.GLOBAL_AXIS] if p.scope == "global" else [random.randrange(2)]
@@ -225,11 +233,11 @@ async def each_law_drives_both_axes_as_the_reference(dut):
     tb = TB(dut)
     await tb.start()
     await tb.fast_pwm()
-    await tb.cmd("MOVE", P.STATUS["STATE"], axis=0, mode=0, target=100)   # disabled: refused
+    await tb.cmd("MOVE", P.STATUS["STATE"], axis=0, mode=U, target=100)   # disabled: refused
     for ax in (0, 1):
         await tb.set(ax, "KP_Q16", 65536 * 2)        # 2 PWM steps per count
         await tb.set(ax, "KD_Q16", 655)              # 0.01 step per count/s
-        await tb.set(ax, "KI_Q16", 65536 * 40)       # 40 steps per count*s
+        await tb.set(ax, "KI_Q16", 65536 * 20)       # 20 steps per count*s (about 62 N m/(rad s), under the 100 maximum)
         await tb.set(ax, "FOLLOW_LIMIT", 100000)
     await _enable(tb)
     for law_name, law in (("P", 1), ("PD", 2), ("PID", 3)):
@@ -238,7 +246,8 @@ async def each_law_drives_both_axes_as_the_reference(dut):
             await tb.cmd("STOP", mask=1 << ax)
             pos = tb.enc[ax]
             target = pos + random.choice([-1, 1]) * random.randint(60, 200)
-            await tb.cmd("MOVE", axis=ax, mode=0, target=target)
+            await tb.cmd("MOVE", P.STATUS["NOT_HOMED"], axis=ax, mode=0, target=target)
+            await tb.cmd("MOVE", axis=ax, mode=U, target=target)
             await Timer(3 * PERIOD_US, unit="us")
             st = await tb.status(ax)
             e = target - pos
@@ -250,13 +259,13 @@ async def each_law_drives_both_axes_as_the_reference(dut):
                 assert abs(st["pwm_cmd"]) > abs(2 * e), f"PID integrates: cmd {st['pwm_cmd']} error {e}"
             # the sign and magnitude reach the pins: the side named by the error's sign switches
             side, other = ("rpwm", "lpwm") if st["pwm_cmd"] > 0 else ("lpwm", "rpwm")
-            d = await tb.duty(ax, side, 60)
+            d = await tb.duty(ax, side, 3 * PWM_PERIOD_US)
             expect = min(1023, abs(st["pwm_cmd"])) / 1023
             if law != 3:
                 assert abs(d - expect) < 0.03, f"{law_name} axis {ax}: duty {d:.3f}, expected {expect:.3f}"
             else:
                 assert d > 0.05
-            assert await tb.duty(ax, other, 20) == 0.0
+            assert await tb.duty(ax, other, PWM_PERIOD_US) == 0.0
             # PD: the D term uses the measured velocity (encoder moving toward the target)
             if law == 2:
                 mover = cocotb.start_soon(tb.move_encoder(ax, pos + (120 if e > 0 else -120), step_ns=10_000))
@@ -284,16 +293,21 @@ async def link_watchdog_stops_a_silent_link(dut):
     await tb.fast_pwm()
     await tb.set(P.GLOBAL_AXIS, "LINK_TIMEOUT_MS", 10)
     await _enable(tb, 1)
-    await tb.cmd("MOVE", axis=0, mode=0, target=300)
-    t_last_cmd = now_ns() / 1000               # the last command the firmware hears
+    await tb.cmd("MOVE", axis=0, mode=U, target=300)
+    t_last_cmd = now_ns() / 1000               # the last command that shows the host in control
     await Timer(2 * PERIOD_US, unit="us")     # next iteration, next PWM period
-    assert await tb.duty(0, "rpwm", 41) > 0.03     # Table 1 P gain: 78 of 1023 steps
+    assert await tb.duty(0, "rpwm", 2 * PWM_PERIOD_US) > 0.03     # Table 1 P gain: 78 of 1023 steps
+    # a monitor that only polls (fresh seqs) and identifies does not keep the axis running
     t0 = now_ns() / 1000
-    while tb.pins_high() or (await tb.duty(0, "rpwm", 20)) > 0:
-        await Timer(200, unit="us")
-        assert now_ns() / 1000 - t0 < 15_000, "no stop after 15 ms of silence"
+    polls = 0
+    while tb.pins_high() or (await tb.duty(0, "rpwm", PWM_PERIOD_US)) > 0:
+        await tb.status(0)
+        await tb.cmd("IDENTIFY")
+        polls += 1
+        assert now_ns() / 1000 - t0 < 15_000, "no stop after 15 ms without a control command"
     stopped = now_ns() / 1000 - t_last_cmd
-    assert 9_900 < stopped < 12_000, f"stopped {stopped} us after the last command, the timeout is 10 ms"
+    assert polls > 5 and 9_900 < stopped < 12_000, \
+        f"stopped {stopped} us after the last control command ({polls} polls since), the timeout is 10 ms"
     st = await tb.status(0)
     assert st["faults"] == P.FAULT["LINK"] and not st["enabled"]
     await tb.assert_quiet(200, "after the link fault")
@@ -302,6 +316,13 @@ async def link_watchdog_stops_a_silent_link(dut):
     await _enable(tb, 1)                     # set-point = present position: no jump
     assert (await tb.status(0))["setpoint"] == 0
     await tb.assert_quiet(100, "re-enabled at its own position")
+    # HEARTBEATs keep it enabled for twice the timeout
+    t0 = now_ns() / 1000
+    while now_ns() / 1000 - t0 < 20_000:
+        await tb.cmd("HEARTBEAT")
+        await Timer(3_000, unit="us")
+    st = await tb.status(0)
+    assert st["enabled"] and st["faults"] == 0, st
 
 
 @cocotb.test()
@@ -312,9 +333,9 @@ async def estop_bridge_fault_following_soft_limit_and_encoder_faults(dut):
 
     async def running(ax: int, target: int) -> None:
         await _enable(tb, 1 << ax)
-        await tb.cmd("MOVE", axis=ax, mode=0, target=target)
+        await tb.cmd("MOVE", axis=ax, mode=U, target=target)
         await Timer(2 * PERIOD_US, unit="us")
-        assert await tb.duty(ax, "rpwm" if target > tb.enc[ax] else "lpwm", 41) > 0.02
+        assert await tb.duty(ax, "rpwm" if target > tb.enc[ax] else "lpwm", 2 * PWM_PERIOD_US) > 0.02
 
     async def faulted(ax: int, fault: str) -> None:
         await tb.assert_quiet(100, fault)
@@ -345,19 +366,22 @@ async def estop_bridge_fault_following_soft_limit_and_encoder_faults(dut):
     await Timer(10, unit="us")
     await tb.cmd("CLEAR_FAULT", mask=2)
 
-    # following error: the axis does not follow a step larger than the limit
+    # following error: a step larger than the limit is refused up front; an axis
+    # pushed away from its set-point beyond the limit trips
     await tb.set(0, "FOLLOW_LIMIT", 50)
     await _enable(tb, 1)
-    await tb.cmd("MOVE", axis=0, mode=0, target=60)
+    await tb.cmd("MOVE", P.STATUS["RANGE"], axis=0, mode=U, target=60)
+    await tb.move_encoder(0, -51)
     await Timer(2 * PERIOD_US, unit="us")
     await faulted(0, "FOLLOWING")
+    await tb.move_encoder(0, 0)
     await tb.cmd("CLEAR_FAULT", mask=1)
     await tb.set(0, "FOLLOW_LIMIT", 16800)
 
     # soft limits: a target outside is refused; a position outside trips the axis
     await tb.set(0, "SOFT_MAX", 20)
     await _enable(tb, 1)
-    await tb.cmd("MOVE", P.STATUS["RANGE"], axis=0, mode=0, target=21)
+    await tb.cmd("MOVE", P.STATUS["RANGE"], axis=0, mode=U, target=21)
     await tb.move_encoder(0, 25)
     await Timer(2 * PERIOD_US, unit="us")
     await faulted(0, "SOFT_LIMIT")
@@ -380,6 +404,43 @@ async def estop_bridge_fault_following_soft_limit_and_encoder_faults(dut):
 
 
 @cocotb.test()
+async def runaway_with_a_frozen_and_a_reversed_encoder(dut):
+    """Encoder loss at the pins: a step the encoder never follows (frozen), then
+    one it follows the wrong way (reversed wiring), each stop the bridge pins
+    within STALL_MS plus a period or two and latch RUNAWAY."""
+    tb = TB(dut)
+    await tb.start()
+    await tb.fast_pwm()
+    stall_ms = 20
+    await tb.set(0, "STALL_MS", stall_ms)
+    await tb.set(P.GLOBAL_AXIS, "LINK_TIMEOUT_MS", 1000)
+    await tb.set(0, "KP_Q16", 65536)                # 1 step per count: 300 counts -> 300 >= STALL_CMD
+    await tb.set(0, "LAW", 1)
+    for kind in ("frozen", "reversed"):
+        await _enable(tb, 1)
+        target = tb.enc[0] + 300
+        await tb.cmd("MOVE", axis=0, mode=U, target=target)
+        t_move = now_ns() / 1000
+        mover = None
+        if kind == "reversed":   # the motor runs toward the target, the encoder counts the other way
+            mover = cocotb.start_soon(tb.move_encoder(0, tb.enc[0] - 2000, step_ns=20_000))
+        await Timer(2 * PERIOD_US, unit="us")
+        assert await tb.duty(0, "rpwm", 2 * PWM_PERIOD_US) > 0.1, f"{kind}: not driving toward the target"
+        while tb.pins_high() or (await tb.duty(0, "rpwm", PWM_PERIOD_US)) > 0:
+            await Timer(100, unit="us")
+            assert now_ns() / 1000 - t_move < 3 * stall_ms * 1000, f"{kind} encoder: still driving"
+        tripped = now_ns() / 1000 - t_move
+        if mover is not None:
+            mover.kill()
+        st = await tb.status(0)
+        cocotb.log.info(f"{kind} encoder: pins off {tripped:.0f} us after the move (STALL_MS {stall_ms} ms)")
+        assert st["faults"] == P.FAULT["RUNAWAY"] and not st["enabled"], st
+        assert stall_ms * 1000 <= tripped <= stall_ms * 1000 + 4 * PERIOD_US, f"{kind}: {tripped} us"
+        await tb.assert_quiet(200, f"after RUNAWAY ({kind})")
+        await tb.cmd("CLEAR_FAULT", mask=1)
+
+
+@cocotb.test()
 async def corrupted_random_and_replayed_frames_change_nothing(dut):
     tb = TB(dut)
     await tb.start()
@@ -393,7 +454,7 @@ async def corrupted_random_and_replayed_frames_change_nothing(dut):
     before = {k: await tb.get(*k) for k in names}
     c0 = await tb.cmd("COUNTERS")
     # commands that would move or reconfigure if any got through
-    templates = [P.request("MOVE", 0, axis=0, mode=0, target=5000),
+    templates = [P.request("MOVE", 0, axis=0, mode=U, target=5000),
                  P.request("ENABLE", 0, mask=3, enable=1),
                  P.request("SET_PARAM", 0, axis=0, param=P.PARAMS["KP_Q16"].id, value=1),
                  P.request("SET_PARAM", 0, axis=P.GLOBAL_AXIS, param=P.PARAMS["PERIOD_US"].id, value=300)]
@@ -455,7 +516,7 @@ async def telemetry_trapezoid_and_bootloader_jump(dut):
     await tb.set(0, "FOLLOW_LIMIT", 1_000_000)
     await _enable(tb, 1)
     await tb.cmd("TELEMETRY", every=2)
-    await tb.cmd("MOVE", axis=0, mode=1, target=400)
+    await tb.cmd("MOVE", axis=0, mode=U | P.MOVE_TRAPEZOID, target=400)
     await Timer(14_000, unit="us")
     await tb.cmd("TELEMETRY", every=0)
     await Timer(2 * PERIOD_US, unit="us")
@@ -504,14 +565,14 @@ async def measure_control_iteration(dut):
     for ax in (0, 1):
         await tb.set(ax, "LAW", 3)
         await tb.set(ax, "KD_Q16", 655)
-        await tb.set(ax, "KI_Q16", 65536 * 40)
+        await tb.set(ax, "KI_Q16", 65536 * 20)
         await tb.set(ax, "FOLLOW_LIMIT", 1_000_000)
     await _enable(tb)
     # a 50-byte telemetry frame takes 500 us at 1 Mbaud: every 4th 200 us period keeps up
     await tb.cmd("TELEMETRY", every=4)
     movers = [cocotb.start_soon(tb.move_encoder(ax, 300 * (1 if ax else -1), step_ns=8_000)) for ax in (0, 1)]
     for ax in (0, 1):
-        await tb.cmd("MOVE", axis=ax, mode=1, target=2000 * (1 if ax else -1))
+        await tb.cmd("MOVE", axis=ax, mode=U | P.MOVE_TRAPEZOID, target=2000 * (1 if ax else -1))
     n_cmd = 0
     t_end = now_ns() + 3_000_000
     while now_ns() < t_end:

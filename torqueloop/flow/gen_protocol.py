@@ -40,12 +40,23 @@ def c_header() -> str:
         L.append(f"#define TLP_ST_{n} {v}u")
     L.append("")
     for n, v in P.FAULT.items():
-        L.append(f"#define TLP_FAULT_{n} 0x{v:02X}u")
+        L.append(f"#define TLP_FAULT_{n} 0x{v:04X}u")
+    L.append("/* faults that only block motion toward their end: ENABLE is allowed with them latched */")
+    L.append(f"#define TLP_FAULT_DIRECTIONAL 0x{P.DIRECTIONAL_FAULTS:04X}u")
     L.append("")
     for c in P.COMMANDS.values():
         L.append(f"#define TLP_CMD_{c.name} 0x{c.cmd:02X}u")
         L.append(f"#define TLP_CMD_{c.name}_REQ_LEN {_size(c.req)}u")
         L.append(f"#define TLP_CMD_{c.name}_REP_LEN {_size(c.rep)}u")
+        L.append(f"#define TLP_CMD_{c.name}_FEEDS_LINK {int(c.feeds_link)}u")
+    feeders = [c for c in P.COMMANDS.values() if c.feeds_link]
+    assert all(c.cmd < 32 for c in feeders), "TLP_LINK_FEED_MASK holds command codes below 32"
+    L.append("/* bit cmd set: that command, executed, feeds the link watchdog */")
+    L.append("#define TLP_LINK_FEED_MASK (" + " | ".join(f"(1u << TLP_CMD_{c.name})" for c in feeders) + ")")
+    L += [f"#define TLP_MOVE_TRAPEZOID 0x{P.MOVE_TRAPEZOID:02X}u", f"#define TLP_MOVE_UNHOMED 0x{P.MOVE_UNHOMED:02X}u"]
+    L += [f"#define TLP_HOME_MODE_{k.upper()} {v}u" for k, v in P.HOME_MODES.items()]
+    L += [f"#define TLP_HOME_STATE_{v.upper().replace(' ', '_')} {k}u" for k, v in P.HOME_STATE.items()]
+    L += [f"#define TLP_LIMIT_{k.upper()} 0x{v:02X}u" for k, v in P.LIMIT_BITS.items()]
     L.append("")
     L.append("/* Field offsets in the payloads (little-endian). */")
     for c in P.COMMANDS.values():
@@ -68,14 +79,15 @@ def c_header() -> str:
     for p in P.PARAMS.values():
         L.append(f"#define TLP_P_{p.name} {p.id}u")
     L += ["", f"#define TLP_AXIS_COUNT {P.AXIS_COUNT}u",
-          "/* dflt[axis]: a global parameter's default is dflt[0] */",
-          "typedef struct { uint8_t id; uint8_t global; int32_t min; int32_t max; int32_t dflt[TLP_AXIS_COUNT]; }"
-          " tlp_param_info_t;",
+          "/* dflt[axis]: a global parameter's default is dflt[0]; tighten: +1 / -1 = while an axis is",
+          "   enabled the value may only rise / fall (a safety limit), 0 = free */",
+          "typedef struct { uint8_t id; uint8_t global; int8_t tighten; int32_t min; int32_t max;"
+          " int32_t dflt[TLP_AXIS_COUNT]; } tlp_param_info_t;",
           f"#define TLP_PARAM_COUNT {len(P.PARAMS)}u",
           "static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {"]
     for p in P.PARAMS.values():
         mn = f"(-{-p.min}L)" if p.min < 0 else f"{p.min}L"
-        L.append(f"    {{{p.id}u, {1 if p.scope == 'global' else 0}u, {mn}, {p.max}L, "
+        L.append(f"    {{{p.id}u, {1 if p.scope == 'global' else 0}u, {p.tighten}, {mn}, {p.max}L, "
                  f"{{{', '.join(_c_int(d) for d in _axis_defaults(p))}}}}},  /* {p.name} */")
     L += ["};", "", "#endif", ""]
     return "\n".join(L)
@@ -113,9 +125,14 @@ def markdown() -> str:
          "## Status codes", "", "| code | name | meaning |", "|---|---|---|"]
     for s in P.SPEC["status"]:
         L.append(f"| {s['code']} | {s['name']} | {s['desc']} |")
-    L += ["", "## Fault flags (per axis, latched)", "", "| bit | name | cause |", "|---|---|---|"]
+    L += ["", "## Fault flags (per axis, u16, latched)", "",
+          "Each fault disables the axis when it trips. *blocks*: `enable` - the axis stays disabled until "
+          "CLEAR_FAULT (refused while the cause is present); `direction` - the axis may be enabled again, "
+          "but motion toward that end is blocked until the fault is cleared. docs/safety.md says what trips "
+          "each fault, how fast, and what clears it.", "",
+          "| bit | name | blocks | cause |", "|---|---|---|---|"]
     for f in P.SPEC["fault"]:
-        L.append(f"| {f['bit']} | {f['name']} | {f['desc']} |")
+        L.append(f"| {f['bit']} | {f['name']} | {f.get('blocks', 'enable')} | {f['desc']} |")
     L += ["", "## Commands", ""]
     for c in P.COMMANDS.values():
         L.append(f"### 0x{c.cmd:02X} {c.name}")
@@ -124,14 +141,21 @@ def markdown() -> str:
         L.append("")
         L.append(f"reply (0x{c.cmd | P.REPLY_FLAG:02X}): " + ", ".join(f"`{n}:{t}`" for n, t in c.rep))
         L.append("")
+        if c.feeds_link:
+            L += ["Feeds the link watchdog (LINK_TIMEOUT_MS) when executed.", ""]
     L += ["## Telemetry (0x%02X)" % P.TELEMETRY_CMD, "",
           "head: " + ", ".join(f"`{n}:{t}`" for n, t in P.TELEMETRY_HEAD) + "; then for axis 0 and 1: "
           + ", ".join(f"`{n}:{t}`" for n, t in P.TELEMETRY_AXIS) + f" ({P.telemetry_payload_bytes()} bytes).",
           "velocity_q8 is counts/s x 256.", "",
-          "## Parameters", "", "| id | name | scope | min | max | default (x / z where they differ) | meaning |", "|---|---|---|---|---|---|---|"]
+          "## Parameters", "",
+          "*tighten*: a safety limit that may only be made stricter (lowered, or raised) while any axis is "
+          "enabled; a change the other way is refused with LOOSEN.", "",
+          "| id | name | scope | min | max | default (x / z where they differ) | tighten | meaning |",
+          "|---|---|---|---|---|---|---|---|"]
     for p in P.PARAMS.values():
         dflt = " / ".join(str(d) for d in p.defaults) if len(set(p.defaults)) > 1 else str(p.default)
-        L.append(f"| {p.id} | {p.name} | {p.scope} | {p.min} | {p.max} | {dflt} | {p.desc} |")
+        t = {1: "up only", -1: "down only", 0: ""}[p.tighten]
+        L.append(f"| {p.id} | {p.name} | {p.scope} | {p.min} | {p.max} | {dflt} | {t} | {p.desc} |")
     L += ["", "Global parameters are addressed with axis 0xFF.", ""]
     return "\n".join(L)
 

@@ -29,6 +29,12 @@ def round_q16(u_q16: int) -> int:
     return (u_q16 + 32768) >> 16
 
 
+def count_diff(a: int, b: int) -> int:
+    """Counts between two decoder readings, modulo 2^32 like the 32-bit counter
+    (control.c's count_diff: the counter wraps, the difference does not jump)."""
+    return ((a - b + (1 << 31)) & 0xFFFF_FFFF) - (1 << 31)
+
+
 def _tdiv(a: int, b: int) -> int:
     """C integer division (truncates toward zero)."""
     q = abs(a) // abs(b)
@@ -116,12 +122,12 @@ class Axis:
     def _velocity(self, pos: int, edge_time: int, now: int, interval: int) -> None:
         clamp32 = (1 << 31) - 1
         if self.p.vel_mode == 0:
-            euler = _tdiv((pos - self.pos_prev) * 256 * 1_000_000, self.period_us)
+            euler = _tdiv(count_diff(pos, self.pos_prev) * 256 * 1_000_000, self.period_us)
             self.vel_q8 = clamp(_tdiv(euler + self.vel_q8, 2), clamp32)
         elif pos != self.pos_ref:
             # edge-to-edge average while moving; one count over the last edge interval
             # for the first counts after a silent sample
-            d, dt = pos - self.pos_ref, (edge_time - self.t_ref) & 0xFFFFFFFF
+            d, dt = count_diff(pos, self.pos_ref), (edge_time - self.t_ref) & 0xFFFFFFFF
             if not self.moved_last:
                 d, dt = (1 if d > 0 else -1), interval
             self.vel_q8 = clamp(_tdiv(d * 256 * self.clk_hz, dt or 1), clamp32)

@@ -64,7 +64,7 @@ class ExperimentConfig:
     pwm_hz: tuple[float, ...] | None = None   # carriers set after the file (None: the file's, else the paper's)
     pw0_off: bool = False               # PW0 set to 0 after the file: no dead-zone compensation
     record_s: float = 0.002             # grid of the plant trace (plots)
-    heartbeat_s: float = 0.25           # STATUS poll, as the host tool keeps the link alive
+    heartbeat_s: float = 0.25           # HEARTBEAT, as the host tool keeps the link watchdog fed
     brake: bool = True                  # off-phase: brake (slow decay), as pwm_torque drives the IBT-2
     baud_div: int | None = None         # UART clocks per bit - 1 after IDENTIFY (None: keep 115200,
                                         # the RN-XV's rate); short control periods need a faster link
@@ -222,7 +222,8 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
             link.advance(2_000)
             link.poll()
         target = cfg.target_counts
-        seqs = [link.post("MOVE", axis=ax, mode=0, target=target) for ax in (0, 1)]
+        # the paper's step from rest, relative to where the stage was at power-up: UNHOMED
+        seqs = [link.post("MOVE", axis=ax, mode=tp.MOVE_UNHOMED, target=target) for ax in (0, 1)]
         for s in seqs:
             r = link.wait(s)
             if r["status"] != tp.STATUS["OK"]:
@@ -244,7 +245,7 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
                           plant.current_sq_integral(1)))
             link.poll()
             if board.cycle >= next_hb:
-                link.post("STATUS", axis=0)
+                link.post("HEARTBEAT")
                 next_hb += hb
             if cfg.progress and time.monotonic() >= next_print:
                 next_print += 5.0

@@ -11,7 +11,13 @@ the level their reference models define:
   event-level model of the PWM block (carrier of FDIV x 1023 clocks, eq. 1
   duty, double buffering, brake in the off phase, the BRAKE parameter's
   safe state while disabled);
-- the quadrature decoder: the plant's count, with the time of its last edge;
+- the quadrature decoder: the plant's count, with the time of its last edge,
+  and its index latch (the plant's Z pulse);
+- limit switches at the ends of each axis's travel (normally closed; open
+  beyond ``limit_counts``), and the SoC's limit block: the bridge side that
+  drives toward an open switch is held off;
+- faults a test can inject: a frozen or reversed encoder (``encoder_fault``),
+  a bridge fault input, the e-stop;
 - the plant: ``sim_models.stepper.TwoAxisPlant`` (paper eq. 5-17).
 
 UART bytes reach the firmware when they arrive and its replies leave at
@@ -43,6 +49,11 @@ HEADERS = [FW / "servo" / "servo.h", FW / "servo" / "control.h", FW / "servo" / 
 BUILD = REPO / "build" / "host"
 CLK_HZ = SYSTEM.clk_hz
 DEFAULT_BUILD_ID = 0x51B0_0001
+#: Limit switches of the simulated stage, encoder counts from the power-up
+#: position: the negative end's switch opens below the first, the positive
+#: end's above the second (about +-190 mm of a 4 mm lead).
+LIMIT_COUNTS = (-400_000, 400_000)
+LIM_NEG, LIM_POS = 0x01, 0x02
 
 
 class BytePipe(Protocol):
@@ -92,6 +103,7 @@ class SimBoard:
         self._lib.sb_period_us.restype = ctypes.c_uint32
         self._lib.sb_baud_div.restype = ctypes.c_uint32
         self._lib.sb_bootloader_requested.restype = ctypes.c_int32
+        self._lib.sb_index_armed.restype = ctypes.c_int32
         self.plant = TwoAxisPlant(load_variant(*parse_plant(plant)), seed=seed)
         self.tick = 0                    # 50 MHz clocks since power-up
         self._edge_tick = [0, 0]
@@ -99,8 +111,14 @@ class SimBoard:
         self._pwm = [PwmChannel(), PwmChannel()]   # the PWM blocks (freq_div + pwm_torque)
         self._next_tick_at = 0
         self._txbuf = ctypes.create_string_buffer(16384)
-        self._drive = (ctypes.c_int32 * 6)()
+        self._drive = (ctypes.c_int32 * 7)()
         self.bridge_fault = [False, False]
+        #: per axis None, "frozen" (the count stops where it is) or "reversed" (counts the wrong way)
+        self.encoder_fault: list[str | None] = [None, None]
+        self._fault_ref = [0, 0]
+        self.limit_counts = [LIMIT_COUNTS, LIMIT_COUNTS]
+        self._count = [self.plant.count(0), self.plant.count(1)]   # the decoder's count, edge by edge
+        self._gray = [self._gray_index(a) for a in range(2)]
         self.build_id = build_id
         self.factory_build_id = build_id
         self.boot: SimBootRom | None = None
@@ -175,7 +193,27 @@ class SimBoard:
 
     def drive(self, axis: int) -> dict[str, int]:
         self._lib.sb_get_drive(ctypes.c_uint32(axis), self._drive)
-        return dict(zip(("cmd", "on", "brake", "fdiv", "pw0", "pwmax"), self._drive))
+        return dict(zip(("cmd", "on", "brake", "fdiv", "pw0", "pwmax", "limit_block"), self._drive))
+
+    def set_encoder_fault(self, axis: int, kind: str | None) -> None:
+        """Freeze the encoder's count where it is, make it count the wrong way
+        from here (a swapped A/B pair), or (None) heal it."""
+        if kind not in (None, "frozen", "reversed"):
+            raise ValueError(f"encoder fault {kind!r}")
+        self._fault_ref[axis] = self.plant.count(axis)
+        self.encoder_fault[axis] = kind
+
+    def encoder_count(self, axis: int) -> int:
+        """The count the decoder reports (the plant's, unless a fault is injected)."""
+        c, ref = self.plant.count(axis), self._fault_ref[axis]
+        kind = self.encoder_fault[axis]
+        return ref if kind == "frozen" else (2 * ref - c if kind == "reversed" else c)
+
+    def limits(self, axis: int) -> int:
+        """Limit switches open now (LIM_NEG / LIM_POS), from the plant's true position."""
+        lo, hi = self.limit_counts[axis]
+        c = self.plant.count(axis)
+        return (LIM_NEG if c < lo else 0) | (LIM_POS if c > hi else 0)
 
     # ---- inside -------------------------------------------------------------------
     def _period_ticks(self) -> int:
@@ -183,30 +221,45 @@ class SimBoard:
 
     def _sync_encoders(self) -> None:
         for a in range(2):
-            self._lib.sb_set_encoder(ctypes.c_uint32(a), ctypes.c_int32(self.plant.count(a)),
+            self._lib.sb_set_encoder(ctypes.c_uint32(a), ctypes.c_int32(self.encoder_count(a)),
                                      ctypes.c_uint32(self._edge_tick[a] & 0xFFFFFFFF),
                                      ctypes.c_uint32(min(self._edge_interval[a], 0xFFFFFFFF)),
                                      ctypes.c_uint32(self.tick & 0xFFFFFFFF), ctypes.c_uint32(0),
-                                     ctypes.c_int32(int(self.bridge_fault[a])))
+                                     ctypes.c_int32(int(self.bridge_fault[a])), ctypes.c_uint32(self.limits(a)))
 
     def _load_drives(self) -> None:
         """What the firmware last wrote to each axis's PWM registers, as the
         PWM block takes it (torqueloop.models.pwm_schedule)."""
         for a, ch in enumerate(self._pwm):
             d = self.drive(a)
-            ch.load(PwmSetting(cmd=d["cmd"] if d["on"] else 0, div=d["fdiv"], pw0=d["pw0"], pwmax=d["pwmax"],
+            cmd = d["cmd"] if d["on"] else 0
+            lim = self.limits(a) if d["limit_block"] else 0
+            if (cmd > 0 and lim & LIM_POS) or (cmd < 0 and lim & LIM_NEG):
+                cmd = 0     # the SoC's limit block holds that bridge side off
+            ch.load(PwmSetting(cmd=cmd, div=d["fdiv"], pw0=d["pw0"], pwmax=d["pwmax"],
                                enabled=bool(d["on"]), safe=BRAKE if d["brake"] else COAST))
+
+    def _gray_index(self, axis: int) -> int:
+        return self.plant.count(axis) & 3
 
     def _edges(self, start: int, edges: list) -> None:
         for e in edges:
             at = start + int(e.t * CLK_HZ)
             self._edge_interval[e.axis] = at - self._edge_tick[e.axis]
             self._edge_tick[e.axis] = at
+            g = _GRAY_INDEX[(e.a, e.b)]
+            self._count[e.axis] += 1 if (g - self._gray[e.axis]) & 3 == 1 else -1
+            self._gray[e.axis] = g
+            if e.z and self._lib.sb_index_armed(ctypes.c_uint32(e.axis)) and self.encoder_fault[e.axis] is None:
+                self._lib.sb_index_latch(ctypes.c_uint32(e.axis), ctypes.c_int32(self._count[e.axis]))
 
     def _run_pwm_until(self, end: int) -> None:
         if end > self.tick:
             run_until(self.plant, self._pwm, self.tick, end, CLK_HZ, self._edges)
             self.tick = end
+
+
+_GRAY_INDEX = {(0, 0): 0, (1, 0): 1, (1, 1): 2, (0, 1): 3}   # sim_models.encoder's A/B Gray code
 
 
 class SimBootRom:

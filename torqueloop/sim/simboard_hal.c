@@ -15,7 +15,8 @@
 static tl_servo_t servo;
 static tl_enc_sample_t enc[2];
 static int32_t pwm_cmd[2];
-static int32_t pwm_on[2], pwm_brake[2];
+static int32_t pwm_on[2], pwm_brake[2], limit_block[2];
+static int32_t index_armed[2], index_seen[2], index_pos[2];
 static uint32_t pwm_fdiv[2], pwm_pw0[2], pwm_pwmax[2];
 static uint32_t safety;
 static uint32_t baud_div;
@@ -26,6 +27,17 @@ static uint32_t tx_len;
 /* ---- hal.h --------------------------------------------------------------- */
 void hal_enc_read(uint32_t axis, tl_enc_sample_t *s) { *s = enc[axis]; }
 void hal_enc_clear_illegal(uint32_t axis) { enc[axis].illegal = 0; }
+void hal_enc_index_arm(uint32_t axis)
+{
+    index_armed[axis] = 1;
+    index_seen[axis] = 0;
+}
+bool hal_enc_index(uint32_t axis, int32_t *pos)
+{
+    *pos = index_pos[axis];
+    return index_seen[axis] != 0;
+}
+void hal_limit_block(uint32_t axis, bool on) { limit_block[axis] = on; }
 void hal_pwm_cmd(uint32_t axis, int32_t cmd) { pwm_cmd[axis] = cmd; }
 void hal_pwm_enable(uint32_t axis, bool on, bool brake)
 {
@@ -43,6 +55,10 @@ void hal_safety_ack(uint32_t bits)
 {
     /* W1C like soc_sys: a cause still present (e-stop input) keeps its bit. */
     uint32_t keep = (safety & TL_HAL_SAFE_ESTOP_IN) ? TL_HAL_SAFE_ESTOP : 0u;
+    if (enc[0].bridge_fault)
+        keep |= TL_HAL_SAFE_FAULT0;
+    if (enc[1].bridge_fault)
+        keep |= TL_HAL_SAFE_FAULT1;
     safety &= ~(bits & ~keep);
     if (!(safety & (TL_HAL_SAFE_ESTOP | TL_HAL_SAFE_FAULT0 | TL_HAL_SAFE_FAULT1 | TL_HAL_SAFE_WDOG |
                     TL_HAL_SAFE_ESTOP_IN)))
@@ -70,6 +86,9 @@ void sb_reset(uint32_t id)
     memset(pwm_cmd, 0, sizeof pwm_cmd);
     memset(pwm_on, 0, sizeof pwm_on);
     memset(pwm_brake, 0, sizeof pwm_brake);
+    memset(limit_block, 0, sizeof limit_block);
+    memset(index_armed, 0, sizeof index_armed);
+    memset(index_seen, 0, sizeof index_seen);
     /* power-up: the SoC latch holds the drives safe with its reset-time ESTOP bit */
     safety = TL_HAL_SAFE_FORCED | TL_HAL_SAFE_ESTOP;
     baud_div = 0;
@@ -114,8 +133,9 @@ uint32_t sb_tx_take(uint8_t *dst, uint32_t cap)
 }
 
 void sb_set_encoder(uint32_t axis, int32_t pos, uint32_t edge_time, uint32_t interval, uint32_t now,
-                    uint32_t illegal, int32_t bridge_fault)
+                    uint32_t illegal, int32_t bridge_fault, uint32_t limits)
 {
+    enc[axis].limits = (uint8_t)limits;
     enc[axis].pos = pos;
     enc[axis].edge_time = edge_time;
 #ifdef SB_HAL_HAS_INTERVAL   /* hal.h's decoder sample grew the last edge interval; simboard.py detects it */
@@ -126,11 +146,22 @@ void sb_set_encoder(uint32_t axis, int32_t pos, uint32_t edge_time, uint32_t int
     enc[axis].now = now;
     enc[axis].illegal = illegal;
     enc[axis].bridge_fault = bridge_fault != 0;
+    if (bridge_fault)   /* soc_sys latches the bridge fault input and forces the drives safe */
+        safety |= (axis ? TL_HAL_SAFE_FAULT1 : TL_HAL_SAFE_FAULT0) | TL_HAL_SAFE_FORCED;
 }
 
-/* drive[0..5] = cmd, on, brake, fdiv, pw0, pwmax */
+/* The decoder's index latch: armed by the firmware, latched by the simulator at a Z rise. */
+int32_t sb_index_armed(uint32_t axis) { return index_armed[axis] && !index_seen[axis]; }
+void sb_index_latch(uint32_t axis, int32_t pos)
+{
+    index_pos[axis] = pos;
+    index_seen[axis] = 1;
+}
+
+/* drive[0..6] = cmd, on, brake, fdiv, pw0, pwmax, limit block */
 void sb_get_drive(uint32_t axis, int32_t *drive)
 {
+    drive[6] = limit_block[axis];
     drive[0] = pwm_cmd[axis];
     drive[1] = pwm_on[axis];
     drive[2] = pwm_brake[axis];

@@ -30,6 +30,7 @@ class Command:
     desc: str
     req: tuple[tuple[str, str], ...]
     rep: tuple[tuple[str, str], ...]
+    feeds_link: bool = False    # executed with a new seq, it feeds the link watchdog
 
     @property
     def req_fmt(self) -> str:
@@ -49,6 +50,7 @@ class Param:
     max: int
     defaults: tuple[int, ...]   # per axis (one entry for a global parameter)
     desc: str
+    tighten: int = 0            # +1 / -1: while an axis is enabled it may only rise / fall (0: free)
 
     @property
     def default(self) -> int:
@@ -94,10 +96,21 @@ MAX_ENCODED = MAX_PACKET + MAX_PACKET // 254 + 1
 STATUS: dict[str, int] = {s["name"]: s["code"] for s in SPEC["status"]}
 STATUS_NAME: dict[int, str] = {v: k for k, v in STATUS.items()}
 FAULT: dict[str, int] = {f["name"]: 1 << f["bit"] for f in SPEC["fault"]}
+#: faults that only block motion toward one end (the axis may be enabled and driven back out)
+DIRECTIONAL_FAULTS: int = sum(1 << f["bit"] for f in SPEC["fault"] if f.get("blocks") == "direction")
 COMMANDS: dict[str, Command] = {
     c["name"]: Command(c["name"], c["cmd"], c["desc"],
-                       tuple(tuple(x) for x in c["req"]), tuple(tuple(x) for x in c["rep"]))
+                       tuple(tuple(x) for x in c["req"]), tuple(tuple(x) for x in c["rep"]),
+                       bool(c.get("feeds_link", False)))
     for c in SPEC["command"]}
+#: MOVE mode bits
+MOVE_TRAPEZOID = 0x01
+MOVE_UNHOMED = 0x80
+#: HOME modes and STATUS.home states
+HOME_MODES = {"neg": 0, "pos": 1, "here": 2}
+HOME_STATE = {0: "not homed", 1: "homing", 2: "homed"}
+#: STATUS.limits bits: limit switch open now
+LIMIT_BITS = {"neg": 0x01, "pos": 0x02}
 BY_CMD: dict[int, Command] = {c.cmd: c for c in COMMANDS.values()}
 AXIS_COUNT = len(SYSTEM.axes)
 GLOBAL_AXIS = 0xFF
@@ -129,12 +142,23 @@ def _params(spec: list[dict]) -> dict[str, Param]:
             raise ProtocolSpecError(f"protocol.toml param {p['name']}: {len(vals)} defaults for {n} axes")
         return tuple(int(x) for x in vals)
 
+    def bound(p: dict, k: str) -> int:
+        v = resolve(p[k], f"protocol.toml param {p['name']}.{k}")
+        if not isinstance(v, int):
+            raise ProtocolSpecError(f"protocol.toml param {p['name']}.{k}: one integer, not {v!r}")
+        return v
+
     out = {}
     for p in spec:
         d = per_axis(p)
-        if not all(p["min"] <= x <= p["max"] for x in d):
-            raise ProtocolSpecError(f"protocol.toml param {p['name']}: default {d} outside {p['min']}..{p['max']}")
-        out[p["name"]] = Param(p["name"], p["id"], p["scope"], p["min"], p["max"], d, p["desc"])
+        lo, hi = bound(p, "min"), bound(p, "max")
+        if not all(lo <= x <= hi for x in d):
+            raise ProtocolSpecError(f"protocol.toml param {p['name']}: default {d} outside {lo}..{hi}")
+        t = p.get("tighten")
+        if t not in (None, "up", "down"):
+            raise ProtocolSpecError(f"protocol.toml param {p['name']}: tighten must be 'up' or 'down', not {t!r}")
+        out[p["name"]] = Param(p["name"], p["id"], p["scope"], lo, hi, d, p["desc"],
+                               {"up": 1, "down": -1, None: 0}[t])
     return out
 
 

@@ -24,6 +24,7 @@ VALUES: dict[str, int | tuple[int, ...]] = {
     "counts_per_turn": SYSTEM.counts_per_turn,
     "lead_um": SYSTEM.lead_um,
     "period_us": SYSTEM.period_us,
+    "bridge_max_hz": SYSTEM.bridge_max_hz,
     # the FDIV register's reset value: axis 0's carrier (one reset value serves every AXIS page)
     "fdiv_reset": divider_for(SYSTEM.axes[0].pwm_hz),
     "fdiv": tuple(divider_for(a.pwm_hz) for a in SYSTEM.axes),

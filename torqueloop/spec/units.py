@@ -22,6 +22,23 @@ from torqueloop.spec.system import SYSTEM
 
 CLK_HZ = SYSTEM.clk_hz   # the board reports its own in IDENTIFY
 LAWS = {"off": 0, "p": 1, "pd": 2, "pid": 3}
+INT32_MIN, INT32_MAX = -(1 << 31), (1 << 31) - 1
+
+
+class BadValue(ValueError):
+    """A value refused before anything is sent (not a number, not finite, out
+    of range, too large for the wire); ``str()`` is one line for a person."""
+
+
+def number(text: str, what: str) -> float:
+    """A finite number from the command line, or BadValue."""
+    try:
+        v = float(text)
+    except (TypeError, ValueError):
+        raise BadValue(f"{what}: {text!r} is not a number") from None
+    if not math.isfinite(v):
+        raise BadValue(f"{what}: {text} is not a finite number")
+    return v
 
 
 @dataclass(frozen=True)
@@ -30,17 +47,24 @@ class Mechanics:
     pitch_um: int = SYSTEM.lead_um
 
     def to_counts(self, value: float, unit: str) -> int:
+        if not math.isfinite(value):
+            raise BadValue(f"position {value} is not a finite number")
         if unit in ("", "counts", "count", "cts"):
-            return int(round(value))
-        if unit == "rad":
-            return int(round(value * self.counts_per_rev / (2 * math.pi)))
-        if unit in ("rev", "turn", "turns"):
-            return int(round(value * self.counts_per_rev))
-        if unit == "mm":
-            return int(round(value * 1000 * self.counts_per_rev / self.pitch_um))
-        if unit == "deg":
-            return int(round(value * self.counts_per_rev / 360))
-        raise ValueError(f"unknown position unit {unit!r} (use rad, mm, rev, deg or counts)")
+            c = value
+        elif unit == "rad":
+            c = value * self.counts_per_rev / (2 * math.pi)
+        elif unit in ("rev", "turn", "turns"):
+            c = value * self.counts_per_rev
+        elif unit == "mm":
+            c = value * 1000 * self.counts_per_rev / self.pitch_um
+        elif unit == "deg":
+            c = value * self.counts_per_rev / 360
+        else:
+            raise BadValue(f"unknown position unit {unit!r} (use rad, mm, rev, deg or counts)")
+        if not INT32_MIN <= c <= INT32_MAX:
+            raise BadValue(f"position {value:g} {unit or 'counts'} is {c:.4g} counts, beyond the encoder's "
+                           f"32-bit range [{INT32_MIN}, {INT32_MAX}]")
+        return int(round(c))
 
     def from_counts(self, counts: float, unit: str) -> float:
         if unit in ("", "counts"):
@@ -63,7 +87,7 @@ def parse_position(text: str, mech: Mechanics, default_unit: str = "counts") -> 
     """``'6.28rad'`` -> counts.  A bare number is in ``default_unit``."""
     m = _POS_RE.match(text.lower())
     if not m:
-        raise ValueError(f"cannot read position {text!r} (examples: 6.28rad, 4mm, 1rev, 8400)")
+        raise BadValue(f"cannot read position {text!r} (examples: 6.28rad, 4mm, 1rev, 8400)")
     return mech.to_counts(float(m.group(1)), m.group(2) or default_unit)
 
 
@@ -94,6 +118,12 @@ FRIENDLY: dict[str, Friendly] = {
     "amax": Friendly("AMAX", 1, "counts/s^2", "trapezoid acceleration"),
     "counts_per_rev": Friendly("COUNTS_PER_REV", 1, "counts", "encoder counts per screw turn"),
     "pitch": Friendly("PITCH_UM", 1e6, "m", "ball-screw lead"),
+    "stall_cmd": Friendly("STALL_CMD", 1, "steps", "runaway check: command that must move the axis"),
+    "stall_time": Friendly("STALL_MS", 1e3, "s", "runaway check: time it has to move it"),
+    "limit_sw": Friendly("LIMIT_SW", 1, "", "1 = limit switches wired, 0 = none"),
+    "home_vel": Friendly("HOME_VEL", 1, "counts/s", "homing speed"),
+    "home_pos": Friendly("HOME_POS", 1, "counts", "position given to the home point"),
+    "pwm_max": Friendly("PWM_MAX_HZ", 1, "Hz", "PWM carrier ceiling (the bridge's rating)"),
 }
 # Parameters with their own conversions (not a plain scale).
 SPECIAL = {"law": "LAW", "pwm_freq": "FDIV"}
@@ -113,22 +143,42 @@ def resolve(name: str) -> tuple[str, str]:
     if up in P.PARAMS:
         return up, "raw"
     known = ", ".join(sorted([*FRIENDLY, *SPECIAL]))
-    raise ValueError(f"unknown parameter {name!r}; friendly names: {known}; or a protocol name "
-                     f"such as KP_Q16 (docs/protocol.md)")
+    raise BadValue(f"unknown parameter {name!r}; friendly names: {known}; or a protocol name "
+                   f"such as KP_Q16 (docs/protocol.md)")
 
 
 def to_raw(name: str, text: str, clk_hz: int = CLK_HZ) -> tuple[str, int]:
-    """(protocol parameter, raw integer) for ``set NAME VALUE``."""
+    """(protocol parameter, raw integer) for ``set NAME VALUE``; BadValue for
+    anything the parameter cannot hold (the message gives its range in the
+    unit the value was given in)."""
     param, kind = resolve(name)
+    p = P.PARAMS[param]
     if kind == "special":
         if param == "LAW":
             if text.lower() in LAWS:
                 return param, LAWS[text.lower()]
-            return param, int(text)
-        return param, divider_for(float(text), clk_hz)
+            v = number(text, name)
+            if v not in range(p.min, p.max + 1):
+                raise BadValue(f"law {text!r}: use {', '.join(LAWS)} or 0..3")
+            return param, int(v)
+        f = number(text, name)
+        if f <= 0:
+            raise BadValue(f"pwm_freq {text} Hz: the carrier must be above 0 Hz")
+        return param, divider_for(f, clk_hz)
     if kind == "friendly":
-        return param, int(round(float(text) * FRIENDLY[name.lower()].scale))
-    return param, int(text, 0)
+        fr = FRIENDLY[name.lower()]
+        raw = number(text, name) * fr.scale
+        if not p.min <= round(raw) <= p.max:
+            raise BadValue(f"{name} {text} {fr.unit}".rstrip() + f" is outside [{p.min / fr.scale:g}, "
+                           f"{p.max / fr.scale:g}] {fr.unit}".rstrip())
+        return param, int(round(raw))
+    try:
+        raw = int(text, 0)
+    except ValueError:
+        raise BadValue(f"{param}: {text!r} is not an integer (raw protocol values are integers)") from None
+    if not p.min <= raw <= p.max:
+        raise BadValue(f"{param} = {raw} is outside [{p.min}, {p.max}]")
+    return param, raw
 
 
 def from_raw(name: str, raw: int, clk_hz: int = CLK_HZ) -> tuple[float | int | str, str]:
