@@ -9,7 +9,15 @@ Checked: info, set/get round trips in physical units, a move the plant
 follows, a step test's files and figures, a following-error fault decoded
 and cleared, config save/load round trip (and the characterisation file),
 an upload that changes the build id, and a corrupted one that the boot ROM
-refuses, leaving the factory firmware working.
+refuses, leaving the factory firmware working; and the careless user of
+issue 17: every bad value refused with one line and exit status 2 before
+anything is sent, a refused `move --enable` that leaves the axis disabled, a
+step beyond the following limit refused with the reason, a busy board named
+busy, safety limits that cannot be loosened while an axis is enabled, and
+`get` reading back what `set` wrote at the extremes of the gains.
+
+Tests may run in any order and on different pytest-xdist workers (each its
+own simulated board), so each one sets up the state it needs.
 """
 
 from __future__ import annotations
@@ -47,10 +55,15 @@ def url():
 
 def run(url: str, capsys, *args: str, rc: int = 0):
     capsys.readouterr()
-    got = cli.main(["-u", url, "--json", *args])
+    try:
+        got = cli.main(["-u", url, "--json", *args])
+    except SystemExit as e:          # argparse: a usage error
+        got = e.code
     out, err = capsys.readouterr()
     assert got == rc, f"torqueloop {' '.join(args)} -> {got}\n{out}\n{err}"
-    return (json.loads(out.strip().splitlines()[-1]) if out.strip() else None), err
+    if rc:
+        assert "Traceback" not in err and len(err.strip().splitlines()) == 1, f"not one line: {err!r}"
+    return (json.loads(out.strip().splitlines()[-1]) if out.strip() and not rc else None), err
 
 
 def test_info(url, capsys) -> None:
@@ -72,13 +85,17 @@ def test_set_get_round_trip_in_physical_units(url, capsys) -> None:
     assert got["law"]["value"] == "pid"
     run(url, capsys, "set", "period", "0.025")
     # out of range: refused by the tool with the limits named, nothing changed
-    _, err = run(url, capsys, "set", "cmd_limit", "4000", rc=1)
-    assert "RANGE" in err and "1023" in err
+    _, err = run(url, capsys, "set", "cmd_limit", "4000", rc=2)
+    assert "outside" in err and "1023" in err
     got, _ = run(url, capsys, "get", "cmd_limit")
     assert got["cmd_limit"]["value"] == 1023
 
 
 def test_move_is_followed_by_the_plant(url, capsys) -> None:
+    run(url, capsys, "disable", "--all")
+    run(url, capsys, "clear-fault", "--all")
+    run(url, capsys, "move", "2mm", "--enable", "--axis", "0", rc=1)     # not homed
+    run(url, capsys, "home", "here", "--axis", "0")
     res, _ = run(url, capsys, "move", "2mm", "--enable", "--wait", "6", "--axis", "0")
     assert res["target_counts"] == 4200          # 2 mm at 4 mm and 8400 counts per turn
     assert abs(res["error_counts"]) <= 20, res
@@ -89,7 +106,7 @@ def test_move_is_followed_by_the_plant(url, capsys) -> None:
 
 def test_step_test_writes_plot_csv_and_figures(url, capsys, tmp_path: Path) -> None:
     run(url, capsys, "clear-fault", "--all")
-    res, _ = run(url, capsys, "step-test", "1rev", "--relative", "--duration", "3", "--out", str(tmp_path))
+    res, _ = run(url, capsys, "step-test", "1rev", "--relative", "--unhomed", "--duration", "3", "--out", str(tmp_path))
     f = res["figures"]
     for ext in ("png", "csv", "json"):
         assert (tmp_path / f"step_axis0.{ext}").stat().st_size > 100
@@ -104,10 +121,17 @@ def test_step_test_writes_plot_csv_and_figures(url, capsys, tmp_path: Path) -> N
 
 
 def test_fault_is_decoded_and_cleared(url, capsys) -> None:
+    run(url, capsys, "disable", "--all")
     run(url, capsys, "clear-fault", "--all")
     run(url, capsys, "set", "follow_limit", "50", "--axis", "1")
-    run(url, capsys, "move", "3000", "--relative", "--enable", "--axis", "1")
-    _, err = run(url, capsys, "move", "0", "--wait", "2", "--axis", "1", rc=1)
+    # a step that large would trip at once: refused up front, with the reason, axis left disabled
+    _, err = run(url, capsys, "move", "3000", "--relative", "--enable", "--unhomed", "--axis", "1", rc=2)
+    assert "FOLLOW_LIMIT" in err and "--trapezoid" in err
+    st, _ = run(url, capsys, "status", "--axis", "1")
+    assert st["1"]["enabled"] == 0
+    # a profiled move the heavy z axis cannot follow within 50 counts
+    _, err = run(url, capsys, "move", "3000", "--relative", "--enable", "--unhomed", "--trapezoid", "--wait", "3",
+                 "--axis", "1", rc=1)
     st, _ = run(url, capsys, "status", "--axis", "1")
     assert "FOLLOWING" in st["1"]["fault_names"] and st["1"]["enabled"] == 0
     _, err = run(url, capsys, "enable", "--axis", "1", rc=1)
@@ -141,8 +165,16 @@ def test_config_save_load_round_trip(url, capsys, tmp_path: Path) -> None:
     assert "0x00000001" in err and "--force" in err
     doc["axes"][1]["PW0"] = 5000
     a.write_text(json.dumps(doc))
-    _, err = run(url, capsys, "config", "load", str(a), "--force", rc=1)
+    _, err = run(url, capsys, "config", "load", str(a), "--force", rc=2)
     assert "axes[1].PW0" in err
+    # a file that is no configuration at all: one line, exit status 2
+    for name, text in (("nested.json", "[" * 100_000 + "]" * 100_000), ("firmware.json", json.dumps({**doc, "firmware": "x"})),
+                       ("garbage.json", "{not json"), ("global.json", json.dumps({**doc, "global": {"PERIOD_US": 1e99}}))):
+        (tmp_path / name).write_text(text)
+        _, err = run(url, capsys, "config", "load", str(tmp_path / name), rc=2)
+        assert name in err
+    (tmp_path / "binary.json").write_bytes(b"\xff\xfe\x00garbage")
+    run(url, capsys, "config", "load", str(tmp_path / "binary.json"), rc=2)
 
 
 def test_config_load_takes_the_characterisation_file(url, capsys, tmp_path: Path) -> None:
@@ -166,11 +198,17 @@ def test_config_load_takes_the_characterisation_file(url, capsys, tmp_path: Path
         assert got["FDIV"]["raw"] == axes[name]["count_max"] and got["tau_max"]["raw"] == 2310
 
 
-def test_upload_changes_the_build_id(url, capsys, tmp_path: Path) -> None:
+@pytest.fixture(scope="module")
+def servo_image() -> Path:
+    from torqueloop.flow.firmware import build
+
+    return build("servo_e2e").elf
+
+
+def test_upload_changes_the_build_id(url, capsys, tmp_path: Path, servo_image: Path) -> None:
     bp = pytest.importorskip("torqueloop.spec.bootproto")
-    image = os.urandom(3000)
-    (tmp_path / "fw.bin").write_bytes(image)
-    res, _ = run(url, capsys, "upload", str(tmp_path / "fw.bin"))
+    image = bp.load_image(servo_image)
+    res, _ = run(url, capsys, "upload", str(servo_image))
     assert res["ok"] and res["bootloader_replies"][:2] == ["W", "K"]
     # the simulated board reports the running image's CRC-32 as its build id
     assert res["new_build_id"] == f"0x{bp.crc32(image):08x}" != res["old_build_id"]
@@ -212,14 +250,20 @@ def test_corrupted_upload_is_refused_and_the_board_keeps_working(url, capsys, tm
     assert r.new_build_id == BUILD_ID               # the factory firmware answers
     # ... and works: a move the plant follows
     run(url, capsys, "clear-fault", "--all")
-    res, _ = run(url, capsys, "move", "1000", "--relative", "--enable", "--wait", "4")
+    res, _ = run(url, capsys, "move", "1000", "--relative", "--enable", "--unhomed", "--wait", "4")
     assert abs(res["error_counts"]) <= 20
     run(url, capsys, "disable", "--all")
-    # a damaged file is refused before anything is sent
+    # a damaged file, or anything but a firmware image for this board, is refused before anything is sent
     bad = tmp_path / "bad.elf"
     bad.write_bytes(b"\x7fELF\x01\x01" + bytes(10))
-    _, err = run(url, capsys, "upload", str(bad), rc=1)
+    _, err = run(url, capsys, "upload", str(bad), rc=2)
     assert "bad.elf" in err
+    (tmp_path / "notes.txt").write_text("hello world\n")              # issue 17: 12 bytes of text ...
+    (tmp_path / "noise.bin").write_bytes(os.urandom(3000))            # ... and 3 kB of random bytes "ran"
+    for name in ("notes.txt", "noise.bin"):
+        for raw in ([], ["--raw"]):
+            _, err = run(url, capsys, "upload", str(tmp_path / name), *raw, rc=2)
+            assert name in err and "refused" in err
     info_, _ = run(url, capsys, "info")
     assert info_["build_id"] == f"0x{BUILD_ID:08x}"
 
@@ -238,3 +282,99 @@ def test_no_answer_names_the_likely_cause(capsys) -> None:
     finally:
         s.close()
     assert rc == 3 and "data mode" in err
+
+
+BAD_VALUES = [
+    ("set", "kp", "inf"), ("set", "kp", "nan"), ("set", "kp", "1e400"), ("set", "kp", "-1"), ("set", "kp", "1e30"),
+    ("set", "kp", "abc"), ("set", "KP_Q16", "1.5"), ("set", "KP_Q16", "99999999999"), ("set", "law", "7"),
+    ("set", "pwm_freq", "0"), ("set", "period", "inf"), ("set", "nonsense", "1"),
+    ("move", "1e400"), ("move", "1e12"), ("move", "inf"), ("move", "nan"), ("move", "12parsecs"),
+    ("move", "1", "--axis", "9"), ("move", "1", "--wait", "nan"), ("monitor", "--every", "0"),
+    ("--timeout", "-1", "info"), ("--retries", "1e9", "info"), ("step-test", "1e99rev"),
+]
+
+
+@pytest.mark.parametrize("args", BAD_VALUES, ids=[" ".join(a) for a in BAD_VALUES])
+def test_every_bad_value_gets_one_line_and_exit_status_2(url, capsys, args) -> None:
+    run(url, capsys, *args, rc=2)
+
+
+def test_pwm_carrier_and_pw0_are_bounded_by_the_tool_and_the_board(url, capsys) -> None:
+    run(url, capsys, "disable", "--all")
+    _, err = run(url, capsys, "set", "pwm_freq", "100000", rc=2)       # issue 17: silently 48.9 kHz before
+    assert "25000" in err
+    run(url, capsys, "set", "pwm_freq", "24000")
+    got, _ = run(url, capsys, "get", "pwm_freq", "FDIV")
+    assert got["FDIV"]["raw"] == 2 and got["pwm_freq"]["value"] < 25_000
+    run(url, capsys, "set", "pw0", "0")
+    run(url, capsys, "set", "pwmax", "800")
+    _, err = run(url, capsys, "set", "pw0", "801", rc=2)
+    assert "PWMAX" in err
+    run(url, capsys, "set", "pw0", "100")
+    _, err = run(url, capsys, "set", "pwmax", "99", rc=2)
+    assert "PW0" in err
+    run(url, capsys, "set", "pwmax", "1023")
+    run(url, capsys, "set", "pw0", "0")
+    run(url, capsys, "set", "pwm_freq", "450")
+
+
+def test_safety_limits_only_tighten_while_enabled(url, capsys) -> None:
+    run(url, capsys, "disable", "--all")
+    run(url, capsys, "clear-fault", "--all")
+    run(url, capsys, "set", "link_timeout", "10")
+    run(url, capsys, "enable", "--axis", "1")
+    for name, looser in (("follow_limit", "20000"), ("soft_max", "2000000"), ("soft_min", "-2000000"),
+                         ("link_timeout", "60"), ("cmd_limit", "1023"), ("pwm_freq", "900"), ("stall_cmd", "500")):
+        if name == "cmd_limit":
+            run(url, capsys, "set", "cmd_limit", "1000")     # tighter: fine
+        _, err = run(url, capsys, "set", name, looser, rc=1)
+        assert "LOOSEN" in err and "disable" in err, (name, err)
+    run(url, capsys, "set", "follow_limit", "8000")          # stricter: fine while enabled
+    run(url, capsys, "disable", "--all")
+    for name, v in (("follow_limit", "16800"), ("cmd_limit", "1023"), ("link_timeout", "10")):
+        run(url, capsys, "set", name, v)
+
+
+def test_get_reads_back_what_set_wrote_at_every_gain(url, capsys) -> None:
+    run(url, capsys, "disable", "--all")
+    run(url, capsys, "set", "tau_max", "2.4")
+    for name in ("kp", "kd", "ki"):
+        for value in ("100", "99.99", "0.000049", "0", "37.5"):
+            res, _ = run(url, capsys, "set", name, value)
+            got, _ = run(url, capsys, "get", name)
+            assert got[name]["value"] == res["value"], (name, value, res, got)
+            assert abs(res["value"] - float(value)) <= 0.00005 + float(value) * 1e-4, (name, value, res)
+    # a raw gain the physical view cannot show (issue 17: read back as 100 N m/rad, 1000x too low)
+    _, err = run(url, capsys, "set", "KP_Q16", "2147483647", rc=2)
+    assert "N m/rad" in err
+    run(url, capsys, "set", "kp", "100")
+    _, err = run(url, capsys, "set", "tau_max", "1000", rc=2)    # would push kp beyond 100 N m/rad
+    run(url, capsys, "set", "kp", "0.82")
+
+
+def test_a_refused_move_does_not_leave_the_axis_enabled(url, capsys) -> None:
+    run(url, capsys, "disable", "--all")
+    run(url, capsys, "clear-fault", "--all")
+    run(url, capsys, "home", "here", "--axis", "0")
+    got, _ = run(url, capsys, "get", "soft_max")
+    _, err = run(url, capsys, "move", str(got["soft_max"]["value"] + 1), "--enable", "--trapezoid", rc=2)
+    assert "soft limits" in err
+    _, err = run(url, capsys, "move", "20000", "--enable", rc=2)     # a step beyond FOLLOW_LIMIT
+    assert "FOLLOW_LIMIT" in err
+    st, _ = run(url, capsys, "status", "--axis", "0")
+    assert st["0"]["enabled"] == 0 and st["0"]["faults"] == 0
+
+
+def test_a_busy_board_is_reported_as_busy(url, capsys) -> None:
+    import socket
+
+    host, port = url.removeprefix("socket://").split(":")
+    holder = socket.create_connection((host, int(port)))       # another client holds the board
+    try:
+        holder.sendall(b"\x00")
+        import time
+        time.sleep(0.2)
+        _, err = run(url, capsys, "info", rc=1)
+    finally:
+        holder.close()
+    assert "busy" in err and "another client" in err and "reset by peer" not in err.split("(")[0]

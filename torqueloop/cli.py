@@ -7,8 +7,9 @@ or the simulated board.  docs/host.md is the user's guide.
     torqueloop set kp 0.82 ; torqueloop step-test 6.28rad --out build/step
 
 The link URL comes from ``--url`` or ``$TORQUELOOP_URL``.  Every command can
-print ``--json`` for scripts.  Exit status: 0 done, 1 refused by the board or
-bad input, 3 no answer.
+print ``--json`` for scripts.  Exit status: 0 done, 1 refused by the board (or
+a fault during the command), 2 bad input (refused before anything was sent,
+one line, never a traceback), 3 no answer.
 """
 
 from __future__ import annotations
@@ -29,9 +30,12 @@ from torqueloop.spec.pwm import carrier_hz
 from torqueloop.host import config as hconfig
 from torqueloop.host.client import Client, NoAnswer, ProtocolError, decode_faults, describe_faults
 from torqueloop.host.transport import DEFAULT_BAUD, LinkOpenError, open_link
+from torqueloop.host.upload import ImageRefused
+from torqueloop.spec.units import BadValue
 
 DEFAULT_URL = "socket://127.0.0.1:2000"
-KEEPALIVE_S = 0.15   # a command this often keeps the firmware's link watchdog (>= 10 ms, default 0.5 s) quiet
+KEEPALIVE_S = 0.15   # a HEARTBEAT this often keeps the firmware's link watchdog (>= 10 ms, default 0.5 s) quiet
+HOMED = 2            # STATUS.home (docs/protocol.md, HOME)
 
 
 class Ctx:
@@ -111,9 +115,13 @@ def cmd_info(ctx: Ctx) -> int:
 def _status_text(a: int, s: dict[str, int], mech: units.Mechanics, unit: str) -> str:
     pos = mech.from_counts(s["position"], unit)
     sp = mech.from_counts(s["setpoint"], unit)
-    return (f"axis {a}: {'ENABLED' if s['enabled'] else 'disabled'}{', moving' if s['moving'] else ''}; "
+    lim = [k for k, bit in P.LIMIT_BITS.items() if s["limits"] & bit]
+    return (f"axis {a}: {'ENABLED' if s['enabled'] else 'disabled'}{', moving' if s['moving'] else ''}, "
+            f"{P.HOME_STATE.get(s['home'], '?')}"
+            f"{' (positions relative to power-up)' if s['home'] != HOMED else ''}; "
             f"position {s['position']} counts ({pos:.4f} {unit}), set-point {s['setpoint']} ({sp:.4f} {unit}), "
             f"velocity {s['velocity_q8'] / 256:.1f} counts/s, PWM {s['pwm_cmd']}; "
+            f"limit switches open: {', '.join(lim) or 'none'}; "
             f"faults: {describe_faults(s['faults'])}; link errors seen by the board: {s['rx_errors']}")
 
 
@@ -124,6 +132,7 @@ def cmd_status(ctx: Ctx) -> int:
         s = ctx.client.status(a)
         s = {k: v for k, v in s.items() if k != "status"}
         s["fault_names"] = decode_faults(s["faults"])
+        s["home_state"] = P.HOME_STATE.get(s["home"], "?")
         res[a] = s
         lines.append(_status_text(a, s, ctx.mech(a), ctx.args.unit))
     ctx.out(res, "\n".join(lines))
@@ -148,8 +157,10 @@ def cmd_get(ctx: Ctx) -> int:
 
 def cmd_set(ctx: Ctx) -> int:
     a = ctx.args
+    units.to_raw(a.name, a.value)          # a bad value is refused before the link is opened
     clk = (ctx.client.identity or {}).get("clk_hz", units.CLK_HZ)
     param, raw = units.to_raw(a.name, a.value, clk)
+    _check_pair(ctx, param, raw, a.axis, clk)
     if param == "BAUD_DIV":
         print("warning: the board changes its baud rate after this reply; reconnect with --baud",
               file=sys.stderr)
@@ -158,6 +169,54 @@ def cmd_set(ctx: Ctx) -> int:
     ctx.out({"name": a.name, "param": param, "raw": stored, "value": val, "unit": unit},
             f"{a.name} = {val} {unit}   ({param} = {stored})")
     return 0
+
+
+def _check_pair(ctx: Ctx, param: str, raw: int, axis: int, clk: int) -> None:
+    """Bounds between parameters, checked before sending (the firmware checks them too)."""
+    c = ctx.client
+    if param == "FDIV":
+        ceiling = c.get_param("PWM_MAX_HZ")
+        if carrier_hz(raw, clk) > ceiling:
+            raise BadValue(f"the nearest carrier the divider makes is {carrier_hz(raw, clk):.0f} Hz (FDIV {raw}), "
+                           f"above PWM_MAX_HZ = {ceiling} Hz, the bridge's rating")
+    elif param == "PWM_MAX_HZ":
+        for ax in range(P.AXIS_COUNT):
+            f = carrier_hz(c.get_param("FDIV", ax), clk)
+            if f > raw:
+                raise BadValue(f"axis {ax} runs its PWM at {f:.0f} Hz, above {raw} Hz: lower its pwm_freq first")
+    elif param in P.RAW_GAIN_OF or param in P.RAW_GAIN_OF.values() or param in ("TAU_MAX_MNM", "COUNTS_PER_REV"):
+        _check_gains(ctx, param, raw, axis)
+    elif param == "PW0" and raw > (pwmax := c.get_param("PWMAX", axis)):
+        raise BadValue(f"PW0 {raw} above PWMAX {pwmax} (eq. 1 needs PW0 <= PW_F)")
+    elif param == "PWMAX" and raw < (pw0 := c.get_param("PW0", axis)):
+        raise BadValue(f"PWMAX {raw} below PW0 {pw0} (eq. 1 needs PW0 <= PW_F)")
+
+
+def _check_gains(ctx: Ctx, param: str, raw: int, axis: int) -> None:
+    """The firmware keeps every raw gain within its physical gain's range, so
+    that `get` reads back what `set` wrote (issue 17: a raw gain 1000x the
+    largest physical one read back as 100 N m/rad)."""
+    c = ctx.client
+    tau, cpr = c.get_param("TAU_MAX_MNM", axis), c.get_param("COUNTS_PER_REV", axis)
+    phys_max = P.PARAMS["KP_UNM_RAD"].max
+    if param == "TAU_MAX_MNM":
+        tau = raw
+    elif param == "COUNTS_PER_REV":
+        cpr = raw
+    raw_max = P.gain_raw_from_phys(phys_max, tau, cpr)
+    if param in P.RAW_GAIN_OF.values():      # a physical gain: its raw gain must not saturate
+        g = P.gain_raw_from_phys(raw, tau, cpr)
+        if g >= 0x7FFF_FFFF and P.gain_phys_from_raw(g, tau, cpr) < raw:
+            raise BadValue(f"{param} {raw}: beyond what the raw q16 gain can hold at TAU_MAX_MNM {tau}, "
+                           f"COUNTS_PER_REV {cpr}")
+        return
+    gains = {k: c.get_param(k, axis) for k in P.RAW_GAIN_OF}
+    if param in gains:
+        gains = {param: raw}
+    for k, v in gains.items():
+        if v > raw_max:
+            raise BadValue(f"{k} {v} would be above {raw_max}, the raw gain of {phys_max / 1e6:g} N m/rad "
+                           f"(the largest physical gain) at TAU_MAX_MNM {tau}, COUNTS_PER_REV {cpr}")
 
 
 def cmd_enable(ctx: Ctx, on: bool) -> int:
@@ -193,18 +252,55 @@ def _poll_settled(ctx: Ctx, axis: int, limit_s: float, tol: int, t0: float) -> d
             return s
         if not ctx.args.json:
             progress(min(time.monotonic() - t0, limit_s), limit_s, f"axis {axis} moving")
+        c.heartbeat()
         time.sleep(KEEPALIVE_S)
+
+
+def _check_move(ctx: Ctx, axis: int, target: int, trapezoid: bool, unhomed: bool, st: dict[str, int]) -> None:
+    """Everything the firmware would refuse about a move, checked before the
+    axis is enabled: a refused move must not leave it enabled."""
+    c = ctx.client
+    lo, hi = c.get_param("SOFT_MIN", axis), c.get_param("SOFT_MAX", axis)
+    if not lo <= target <= hi:
+        raise BadValue(f"target {target} counts is outside axis {axis}'s soft limits [{lo}, {hi}]"
+                       + ("" if st["home"] == HOMED else " (relative to where it was at power-up: not homed)"))
+    step = target - st["position"]
+    if not trapezoid and abs(step) > (fl := c.get_param("FOLLOW_LIMIT", axis)):
+        raise BadValue(f"a step of {step} counts is larger than FOLLOW_LIMIT = {fl} counts: the following-error "
+                       "fault would trip at once; use --trapezoid, a smaller step, or raise follow_limit")
+    if st["home"] != HOMED and not unhomed:
+        raise ProtocolError(f"axis {axis} is not homed: `torqueloop home --axis {axis} neg|pos|here` first, "
+                            "or --unhomed to move relative to where it was at power-up")
+    blocking = st["faults"] & ~P.DIRECTIONAL_FAULTS
+    if blocking:
+        raise ProtocolError(f"axis {axis} has latched faults: {describe_faults(blocking)}; "
+                            "`torqueloop clear-fault` first")
+    lim = st["limits"] | (P.LIMIT_BITS["neg"] if st["faults"] & P.FAULT["LIMIT_NEG"] else 0) \
+        | (P.LIMIT_BITS["pos"] if st["faults"] & P.FAULT["LIMIT_POS"] else 0)
+    if (lim & P.LIMIT_BITS["pos"] and step > 0) or (lim & P.LIMIT_BITS["neg"] and step < 0):
+        raise ProtocolError(f"axis {axis}: the limit switch at that end is tripped; only moves away from it")
 
 
 def cmd_move(ctx: Ctx) -> int:
     a = ctx.args
+    units.parse_position(a.target, units.Mechanics(), a.unit)   # refused before the link is opened
     mech = ctx.mech(a.axis)
     target = units.parse_position(a.target, mech, a.unit if a.unit != "counts" else "counts")
+    st = ctx.client.status(a.axis)
     if a.relative:
-        target += ctx.client.status(a.axis)["position"]
-    if a.enable:
+        target += st["position"]
+        if not units.INT32_MIN <= target <= units.INT32_MAX:
+            raise BadValue(f"{a.target} from {st['position']} is beyond the encoder's 32-bit range")
+    _check_move(ctx, a.axis, target, a.trapezoid, a.unhomed, st)
+    enabled_here = a.enable and not st["enabled"]
+    if enabled_here:
         ctx.client.enable(1 << a.axis, True)
-    ctx.client.move(a.axis, target, a.trapezoid)
+    try:
+        ctx.client.move(a.axis, target, a.trapezoid, a.unhomed)
+    except ProtocolError:
+        if enabled_here:
+            ctx.client.enable(1 << a.axis, False)
+        raise
     res: dict[str, Any] = {"axis": a.axis, "target_counts": target, "mode": "trapezoid" if a.trapezoid else "step"}
     text = f"axis {a.axis} -> {target} counts ({mech.from_counts(target, a.unit):.4f} {a.unit})"
     if a.wait:
@@ -213,6 +309,39 @@ def cmd_move(ctx: Ctx) -> int:
         res["error_counts"] = target - s["position"]
         text += f"; at {s['position']} counts (error {target - s['position']})"
     ctx.out(res, text)
+    return 0
+
+
+def cmd_home(ctx: Ctx) -> int:
+    a = ctx.args
+    c = ctx.client
+    st = c.status(a.axis)
+    if a.mode != "here":
+        if not st["enabled"]:
+            raise ProtocolError(f"axis {a.axis} is disabled: homing to a switch moves it (`torqueloop enable`)")
+        if not c.get_param("LIMIT_SW", a.axis):
+            raise ProtocolError(f"axis {a.axis} has no limit switches (LIMIT_SW 0): `torqueloop home here`")
+    c.home(a.axis, a.mode, a.index)
+    t0 = time.monotonic()
+    while a.mode != "here" and time.monotonic() - t0 < a.wait:
+        st = c.status(a.axis)
+        if st["home"] != 1 or st["faults"]:
+            break
+        c.heartbeat()
+        if not a.json:
+            progress(time.monotonic() - t0, a.wait, f"axis {a.axis} homing")
+        time.sleep(KEEPALIVE_S)
+    if a.mode != "here" and not a.json:
+        sys.stderr.write("\n")
+    st = c.status(a.axis)
+    obj = {"axis": a.axis, "mode": a.mode, "index": a.index, "home_state": P.HOME_STATE.get(st["home"], "?"),
+           "position_counts": st["position"], "faults": decode_faults(st["faults"])}
+    ctx.out(obj, f"axis {a.axis}: {obj['home_state']}, position {st['position']} counts; "
+                 f"faults: {describe_faults(st['faults'])}")
+    if st["faults"]:
+        return 1
+    if a.mode != "here" and a.wait and st["home"] != HOMED:
+        raise ProtocolError(f"axis {a.axis} still {obj['home_state']} after {a.wait:g} s")
     return 0
 
 
@@ -267,7 +396,7 @@ def capture(ctx: Ctx, duration: float, every: int = 1, on_record: Callable[[dict
                 raise ProtocolError(f"no telemetry for {now - last_new:.0f} s (board streaming every {every} "
                                     "periods was requested); check `torqueloop info` counters")
             if now - last_keep > KEEPALIVE_S:
-                c.status(ctx.args.axis)
+                c.heartbeat()
                 last_keep = now
             if show and math.isfinite(duration):
                 progress(span, duration, label)
@@ -343,6 +472,7 @@ def cmd_plot(ctx: Ctx) -> int:
 
 def cmd_step_test(ctx: Ctx) -> int:
     a = ctx.args
+    units.parse_position(a.target, units.Mechanics(), a.unit)   # refused before the link is opened
     c = ctx.client
     mech = ctx.mech(a.axis)
     s0 = c.status(a.axis)
@@ -350,6 +480,9 @@ def cmd_step_test(ctx: Ctx) -> int:
     target = units.parse_position(a.target, mech, a.unit)
     if a.relative:
         target += start
+        if not units.INT32_MIN <= target <= units.INT32_MAX:
+            raise BadValue(f"{a.target} from {start} is beyond the encoder's 32-bit range")
+    _check_move(ctx, a.axis, target, a.trapezoid, a.unhomed, s0)
     if s0["faults"]:
         raise ProtocolError(f"axis {a.axis} has latched faults: {describe_faults(s0['faults'])}; "
                             "`torqueloop clear-fault` first")
@@ -357,7 +490,7 @@ def cmd_step_test(ctx: Ctx) -> int:
     if not was_enabled:
         c.enable(1 << a.axis, True)
     def go() -> None:
-        c.move(a.axis, target, a.trapezoid)
+        c.move(a.axis, target, a.trapezoid, a.unhomed)
 
     try:
         # a few samples before the step show where it started from
@@ -424,25 +557,22 @@ def cmd_config(ctx: Ctx) -> int:
     ident = c.identity or c.identify()
     warn = []
     if cfg.proto_version is not None and cfg.proto_version != ident["proto_version"]:
-        raise hconfig.HostConfigError(f"{a.file} was saved with protocol {cfg.proto_version}, the board speaks "
-                                      f"{ident['proto_version']}")
+        raise ProtocolError(f"{a.file} was saved with protocol {cfg.proto_version}, the board speaks "
+                            f"{ident['proto_version']}")
     if cfg.build_id is not None and cfg.build_id != ident["build_id"]:
         warn.append(f"saved from firmware build 0x{cfg.build_id:08x}, the board runs 0x{ident['build_id']:08x}")
         if not a.force:
-            raise hconfig.HostConfigError(f"{a.file}: {warn[-1]}; parameters may differ in meaning - "
-                                          "check and use --force")
+            raise ProtocolError(f"{a.file}: {warn[-1]}; parameters may differ in meaning - check and use --force")
     enabled = [i for i in range(P.AXIS_COUNT) if c.status(i)["enabled"]]
     if enabled:
-        raise hconfig.HostConfigError(f"axes {enabled} are enabled: `torqueloop disable --all` before loading")
+        raise ProtocolError(f"axes {enabled} are enabled: `torqueloop disable --all` before loading")
     writes = hconfig.apply_order(cfg)
     for n, (axis, name, value) in enumerate(writes):
         c.set_param(name, value, 0 if axis == P.GLOBAL_AXIS else axis)
         if not a.json:
             progress(n + 1, len(writes), "config load")
-    mismatch = [(ax, k, v) for ax, k, v in writes
-                if c.get_param(k, 0 if ax == P.GLOBAL_AXIS else ax) != v and k not in ("SOFT_MIN",)]
-    mismatch += [(i, "SOFT_MIN", ax["SOFT_MIN"]) for i, ax in enumerate(cfg.axes)
-                 if "SOFT_MIN" in ax and c.get_param("SOFT_MIN", i) != ax["SOFT_MIN"]]
+    final = {(ax, k): v for ax, k, v in writes}      # the last write of each parameter is what must stick
+    mismatch = [(ax, k, v) for (ax, k), v in final.items() if c.get_param(k, 0 if ax == P.GLOBAL_AXIS else ax) != v]
     if mismatch:
         raise ProtocolError(f"read back differs after loading: {mismatch}")
     ctx.out({"file": a.file, "source": cfg.source, "writes": len(writes), "warnings": warn},
@@ -454,7 +584,7 @@ def cmd_config(ctx: Ctx) -> int:
 def cmd_upload(ctx: Ctx) -> int:
     from torqueloop.host import upload
 
-    image = upload.load_image(ctx.args.file)
+    image = upload.load_image(ctx.args.file, raw_ok=ctx.args.raw)   # before the link is opened
     show = None if ctx.args.json else (lambda done, total: progress(done, total, "upload"))
     r = upload.run_upload(ctx.client, image, show, window_s=ctx.args.window)
     obj = {"ok": r.ok, "message": r.message, "bytes": r.bytes, "crc32": f"0x{r.crc32:08x}",
@@ -484,7 +614,7 @@ def cmd_sim(ctx: Ctx) -> int:
         board: Any = RtlBoard(seed=a.seed, plant=a.plant)
         what = "RTL board image (Verilator) + plant model, far below real time"
     else:
-        board = SimBoard(build_id=int(a.build_id, 0), seed=a.seed, plant=a.plant)
+        board = SimBoard(build_id=a.build_id, seed=a.seed, plant=a.plant)
         what = f"servo firmware + plant model, build id 0x{board.build_id:08x}"
     srv = BoardServer(board, a.host, a.port, speed=a.speed, hello=a.hello)
     print(f"simulated board on socket://{a.host}:{srv.port} ({what}); Ctrl-C stops it", flush=True)
@@ -501,16 +631,41 @@ class SimStackMissing(Exception):
 
 # ---- argument parsing --------------------------------------------------------------
 
+def _bounded(kind: type, lo: float, hi: float, what: str) -> Callable[[str], Any]:
+    """An argparse type: a finite number of ``kind`` in [lo, hi]; anything else
+    is a usage error (one line, exit status 2)."""
+    def conv(text: str) -> Any:
+        try:
+            v = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{what}: {text!r} is not {'a number' if kind is float else 'an integer'}")
+        if isinstance(v, float) and not math.isfinite(v):
+            raise argparse.ArgumentTypeError(f"{what}: {text} is not a finite number")
+        if not lo <= v <= hi:
+            raise argparse.ArgumentTypeError(f"{what}: {text} is outside [{lo:g}, {hi:g}]")
+        return v
+    return conv
+
+
+class _Parser(argparse.ArgumentParser):
+    """A usage error is one line on stderr and exit status 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: {message} (see {self.prog} -h)\n")
+
+
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="torqueloop", description=__doc__.split("\n\n")[0],
+    p = _Parser(prog="torqueloop", description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
                                 epilog="docs/host.md has the walk-through; docs/protocol.md the parameters.")
     p.add_argument("-u", "--url", default=os.environ.get("TORQUELOOP_URL", DEFAULT_URL),
                    help="/dev/ttyUSB0, socket://HOST:2000 (RN-XV or `torqueloop sim`) "
                         f"[$TORQUELOOP_URL or {DEFAULT_URL}]")
-    p.add_argument("-b", "--baud", type=int, default=DEFAULT_BAUD, help="serial baud rate [115200]")
-    p.add_argument("--timeout", type=float, default=0.5, help="seconds to wait for each reply [0.5]")
-    p.add_argument("--retries", type=int, default=3, help="resends before giving up [3]")
+    p.add_argument("-b", "--baud", type=_bounded(int, 50, 20_000_000, "baud"), default=DEFAULT_BAUD,
+                   help="serial baud rate [115200]")
+    p.add_argument("--timeout", type=_bounded(float, 0.001, 3600, "timeout"), default=0.5,
+                   help="seconds to wait for each reply [0.5]")
+    p.add_argument("--retries", type=_bounded(int, 0, 100, "retries"), default=3, help="resends before giving up [3]")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -548,11 +703,22 @@ def parser() -> argparse.ArgumentParser:
     unit_opt(sp, "counts")
     sp.add_argument("--trapezoid", action="store_true", help="trapezoidal profile (VMAX, AMAX) instead of a step")
     sp.add_argument("--relative", action="store_true", help="target is relative to the present position")
-    sp.add_argument("--enable", action="store_true", help="enable the axis first")
-    sp.add_argument("--wait", type=float, default=0.0, metavar="S",
+    sp.add_argument("--enable", action="store_true", help="enable the axis first (after the move is checked)")
+    sp.add_argument("--unhomed", action="store_true",
+                    help="move although the axis is not homed (positions relative to power-up)")
+    sp.add_argument("--wait", type=_bounded(float, 0, 86400, "--wait"), default=0.0, metavar="S",
                     help="wait up to S seconds for the axis to settle, keeping the link alive")
-    sp.add_argument("--tolerance", type=int, default=20, help="settled within this many counts [20]")
+    sp.add_argument("--tolerance", type=_bounded(int, 0, 2**31 - 1, "--tolerance"), default=20,
+                    help="settled within this many counts [20]")
     sp.set_defaults(fn=cmd_move)
+    sp = sub.add_parser("home", help="home an axis: to its negative or positive limit switch, or here")
+    sp.add_argument("mode", nargs="?", default="neg", choices=list(P.HOME_MODES),
+                    help="neg / pos: seek that limit switch (axis enabled); here: the present position [neg]")
+    sp.add_argument("--index", action="store_true", help="after the switch, go on to the next encoder index pulse")
+    sp.add_argument("--wait", type=_bounded(float, 0, 86400, "--wait"), default=60.0, metavar="S",
+                    help="wait up to S seconds for homing to finish, keeping the link alive [60]")
+    axis_opts(sp, False)
+    sp.set_defaults(fn=cmd_home)
     sp = sub.add_parser("stop", help="hold the present position")
     axis_opts(sp)
     sp.set_defaults(fn=cmd_stop)
@@ -562,14 +728,18 @@ def parser() -> argparse.ArgumentParser:
     sp = sub.add_parser("monitor", help="live terminal view of the telemetry")
     axis_opts(sp, False)
     unit_opt(sp)
-    sp.add_argument("--duration", type=float, default=0.0, help="seconds (0 = until Ctrl-C)")
-    sp.add_argument("--every", type=int, default=4, help="one record every N control periods [4]")
+    sp.add_argument("--duration", type=_bounded(float, 0, 1e7, "--duration"), default=0.0,
+                    help="seconds (0 = until Ctrl-C)")
+    sp.add_argument("--every", type=_bounded(int, 1, 65535, "--every"), default=4,
+                    help="one record every N control periods [4]")
     sp.set_defaults(fn=cmd_monitor)
     sp = sub.add_parser("plot", help="live plot; --save PREFIX writes PREFIX.png and PREFIX.csv")
     axis_opts(sp)
     unit_opt(sp)
-    sp.add_argument("--duration", type=float, default=0.0, help="seconds (0 = until Ctrl-C; needed with --save)")
-    sp.add_argument("--every", type=int, default=1, help="one record every N control periods [1]")
+    sp.add_argument("--duration", type=_bounded(float, 0, 1e7, "--duration"), default=0.0,
+                    help="seconds (0 = until Ctrl-C; needed with --save)")
+    sp.add_argument("--every", type=_bounded(int, 1, 65535, "--every"), default=1,
+                    help="one record every N control periods [1]")
     sp.add_argument("--save", metavar="PREFIX")
     sp.set_defaults(fn=cmd_plot)
     sp = sub.add_parser("step-test", help="step, capture, plot + CSV + overshoot/settling/RMSE")
@@ -578,9 +748,14 @@ def parser() -> argparse.ArgumentParser:
     unit_opt(sp)
     sp.add_argument("--relative", action="store_true", help="step relative to the present position")
     sp.add_argument("--trapezoid", action="store_true")
-    sp.add_argument("--duration", type=float, default=2.0, help="board seconds captured after the step [2]")
-    sp.add_argument("--pre", type=float, default=0.1, help="board seconds captured before the step [0.1]")
-    sp.add_argument("--band", type=float, default=2.0, help="settling band, %% of the step [2]")
+    sp.add_argument("--unhomed", action="store_true",
+                    help="step although the axis is not homed (positions relative to power-up)")
+    sp.add_argument("--duration", type=_bounded(float, 0.01, 1e5, "--duration"), default=2.0,
+                    help="board seconds captured after the step [2]")
+    sp.add_argument("--pre", type=_bounded(float, 0, 1e3, "--pre"), default=0.1,
+                    help="board seconds captured before the step [0.1]")
+    sp.add_argument("--band", type=_bounded(float, 0.001, 100, "--band"), default=2.0,
+                    help="settling band, %% of the step [2]")
     sp.add_argument("--out", default="build/step", help="output folder [build/step]")
     sp.add_argument("--keep-enabled", action="store_true", help="leave the axis enabled afterwards")
     sp.set_defaults(fn=cmd_step_test)
@@ -591,16 +766,22 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("--force", action="store_true", help="load even if saved from another build id")
     sp.set_defaults(fn=cmd_config)
     sp = sub.add_parser("upload", help="load firmware through the boot ROM bootloader, then check it answers")
-    sp.add_argument("file", help="FIRMWARE.elf (RAM-linked RV32) or a flat .bin")
-    sp.add_argument("--window", type=float, default=5.0, help="seconds to wait for the bootloader [5]")
+    sp.add_argument("file", help="FIRMWARE.elf (RAM-linked RV32), or with --raw a flat .bin")
+    sp.add_argument("--raw", action="store_true",
+                    help="the file is a flat RAM image (it must carry the firmware image header)")
+    sp.add_argument("--window", type=_bounded(float, 0.1, 3600, "--window"), default=5.0,
+                    help="seconds to wait for the bootloader [5]")
     sp.set_defaults(fn=cmd_upload)
     sp = sub.add_parser("sim", help="run the simulated board on a local TCP port")
     sp.add_argument("--host", default="127.0.0.1")
-    sp.add_argument("--port", type=int, default=2000, help="TCP port (0 = any free one) [2000]")
-    sp.add_argument("--speed", type=float, default=1.0, help="simulated seconds per wall second [1]")
+    sp.add_argument("--port", type=_bounded(int, 0, 65535, "--port"), default=2000,
+                    help="TCP port (0 = any free one) [2000]")
+    sp.add_argument("--speed", type=_bounded(float, 0, 1e6, "--speed"), default=1.0,
+                    help="simulated seconds per wall second [1]")
     sp.add_argument("--hello", action="store_true", help="send *HELLO* on connect, like an RN-XV")
-    sp.add_argument("--build-id", default="0x51b00001", help="build id the board reports")
-    sp.add_argument("--seed", type=int, default=0, help="plant random seed")
+    sp.add_argument("--build-id", type=_bounded(lambda t: int(t, 0), 0, 0xFFFF_FFFF, "--build-id"),
+                    default=0x51B0_0001, help="build id the board reports [0x51b00001]")
+    sp.add_argument("--seed", type=_bounded(int, 0, 2**32 - 1, "--seed"), default=0, help="plant random seed")
     sp.add_argument("--plant", default="paper",
                     help="plant variant: paper-printed, paper or lab (lab-no-EFFECT switches one off) [paper]")
     sp.add_argument("--rtl", action="store_true",
@@ -609,19 +790,29 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
+#: exit status (module docstring)
+EXIT_REFUSED, EXIT_BAD_INPUT, EXIT_NO_ANSWER = 1, 2, 3
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = parser().parse_args(argv)
+    args = parser().parse_args(argv)      # a usage error exits 2 with one line
     ctx = Ctx(args)
     try:
         return args.fn(ctx)
     except NoAnswer as e:
         print(f"torqueloop: {e}", file=sys.stderr)
-        return 3
-    except (ProtocolError, LinkOpenError, hconfig.HostConfigError, SimStackMissing, ValueError, OSError) as e:
+        return EXIT_NO_ANSWER
+    except (BadValue, hconfig.HostConfigError, ImageRefused) as e:
         print(f"torqueloop: {e}", file=sys.stderr)
-        return 1
+        return EXIT_BAD_INPUT
+    except (ProtocolError, LinkOpenError, SimStackMissing, ValueError, OSError) as e:
+        print(f"torqueloop: {e}", file=sys.stderr)
+        return EXIT_REFUSED
     finally:
-        ctx.close()
+        try:
+            ctx.close()
+        except OSError:
+            pass
 
 
 if __name__ == "__main__":

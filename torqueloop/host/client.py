@@ -32,6 +32,8 @@ from torqueloop.spec import protocol as P
 from .transport import Link, LinkInfo
 
 READ_ONLY = frozenset({"IDENTIFY", "GET_PARAM", "STATUS", "COUNTERS"})
+#: a lost reply to these is harmless to repeat with a fresh seq
+REPEATABLE = READ_ONLY | {"HEARTBEAT"}
 FAULT_DESC: dict[str, str] = {f["name"]: f["desc"] for f in P.SPEC["fault"]}
 STATUS_DESC: dict[int, str] = {s["code"]: s["desc"] for s in P.SPEC["status"]}
 
@@ -44,6 +46,11 @@ class NoAnswer(ProtocolError):
     pass
 
 
+class LinkClosed(ProtocolError):
+    """The link failed under us: closed by the other end (a busy RN-XV or
+    simulated board refuses a second client that way) or the port went away."""
+
+
 class ReplyLost(ProtocolError):
     pass
 
@@ -53,6 +60,8 @@ class CommandRejected(ProtocolError):
         self.command, self.status = command, status
         name = P.STATUS_NAME.get(status, f"status {status}")
         msg = f"{command} refused: {name} ({STATUS_DESC.get(status, 'unknown status')})"
+        if name == "LOOSEN":
+            msg += " - `torqueloop disable --all`, change it, enable again"
         super().__init__(msg + (f" {detail}" if detail else ""))
 
 
@@ -107,13 +116,30 @@ class Client:
         self.raw_tap: bytearray | None = None   # when set, every byte read is appended (upload)
 
     # ---- bytes in ----------------------------------------------------------
+    def _closed(self, e: OSError) -> LinkClosed:
+        where = self.info.url if self.info else "the link"
+        if self.stats.replies == 0:
+            return LinkClosed(f"{where} closed the connection before answering ({e}): the board is busy - "
+                              "another client is connected (the RN-XV and `torqueloop sim` take one client "
+                              "at a time); close the other session and try again")
+        return LinkClosed(f"{where}: link lost after {self.stats.replies} replies ({e})")
+
+    def _write(self, data: bytes) -> None:
+        try:
+            self.link.write(data)
+        except OSError as e:
+            raise self._closed(e) from None
+
     def _read_some(self) -> bytes:
-        n = getattr(self.link, "in_waiting", 0) or 0
-        data = self.link.read(max(1, min(n, 4096)))
-        if data:
-            more = getattr(self.link, "in_waiting", 0) or 0
-            if more:
-                data += self.link.read(min(more, 4096))
+        try:
+            n = getattr(self.link, "in_waiting", 0) or 0
+            data = self.link.read(max(1, min(n, 4096)))
+            if data:
+                more = getattr(self.link, "in_waiting", 0) or 0
+                if more:
+                    data += self.link.read(min(more, 4096))
+        except OSError as e:
+            raise self._closed(e) from None
         self.stats.rx_bytes += len(data)
         if self.raw_tap is not None:
             self.raw_tap += data
@@ -163,7 +189,7 @@ class Client:
         for attempt in range(self.retries + 1):
             if attempt:
                 self.stats.retries += 1
-            self.link.write(wire)
+            self._write(wire)
             self.stats.frames_tx += 1
             deadline = self.clock() + self.timeout
             resend = False
@@ -223,7 +249,7 @@ class Client:
                 st = rep["status"]
             if st == P.STATUS["REPLAY"]:
                 # The first copy was accepted and executed; its reply was lost.
-                if name in READ_ONLY:
+                if name in REPEATABLE:
                     return self.transact(name, **fields)
                 if name == "SET_PARAM":
                     got = self.transact("GET_PARAM", axis=fields["axis"], param=fields["param"])
@@ -277,8 +303,17 @@ class Client:
                                       "(remove the cause, then `torqueloop clear-fault`)") from None
             raise
 
-    def move(self, axis: int, target_counts: int, trapezoid: bool = False) -> None:
-        self.transact("MOVE", axis=axis, mode=int(trapezoid), target=target_counts)
+    def move(self, axis: int, target_counts: int, trapezoid: bool = False, unhomed: bool = False) -> None:
+        mode = (P.MOVE_TRAPEZOID if trapezoid else 0) | (P.MOVE_UNHOMED if unhomed else 0)
+        self.transact("MOVE", axis=axis, mode=mode, target=target_counts)
+
+    def home(self, axis: int, mode: str, index: bool = False) -> None:
+        self.transact("HOME", axis=axis, mode=P.HOME_MODES[mode], index=int(index))
+
+    def heartbeat(self) -> None:
+        """Feed the board's link watchdog: only commands that show the host in
+        control do (ENABLE, MOVE, STOP, HOME, HEARTBEAT); polls do not."""
+        self.transact("HEARTBEAT")
 
     def stop(self, mask: int) -> None:
         self.transact("STOP", mask=mask)

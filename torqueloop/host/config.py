@@ -30,6 +30,7 @@ from typing import Any
 
 from torqueloop.spec import protocol as P
 from torqueloop.spec.charconfig import ConfigError, load_config
+from torqueloop.spec.pwm import carrier_hz
 
 SCHEMA = "torqueloop-host-config"
 SCHEMA_VERSION = 1
@@ -68,11 +69,28 @@ def _check_value(where: str, name: str, v: Any) -> int:
     return v
 
 
+def _check_carriers(where: str, axes: list[dict[str, int]], globals_: dict[str, int]) -> None:
+    """Every axis's PWM carrier at most PWM_MAX_HZ (the file's, or the bridge rating)."""
+    ceiling = globals_.get("PWM_MAX_HZ", P.PARAMS["PWM_MAX_HZ"].max)
+    for i, ax in enumerate(axes):
+        if "FDIV" in ax and carrier_hz(ax["FDIV"]) > ceiling:
+            raise HostConfigError(f"{where}.axes[{i}].FDIV = {ax['FDIV']}: carrier {carrier_hz(ax['FDIV']):.0f} Hz "
+                                  f"above PWM_MAX_HZ {ceiling} Hz")
+
+
 def _check_axis(where: str, ax: dict[str, int]) -> None:
     if "SOFT_MIN" in ax and "SOFT_MAX" in ax and ax["SOFT_MIN"] > ax["SOFT_MAX"]:
         raise HostConfigError(f"{where}: SOFT_MIN {ax['SOFT_MIN']} > SOFT_MAX {ax['SOFT_MAX']}")
     if "PW0" in ax and "PWMAX" in ax and ax["PW0"] > ax["PWMAX"]:
         raise HostConfigError(f"{where}: PW0 {ax['PW0']} > PWMAX {ax['PWMAX']} (eq. 1 needs PW0 <= PW_F)")
+    if "TAU_MAX_MNM" in ax and "COUNTS_PER_REV" in ax:
+        # the firmware keeps every raw gain within its physical gain's range
+        raw_max = P.gain_raw_from_phys(P.PARAMS["KP_UNM_RAD"].max, ax["TAU_MAX_MNM"], ax["COUNTS_PER_REV"])
+        for k in P.RAW_GAIN_OF:
+            if ax.get(k, 0) > raw_max:
+                raise HostConfigError(f"{where}.{k} = {ax[k]}: above {raw_max}, the raw gain of "
+                                      f"{P.PARAMS['KP_UNM_RAD'].max / 1e6:g} N m/rad at this TAU_MAX_MNM and "
+                                      "COUNTS_PER_REV")
 
 
 def to_json(cfg: HostConfig, readable: dict[str, Any] | None = None) -> str:
@@ -97,12 +115,28 @@ def parse(doc: Any, where: str = "config") -> HostConfig:
     if doc.get("schema_version") != SCHEMA_VERSION:
         raise HostConfigError(f"{where}: schema_version {doc.get('schema_version')!r}, this tool reads "
                               f"{SCHEMA_VERSION}")
-    fw = doc.get("firmware") or {}
+    fw = doc.get("firmware")
+    if fw is None:
+        fw = {}
+    if not isinstance(fw, dict):
+        raise HostConfigError(f"{where}.firmware: must be an object, not {fw!r:.40}")
     bid = fw.get("build_id")
-    try:
-        build_id = None if bid is None else int(bid, 16) if isinstance(bid, str) else int(bid)
-    except ValueError:
-        raise HostConfigError(f"{where}.firmware.build_id: {bid!r} is not a number") from None
+    if bid is None:
+        build_id = None
+    elif isinstance(bid, str):
+        try:
+            build_id = int(bid, 16)
+        except ValueError:
+            raise HostConfigError(f"{where}.firmware.build_id: {bid!r:.40} is not a hex number") from None
+    elif isinstance(bid, int) and not isinstance(bid, bool):
+        build_id = bid
+    else:
+        raise HostConfigError(f"{where}.firmware.build_id: {bid!r:.40} is not a number")
+    if build_id is not None and not 0 <= build_id <= 0xFFFF_FFFF:
+        raise HostConfigError(f"{where}.firmware.build_id: {build_id} is not a 32-bit build id")
+    pv = fw.get("proto_version")
+    if pv is not None and (isinstance(pv, bool) or not isinstance(pv, int)):
+        raise HostConfigError(f"{where}.firmware.proto_version: {pv!r:.40} is not an integer")
     g = doc.get("global")
     if not isinstance(g, dict):
         raise HostConfigError(f"{where}.global: missing or not an object")
@@ -127,7 +161,8 @@ def parse(doc: Any, where: str = "config") -> HostConfig:
             raise HostConfigError(f"{w}: missing {', '.join(missing)}")
         _check_axis(w, vals)
         out.append(vals)
-    return HostConfig(tuple(out), globals_, build_id, fw.get("proto_version"), "host")
+    _check_carriers(where, out, globals_)
+    return HostConfig(tuple(out), globals_, build_id, pv, "host")
 
 
 def from_characterization(path: Path) -> HostConfig:
@@ -145,6 +180,7 @@ def from_characterization(path: Path) -> HostConfig:
                 "TAU_MAX_MNM": int(round(a.tau_max_nm * 1000))}
         axes[CHAR_AXES[name]] = {k: _check_value(w, k, v) for k, v in vals.items()}
         _check_axis(w, axes[CHAR_AXES[name]])
+    _check_carriers(str(path), axes, {})
     return HostConfig(tuple(axes), {}, None, None, "characterization")
 
 
@@ -154,23 +190,47 @@ def load_file(path: str | Path) -> HostConfig:
         text = p.read_text(encoding="utf-8")
     except OSError as e:
         raise HostConfigError(f"{p}: cannot read ({e.strerror})") from None
+    except UnicodeDecodeError:
+        raise HostConfigError(f"{p}: not a text file (not UTF-8)") from None
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as e:
         raise HostConfigError(f"{p}: not JSON ({e.msg} at line {e.lineno})") from None
+    except RecursionError:
+        raise HostConfigError(f"{p}: not a configuration file (JSON nested too deeply)") from None
     if isinstance(doc, dict) and doc.get("schema") == "torqueloop-characterization":
         return from_characterization(p)
     return parse(doc, str(p))
 
 
+#: pairs the firmware keeps ordered at every step (low <= high), written as
+#: low to its minimum, high, low: no intermediate state breaks the bound
+_PAIRS = (("SOFT_MIN", "SOFT_MAX"), ("PW0", "PWMAX"))
+
+
 def apply_order(cfg: HostConfig) -> list[tuple[int, str, int]]:
-    """(axis, parameter, value) writes in an order the firmware accepts: it
-    refuses SOFT_MIN > SOFT_MAX at every step, so the lower limit is first
-    widened to its minimum, then SOFT_MAX and SOFT_MIN take their values."""
-    order: list[tuple[int, str, int]] = [(P.GLOBAL_AXIS, k, v) for k, v in cfg.globals.items()]
+    """(axis, parameter, value) writes in an order the firmware accepts (all
+    axes disabled): it refuses SOFT_MIN > SOFT_MAX, PW0 > PWMAX and a carrier
+    above PWM_MAX_HZ at every step, so each low end is first taken to its
+    minimum, the ceiling to the rating before the carriers and to its own
+    value after them."""
+    g = dict(cfg.globals)
+    ceiling = g.pop("PWM_MAX_HZ", None)
+    order: list[tuple[int, str, int]] = [(P.GLOBAL_AXIS, k, v) for k, v in g.items()]
+    if ceiling is not None:
+        order.append((P.GLOBAL_AXIS, "PWM_MAX_HZ", P.PARAMS["PWM_MAX_HZ"].max))
     for i, ax in enumerate(cfg.axes):
-        if "SOFT_MIN" in ax or "SOFT_MAX" in ax:
-            order.append((i, "SOFT_MIN", P.PARAMS["SOFT_MIN"].min))
-            order += [(i, k, ax[k]) for k in ("SOFT_MAX", "SOFT_MIN") if k in ax]
-        order += [(i, k, v) for k, v in ax.items() if k not in ("SOFT_MIN", "SOFT_MAX")]
+        gains = [k for k in P.RAW_GAIN_OF if k in ax]
+        scale = [k for k in ("TAU_MAX_MNM", "COUNTS_PER_REV") if k in ax]
+        if gains and scale:
+            # a gain must fit its physical range at every step: zero them, scale, then set them
+            order += [(i, k, 0) for k in gains] + [(i, k, ax[k]) for k in scale]
+        for lo, hi in _PAIRS:
+            if lo in ax or hi in ax:
+                order.append((i, lo, P.PARAMS[lo].min))
+                order += [(i, k, ax[k]) for k in (hi, lo) if k in ax]
+        done = {k for pair in _PAIRS for k in pair} | (set(scale) if gains else set())
+        order += [(i, k, v) for k, v in ax.items() if k not in done]
+    if ceiling is not None:
+        order.append((P.GLOBAL_AXIS, "PWM_MAX_HZ", ceiling))
     return order
