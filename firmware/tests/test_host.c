@@ -565,6 +565,11 @@ static void test_homing(void)
         int n = 0;
         for (; n < 20000 && sv.ax[0].home == TLP_HOME_STATE_HOMING; n++) {
             int32_t sp = (int32_t)(sv.ax[0].c.sp_q16 >> 16) - sv.ax[0].offset;
+            hal_fake.enc[0].now += 1000u * 50u;    /* the decoder's clock and edge times (1 ms periods) */
+            if (sp != hal_fake.enc[0].pos) {
+                hal_fake.enc[0].interval = hal_fake.enc[0].now - hal_fake.enc[0].edge_time;
+                hal_fake.enc[0].edge_time = hal_fake.enc[0].now;
+            }
             hal_fake.enc[0].pos = sp;
             hal_fake.enc[0].limits = sp < 1000 ? TL_HAL_LIM_NEG : 0u;
             if (hal_fake.index_armed[0] && sp / 400 != last / 400 && !hal_fake.index_seen[0]) {
