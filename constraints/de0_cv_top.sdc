@@ -11,8 +11,8 @@ derive_clock_uncertainty
 # RESET_N) before any logic reads it, so no timing relation to CLOCK_50 exists.
 set_false_path -from [get_ports {RESET_N KEY[0] KEY[1] KEY[2] KEY[3] SW[0] SW[1] SW[2]}]
 set_false_path -from [get_ports {SW[3] SW[4] SW[5] SW[6] SW[7] SW[8] SW[9] GPIO_0[4]}]
-set_false_path -from [get_ports {GPIO_0[6] GPIO_0[7] GPIO_0[8] GPIO_0[10] GPIO_0[12] GPIO_1[4] GPIO_1[6] GPIO_1[7]}]
-set_false_path -from [get_ports {GPIO_1[8]}]
+set_false_path -from [get_ports {GPIO_0[6] GPIO_0[7] GPIO_0[8] GPIO_0[5] GPIO_0[9] GPIO_0[10] GPIO_0[12] GPIO_1[4]}]
+set_false_path -from [get_ports {GPIO_1[6] GPIO_1[7] GPIO_1[8] GPIO_1[5] GPIO_1[9]}]
 
 # Outputs from registers to LEDs, displays, H-bridge inputs (PWM up to 25 kHz, 20 ns
 # resolution) and the 3.3 V UART: a few ns of pin delay change nothing for them.

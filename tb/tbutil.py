@@ -40,8 +40,8 @@ def cycle_now(clk_ns: int = CLK_NS) -> int:
 
 def idle_soc_pins(dut, sw: int = 0) -> None:
     """The SoC's (and soc_fabric's) board inputs at rest: keys released
-    (active low), no e-stop, no bridge fault, encoders still, UART line idle
-    and the peer ready (CTS_N low); switches at ``sw``."""
+    (active low), no e-stop, no bridge fault, encoders still, limit switches
+    closed, UART line idle and the peer ready (CTS_N low); switches at ``sw``."""
     dut.sw.value = sw
     dut.key_n.value = 0xF
     dut.estop.value = 0
@@ -49,6 +49,8 @@ def idle_soc_pins(dut, sw: int = 0) -> None:
     dut.enc_a.value = 0
     dut.enc_b.value = 0
     dut.enc_z.value = 0
+    dut.lim_neg.value = 0
+    dut.lim_pos.value = 0
     dut.uart_rx.value = 1
     dut.uart_cts_n.value = 0
 

@@ -143,7 +143,24 @@ def test_rv32_image_builds_and_fits() -> None:
     from torqueloop.flow.firmware import build
     img = build("servo_check", out=REPO / "build" / "firmware" / "check")
     assert img.text_bytes + img.data_bytes + img.bss_bytes + 4096 < 64 * 1024
-    words = img.rom_hex.read_text().split()
-    assert words[:2] == ["800002b7", "00028067"], "boot stub: lui t0, 0x80000; jr t0"
+    # the boot stub, run on the ISS: arms the watchdog as the boot ROM does, then enters the image
+    from torqueloop.models.rv32 import Memory, Rv32
+    from torqueloop.spec import bootproto, regs
+    words = [int(w, 16) for w in img.rom_hex.read_text().split()]
+    mem = Memory()
+    rom = mem.add_ram(regs.BOOT_ROM_BASE, 64 * 4)
+    rom.data[:] = b"".join(w.to_bytes(4, "little") for w in words[:64])
+    mem.add_ram(regs.SYS_BASE, 0x1000)
+    cpu, stores = Rv32(mem, regs.BOOT_ROM_BASE), []
+    while cpu.pc != regs.RAM_BASE and len(stores) < 10:
+        cpu.last_store = None
+        cpu.step()
+        if cpu.last_store:
+            stores.append(cpu.last_store[::2])
+    assert cpu.pc == regs.RAM_BASE
+    assert stores == [(regs.SYS_WDOG_LOAD, bootproto.ms_to_cycles(bootproto.WDOG_MS)),
+                      (regs.SYS_WDOG_ARM, regs.SYS_WDOG_ARM_KEY_ARM_KEY),
+                      (regs.SYS_WDOG_KICK, regs.SYS_WDOG_KICK_KEY_KICK_A),
+                      (regs.SYS_WDOG_KICK, regs.SYS_WDOG_KICK_KEY_KICK_B)], stores
 
 

@@ -8,6 +8,11 @@
  * reply, and the factory image stored in this ROM is copied over RAM and
  * started instead, so a failed or interrupted upload never runs.
  *
+ * Before anything else it arms the SoC's hardware watchdog (BOOT_WDOG_CYCLES):
+ * from then until reset nothing can disarm or lengthen it, so every image
+ * it starts runs watched and must feed it with the kick sequence.  The
+ * bootloader feeds it in every loop while it waits or copies.
+ *
  * Runs from ROM with its stack in the top BOOT_STACK_BYTES of RAM, which an
  * upload never reaches; no .data, no .bss (boot.ld checks).  The constants
  * come from boot_proto.h, generated from torqueloop/spec/bootproto.py. */
@@ -40,16 +45,33 @@ struct factory_desc {
  * pointers it knows to be near address 0). */
 extern const volatile struct factory_desc boot_factory;
 
+static void kick(void)
+{
+    TL_SYS_WDOG_KICK = TL_SYS_WDOG_KICK_KEY_KICK_A;
+    TL_SYS_WDOG_KICK = TL_SYS_WDOG_KICK_KEY_KICK_B;
+}
+
+/* Armed once after reset; a jump here from a running image finds it armed
+ * (the writes are then ignored) and just feeds it. */
+static void arm_watchdog(void)
+{
+    TL_SYS_WDOG_LOAD = BOOT_WDOG_CYCLES;
+    TL_SYS_WDOG_ARM = TL_SYS_WDOG_ARM_KEY_ARM_KEY;
+    kick();
+}
+
 static uint32_t now(void)
 {
-    /* mtime low word: intervals up to 85 s by unsigned subtraction. */
+    /* mtime low word: intervals up to 85 s by unsigned subtraction.  Every
+     * waiting loop reads it, so the watchdog is fed here. */
+    kick();
     return TL_TIMER_MTIME_LO;
 }
 
 static void put(uint8_t c)
 {
-    while (!(TL_UART_STATUS & TL_UART_STATUS_TX_READY_MSK)) {
-    }
+    while (!(TL_UART_STATUS & TL_UART_STATUS_TX_READY_MSK))
+        kick();
     TL_UART_TX_DATA = c;
 }
 
@@ -64,8 +86,8 @@ static void reply(char code)
 
 static void tx_wait_idle(void)
 {
-    while (!(TL_UART_STATUS & TL_UART_STATUS_TX_IDLE_MSK)) {
-    }
+    while (!(TL_UART_STATUS & TL_UART_STATUS_TX_IDLE_MSK))
+        kick();
 }
 
 /* Next received byte, or RX_NONE after `limit` cycles without one. */
@@ -85,16 +107,16 @@ static int get(uint32_t limit)
  * timer, watchdog, UART mode.  After a reset all of this is already so. */
 static void quiesce(void)
 {
-    TL_AXIS0_PWM_CTRL = 0u;
+    /* drives off; the hardware limit block stays on (its reset state) */
+    TL_AXIS0_PWM_CTRL = TL_AXIS_PWM_CTRL_LIMIT_EN_MSK;
     TL_AXIS0_PWM_CMD = 0u;
-    TL_AXIS1_PWM_CTRL = 0u;
+    TL_AXIS1_PWM_CTRL = TL_AXIS_PWM_CTRL_LIMIT_EN_MSK;
     TL_AXIS1_PWM_CMD = 0u;
     TL_INTC_ENABLE = 0u;
     TL_INTC_PENDING = 0xFFFFFFFFu;
     TL_TIMER_MTIMECMP_HI = 0xFFFFFFFFu;
     TL_TIMER_MTIMECMP_LO = 0xFFFFFFFFu;
     TL_TIMER_MSIP = 0u;
-    TL_SYS_WDOG_LOAD = 0u;
     /* Flow control off first: a peer holding CTS must not stall the drain. */
     TL_UART_CTRL = 0u;
     tx_wait_idle();
@@ -115,6 +137,7 @@ static char receive(int forever)
     unsigned match = 0;
 
     while (match < sizeof sync_bytes) {
+        kick();
         uint32_t r = TL_UART_RX_DATA;
         if (r & TL_UART_RX_DATA_VALID_MSK) {
             uint8_t b = (uint8_t)r;
@@ -185,10 +208,14 @@ static int load_factory(void)
     volatile uint32_t *dst = (volatile uint32_t *)BOOT_LOAD_ADDR;
     for (uint32_t i = 0; i < (length + 3u) / 4u; i++)
         dst[i] = src[i];
+    kick();
     const volatile uint8_t *ram = (const volatile uint8_t *)BOOT_LOAD_ADDR;
     uint32_t crc = BOOT_CRC_INIT;
-    for (uint32_t i = 0; i < length; i++)
+    for (uint32_t i = 0; i < length; i++) {
+        if ((i & 1023u) == 0u)
+            kick();
         crc = boot_crc_byte(crc, ram[i]);
+    }
     return ~crc == d->crc;
 }
 
@@ -196,6 +223,7 @@ static void __attribute__((noreturn)) start_image(void)
 {
     tx_wait_idle();                  /* the image may change the baud rate */
     TL_INTC_PENDING = 0xFFFFFFFFu;   /* our own UART traffic is no event for it */
+    kick();                          /* a full timeout for the image to start feeding it */
     void (*entry)(void) = (void (*)(void))BOOT_LOAD_ADDR;
     entry();
     for (;;) {
@@ -206,6 +234,7 @@ void __attribute__((noreturn)) boot_main(void);
 
 void boot_main(void)
 {
+    arm_watchdog();
     quiesce();
     int forever = 0;
     for (;;) {

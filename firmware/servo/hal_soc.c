@@ -21,9 +21,14 @@ void hal_enc_read(uint32_t axis, tl_enc_sample_t *s)
     s->edge_time = t1;
     s->now = AX(axis, ENC_TIMESTAMP);
     s->illegal = AX(axis, ENC_ILLEGAL) & TL_AXIS_ENC_ILLEGAL_COUNT_MSK;
-    s->bridge_fault = (AX(axis, PWM_STATUS) & TL_AXIS_PWM_STATUS_BRIDGE_FAULT_MSK) != 0u;
-    s->limits = 0;   /* the SoC has no limit-switch inputs yet */
+    uint32_t st = AX(axis, PWM_STATUS);
+    s->bridge_fault = (st & TL_AXIS_PWM_STATUS_BRIDGE_FAULT_MSK) != 0u;
+    s->limits = (uint8_t)(((st & TL_AXIS_PWM_STATUS_LIM_NEG_MSK) ? TL_HAL_LIM_NEG : 0u) |
+                          ((st & TL_AXIS_PWM_STATUS_LIM_POS_MSK) ? TL_HAL_LIM_POS : 0u));
 }
+
+/* PWM_CTRL.LIMIT_EN as hal_limit_block set it, kept in every PWM_CTRL write. */
+static uint32_t limit_en[2] = {TL_AXIS_PWM_CTRL_LIMIT_EN_MSK, TL_AXIS_PWM_CTRL_LIMIT_EN_MSK};
 
 void hal_enc_clear_illegal(uint32_t axis) { AX(axis, ENC_CMD) = TL_AXIS_ENC_CMD_ILLEGAL_CLEAR_MSK; }
 
@@ -39,15 +44,17 @@ bool hal_enc_index(uint32_t axis, int32_t *pos)
 
 void hal_limit_block(uint32_t axis, bool on)
 {
-    (void)axis;   /* the SoC has no limit-switch inputs yet */
-    (void)on;
+    limit_en[axis] = on ? TL_AXIS_PWM_CTRL_LIMIT_EN_MSK : 0u;
+    uint32_t ctrl = AX(axis, PWM_CTRL);
+    AX(axis, PWM_CTRL) = (ctrl & ~TL_AXIS_PWM_CTRL_LIMIT_EN_MSK) | limit_en[axis];
 }
 
 void hal_pwm_cmd(uint32_t axis, int32_t cmd) { AX(axis, PWM_CMD) = (uint32_t)cmd & TL_AXIS_PWM_CMD_CMD_MSK; }
 
 void hal_pwm_enable(uint32_t axis, bool on, bool brake)
 {
-    AX(axis, PWM_CTRL) = (on ? TL_AXIS_PWM_CTRL_ENABLE_MSK : 0u) | (brake ? TL_AXIS_PWM_CTRL_BRAKE_MSK : 0u);
+    AX(axis, PWM_CTRL) = (on ? TL_AXIS_PWM_CTRL_ENABLE_MSK : 0u) | (brake ? TL_AXIS_PWM_CTRL_BRAKE_MSK : 0u) |
+                         limit_en[axis];
 }
 
 void hal_pwm_config(uint32_t axis, uint32_t fdiv, uint32_t pw0, uint32_t pwmax)

@@ -6,8 +6,11 @@
  * Measured here and reported over the link (STATUS): the worst cycles of one
  * control iteration (mcycle around tl_servo_tick) and the worst lateness of
  * the interrupt against its mtimecmp deadline (the jitter of the period).
- * The SoC watchdog is kicked by every iteration: if the interrupt stops, the
- * hardware forces both drives safe after WDOG_PERIODS periods. */
+ * The SoC's hardware watchdog was armed by the boot ROM before this image
+ * started (its timeout cannot be changed from here); every control
+ * iteration feeds it with the kick sequence.  If the interrupt stops, the
+ * watchdog expires and the SoC latch and the board's drive interlock switch
+ * the drives off; they stay off until the operator re-arms with SW[0]. */
 #include <stdbool.h>
 #include <stdint.h>
 
@@ -15,7 +18,6 @@
 #include "servo.h"
 #include "torqueloop_regs.h"
 
-#define WDOG_PERIODS 4u
 #define TX_RING 512u          /* bytes; a power of two */
 #define RX_RING 256u          /* bytes; a power of two */
 
@@ -53,6 +55,12 @@ static uint64_t mtime(void)
     return ((uint64_t)hi << 32) | lo;
 }
 
+static inline void kick_watchdog(void)
+{
+    TL_SYS_WDOG_KICK = TL_SYS_WDOG_KICK_KEY_KICK_A;
+    TL_SYS_WDOG_KICK = TL_SYS_WDOG_KICK_KEY_KICK_B;
+}
+
 __attribute__((interrupt("machine"))) static void trap_handler(void)
 {
     uint32_t cause;
@@ -62,7 +70,7 @@ __attribute__((interrupt("machine"))) static void trap_handler(void)
         uint32_t c0 = mcycle();
         tl_servo_tick(&servo);
         uint32_t period = tl_servo_period_cycles(&servo);
-        TL_SYS_WDOG_KICK = 1u;
+        kick_watchdog();
         deadline += period;
         uint64_t now = mtime();
         if (deadline <= now) {
@@ -99,7 +107,7 @@ __attribute__((interrupt("machine"))) static void trap_handler(void)
         return;
     }
     /* Anything else is a firmware bug: drives off, stop here (the watchdog
-     * keeps the SoC latch set because nothing kicks it any more). */
+     * expires because nothing kicks it any more). */
     hal_pwm_enable(0, false, true);
     hal_pwm_enable(1, false, true);
     for (;;)
@@ -137,12 +145,13 @@ static void tx_drain(void)
 
 static void jump_to_bootloader(void)
 {
-    /* Hook for the bootloader issue: drives are already off (servo.c); stop
-     * the timer and interrupts and enter the boot ROM at its reset address. */
+    /* Drives are already off (servo.c); stop the timer and interrupts and
+     * enter the boot ROM at its reset address.  The watchdog stays armed:
+     * the bootloader feeds it. */
     tx_drain();
     hal_irq_off();
     arm_timer(0xFFFFFFFFFFFFFFFFull);
-    TL_SYS_WDOG_LOAD = 0u;
+    kick_watchdog();
     void (*boot)(void) = (void (*)(void))(uintptr_t)TL_BOOT_ROM_BASE;
     boot();
 }
@@ -158,14 +167,14 @@ int main(void)
      * or the link would stay deaf with data waiting in the FIFO. */
     if (TL_UART_STATUS & TL_UART_STATUS_RX_VALID_MSK)
         TL_INTC_SET = TL_INTC_PENDING_UART_RX_MSK;
-    TL_SYS_WDOG_LOAD = tl_servo_period_cycles(&servo) * WDOG_PERIODS;
+    kick_watchdog();
     deadline = mtime() + tl_servo_period_cycles(&servo);
     arm_timer(deadline);
     __asm__ volatile("csrw mtvec, %0" : : "r"(&trap_handler));
     __asm__ volatile("csrs mie, %0" : : "r"((1u << 7) | (1u << 11)));   /* MTIE, MEIE */
     hal_irq_on();
 
-    uint32_t wdog_period = tl_servo_period_cycles(&servo);
+    uint32_t tick_period = tl_servo_period_cycles(&servo);
     for (;;) {
         while (rx_tail != rx_head) {
             uint8_t b = rx_ring[rx_tail & (RX_RING - 1u)];
@@ -187,18 +196,16 @@ int main(void)
         }
         tx_pump();
         uint32_t period = tl_servo_period_cycles(&servo);
-        if (period != wdog_period) {
+        if (period != tick_period) {
             /* The new period starts now: the next tick is one new period away,
-             * not at the deadline computed with the old one.  Otherwise a
-             * shorter period (25 ms -> 5 ms) reloads the watchdog with 4 new
-             * periods while the next tick is still up to one old period off,
-             * and the hardware latches the drives safe. */
+             * not at the deadline computed with the old one.  The watchdog's
+             * timeout (the boot ROM's, at least 4 of the longest periods) does
+             * not follow the period, so neither change can starve it. */
             hal_irq_off();
             deadline = mtime() + period;
             arm_timer(deadline);
-            TL_SYS_WDOG_LOAD = period * WDOG_PERIODS;
             hal_irq_on();
-            wdog_period = period;
+            tick_period = period;
         }
         if (servo.baud_div_pending) {
             tx_drain();

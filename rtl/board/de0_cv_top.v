@@ -12,9 +12,13 @@
 // Around the SoC (rtl/soc/tl_soc.v) this adds only what is board-specific:
 //   - RESET_N through reset_sync (asynchronous assertion, synchronous release);
 //   - drive_interlock between the SoC's bridge outputs and the IBT-2 pins: the
-//     drives run only after SW[0] has been moved up (with no stop and no fault
-//     present) and stop at once on KEY[0] or a bridge fault, independently of
-//     the processor and of the SoC's own safety latch (SYS.SAFETY);
+//     drives run only after SW[0] has been moved up (with no stop, no fault
+//     present and the SoC's hardware watchdog alive) and stop at once on
+//     KEY[0], a bridge fault or a watchdog expiry, independently of the
+//     processor and of the SoC's own safety latch (SYS.SAFETY);
+//   - estop_gate after it: KEY[0] forces every bridge input low through one
+//     AND gate, without the clock (the interlock's outputs are registered);
+//   - the limit switches (header pins 6 and 10 of each axis) to the SoC;
 //   - KEY[0] as the e-stop input of the SoC as well (active high there);
 //   - LEDR[9] = drives armed, LEDR[8] = stop or fault since the last arming;
 //     LEDR[7:0], HEX0-HEX5 belong to the firmware (GPIO registers).
@@ -76,6 +80,9 @@ module de0_cv_top #(
     wire            uart_tx_pin;
     wire            uart_cts_n_pin;
     wire            uart_rts_n_pin;
+    wire [AXES-1:0] lim_neg_pin;        // limit switches, NC to GND: 1 = open (tripped or wire broken)
+    wire [AXES-1:0] lim_pos_pin;
+    wire            wdog_alive;         // the SoC's hardware watchdog armed and fed
 
     // ---- the SoC ----
     /* verilator lint_off UNUSEDSIGNAL */
@@ -116,7 +123,10 @@ module de0_cv_top #(
         .uart_tx(uart_tx_pin),
         .uart_cts_n(uart_cts_n_pin),
         .uart_rts_n(uart_rts_n_pin),
-        .estop(~KEY[0])
+        .estop(~KEY[0]),
+        .lim_neg(lim_neg_pin),
+        .lim_pos(lim_pos_pin),
+        .wdog_alive(wdog_alive)
     );
 
     // ---- board-level drive interlock ----
@@ -145,17 +155,26 @@ module de0_cv_top #(
         .estop(~estop_n_s),
         .arm_sw(arm_sw_s),
         .fault(~fault_n_s),
+        .alive(wdog_alive),
         .rpwm_in(soc_rpwm),
         .lpwm_in(soc_lpwm),
         .r_en_in(soc_r_en),
         .l_en_in(soc_l_en),
-        .rpwm_out(ibt2_rpwm_pin),
-        .lpwm_out(ibt2_lpwm_pin),
-        .r_en_out(ibt2_r_en_pin),
-        .l_en_out(ibt2_l_en_pin),
+        .rpwm_out(il_rpwm),
+        .lpwm_out(il_lpwm),
+        .r_en_out(il_r_en),
+        .l_en_out(il_l_en),
         .armed(armed),
         .tripped(tripped),
         .fault_latched(fault_latched)
+    );
+
+    // ---- KEY[0] to the pins without the clock: one AND gate per bridge input ----
+    wire [AXES-1:0] il_rpwm, il_lpwm, il_r_en, il_l_en;   // the interlock's registered outputs
+    tl_estop_gate #(.N(4 * AXES)) u_estop_gate (
+        .key_n(KEY[0]),
+        .drive_in({il_l_en, il_r_en, il_lpwm, il_rpwm}),
+        .drive_out({ibt2_l_en_pin, ibt2_r_en_pin, ibt2_lpwm_pin, ibt2_rpwm_pin})
     );
 
     assign LEDR = {armed, tripped, soc_ledr[7:0]};
@@ -167,14 +186,16 @@ module de0_cv_top #(
     assign GPIO_0[3]           = ibt2_l_en_pin[0];    // pin 4: IBT-2 #1 (axis 1) L_EN
     assign GPIO_0[4]           = 1'bz;                // pin 5: input
     assign ibt2_fault_n_pin[0] = GPIO_0[4];           // pin 5: IBT-2 #1 (axis 1) R_IS, L_IS via comparators
-    assign GPIO_0[5]           = 1'bz;                // pin 6: spare, tri-stated
+    assign GPIO_0[5]           = 1'bz;                // pin 6: input
+    assign lim_neg_pin[0]      = GPIO_0[5];           // pin 6: limit switches (axis 1) negative-end switch
     assign GPIO_0[6]           = 1'bz;                // pin 7: input
     assign enc_a_pin[0]        = GPIO_0[6];           // pin 7: encoder 1 (axis 1) A
     assign GPIO_0[7]           = 1'bz;                // pin 8: input
     assign enc_b_pin[0]        = GPIO_0[7];           // pin 8: encoder 1 (axis 1) B
     assign GPIO_0[8]           = 1'bz;                // pin 9: input
     assign enc_z_pin[0]        = GPIO_0[8];           // pin 9: encoder 1 (axis 1) Z
-    assign GPIO_0[9]           = 1'bz;                // pin 10: spare, tri-stated
+    assign GPIO_0[9]           = 1'bz;                // pin 10: input
+    assign lim_pos_pin[0]      = GPIO_0[9];           // pin 10: limit switches (axis 1) positive-end switch
     assign GPIO_0[10]          = 1'bz;                // pin 13: input
     assign uart_rx_pin         = GPIO_0[10];          // pin 13: RN-XV TX (XBee pin 2)
     assign GPIO_0[11]          = uart_tx_pin;         // pin 14: RN-XV RX (XBee pin 3)
@@ -189,14 +210,16 @@ module de0_cv_top #(
     assign GPIO_1[3]           = ibt2_l_en_pin[1];    // pin 4: IBT-2 #2 (axis 2) L_EN
     assign GPIO_1[4]           = 1'bz;                // pin 5: input
     assign ibt2_fault_n_pin[1] = GPIO_1[4];           // pin 5: IBT-2 #2 (axis 2) R_IS, L_IS via comparators
-    assign GPIO_1[5]           = 1'bz;                // pin 6: spare, tri-stated
+    assign GPIO_1[5]           = 1'bz;                // pin 6: input
+    assign lim_neg_pin[1]      = GPIO_1[5];           // pin 6: limit switches (axis 2) negative-end switch
     assign GPIO_1[6]           = 1'bz;                // pin 7: input
     assign enc_a_pin[1]        = GPIO_1[6];           // pin 7: encoder 2 (axis 2) A
     assign GPIO_1[7]           = 1'bz;                // pin 8: input
     assign enc_b_pin[1]        = GPIO_1[7];           // pin 8: encoder 2 (axis 2) B
     assign GPIO_1[8]           = 1'bz;                // pin 9: input
     assign enc_z_pin[1]        = GPIO_1[8];           // pin 9: encoder 2 (axis 2) Z
-    assign GPIO_1[9]           = 1'bz;                // pin 10: spare, tri-stated
+    assign GPIO_1[9]           = 1'bz;                // pin 10: input
+    assign lim_pos_pin[1]      = GPIO_1[9];           // pin 10: limit switches (axis 2) positive-end switch
     assign GPIO_1[25:10]       = {16{1'bz}};          // pins 13-28: spare, tri-stated
     assign GPIO_1[35:26]       = {10{1'bz}};          // pins 31-40: spare, tri-stated
     // ---- end of the generated GPIO header map ----

@@ -12,7 +12,13 @@
 //     and no fault is present: a switch that is already up at power-up, or
 //     after a stop, arms nothing until it is moved down and up again;
 //   - estop (KEY[0] pressed) or a fault on any axis disarms at once and
-//     latches `tripped`; arm_sw down disarms too.
+//     latches `tripped`; arm_sw down disarms too;
+//   - liveness: `alive` is the SoC's hardware watchdog, armed by the boot ROM
+//     and fed by the running firmware.  Not alive disarms and blocks arming;
+//     alive falling (the watchdog expired: the firmware hung) also latches
+//     `tripped`.  Drives are therefore only ever on while a watched firmware
+//     runs, and after a hang they stay off until the firmware is alive again
+//     *and* the operator re-arms with SW[0] (a physical act).
 //
 // A fault is an IBT-2 IS line above its fault level, seen through a
 // comparator (docs/hardware.md); it must persist FAULT_FILTER_CLKS clocks
@@ -39,6 +45,7 @@ module tl_drive_interlock #(
     input  wire            estop,          // 1 = stop requested (held while pressed)
     input  wire            arm_sw,         // 1 = drives allowed; a rising edge arms
     input  wire [AXES-1:0] fault,          // 1 = bridge reports a fault
+    input  wire            alive,          // 1 = the SoC's watchdog is armed and not expired
     // from the SoC
     input  wire [AXES-1:0] rpwm_in,
     input  wire [AXES-1:0] lpwm_in,
@@ -61,8 +68,11 @@ module tl_drive_interlock #(
     reg  [FILTER_BITS*AXES-1:0] fault_cnt;   // consecutive clocks with fault, per axis
     reg  [AXES-1:0]             fault_ok;    // fault present for FAULT_FILTER_CLKS clocks
     reg                         arm_sw_q;    // arm_sw one clock ago, for the rising edge
+    reg                         alive_q;     // alive one clock ago, for its falling edge
 
     wire trip    = estop || (|fault_ok);
+    wire lost    = alive_q && !alive;        // the watchdog expired
+    wire stop    = trip || !alive;
     wire arm_req = arm_sw && !arm_sw_q;
 
     integer i;
@@ -89,14 +99,16 @@ module tl_drive_interlock #(
         if (rst) begin
             // Up at reset counts as "was already up": no arming without a new edge.
             arm_sw_q      <= 1'b1;
+            alive_q       <= 1'b0;
             armed         <= 1'b0;
             tripped       <= 1'b0;
             fault_latched <= {AXES{1'b0}};
         end else begin
             arm_sw_q <= arm_sw;
-            if (trip) begin
+            alive_q  <= alive;
+            if (stop) begin
                 armed         <= 1'b0;
-                tripped       <= 1'b1;
+                tripped       <= tripped | trip | lost;
                 fault_latched <= fault_latched | fault_ok;
             end else if (!arm_sw) begin
                 armed <= 1'b0;

@@ -18,6 +18,7 @@ entity tl_drive_interlock is
         estop         : in  std_logic;                             -- 1 = stop requested
         arm_sw        : in  std_logic;                             -- 1 = drives allowed; a rising edge arms
         fault         : in  std_logic_vector(AXES - 1 downto 0);   -- 1 = bridge reports a fault
+        alive         : in  std_logic;                             -- 1 = the SoC's watchdog armed, not expired
         rpwm_in       : in  std_logic_vector(AXES - 1 downto 0);
         lpwm_in       : in  std_logic_vector(AXES - 1 downto 0);
         r_en_in       : in  std_logic_vector(AXES - 1 downto 0);
@@ -49,12 +50,17 @@ architecture rtl of tl_drive_interlock is
     signal fault_cnt : unsigned(FILTER_BITS * AXES - 1 downto 0);   -- consecutive clocks with fault, per axis
     signal fault_ok  : std_logic_vector(AXES - 1 downto 0);         -- fault present for FAULT_FILTER_CLKS clocks
     signal arm_sw_q  : std_logic;                                   -- arm_sw one clock ago
+    signal alive_q   : std_logic;                                   -- alive one clock ago
 
     signal trip    : std_logic;
+    signal lost    : std_logic;
+    signal stop    : std_logic;
     signal arm_req : std_logic;
     signal armed_v : std_logic_vector(AXES - 1 downto 0);
 begin
     trip    <= '1' when estop = '1' or fault_ok /= (fault_ok'range => '0') else '0';
+    lost    <= alive_q and not alive;
+    stop    <= trip or not alive;
     arm_req <= arm_sw and not arm_sw_q;
     armed_v <= (others => armed);
 
@@ -86,14 +92,16 @@ begin
             if rst = '1' then
                 -- Up at reset counts as "was already up": no arming without a new edge.
                 arm_sw_q      <= '1';
+                alive_q       <= '0';
                 armed         <= '0';
                 tripped       <= '0';
                 fault_latched <= (others => '0');
             else
                 arm_sw_q <= arm_sw;
-                if trip = '1' then
+                alive_q  <= alive;
+                if stop = '1' then
                     armed         <= '0';
-                    tripped       <= '1';
+                    tripped       <= tripped or trip or lost;
                     fault_latched <= fault_latched or fault_ok;
                 elsif arm_sw = '0' then
                     armed <= '0';

@@ -23,7 +23,8 @@ module tl_soc #(
     parameter         ROM_INIT         = "",
     parameter [31:0]  BUILD_ID         = 32'd0,
     parameter integer CLK_HZ           = `TL_CLK_HZ,
-    parameter [31:0]  HART_ID          = 32'd0
+    parameter [31:0]  HART_ID          = 32'd0,
+    parameter integer LIMIT_DEBOUNCE_CLKS = 50_000   // limit switch debounce, 1 ms
 ) (
     input  wire        clk,
     input  wire        rst,            // synchronous, active high
@@ -50,7 +51,10 @@ module tl_soc #(
     output wire        uart_tx,
     input  wire        uart_cts_n,
     output wire        uart_rts_n,
-    input  wire        estop
+    input  wire        estop,
+    input  wire [1:0]  lim_neg,        // limit switches, asynchronous, 1 = open (tripped), per axis
+    input  wire [1:0]  lim_pos,
+    output wire        wdog_alive      // hardware watchdog armed and not expired (to the drive interlock)
 );
 
     wire        ibus_req, ibus_ack, ibus_err;
@@ -76,7 +80,7 @@ module tl_soc #(
 
     tl_soc_fabric #(
         .RAM_BYTES(RAM_BYTES), .RAM_INIT(RAM_INIT), .ROM_INIT(ROM_INIT), .BUILD_ID(BUILD_ID),
-        .CLK_HZ(CLK_HZ)
+        .CLK_HZ(CLK_HZ), .LIMIT_DEBOUNCE_CLKS(LIMIT_DEBOUNCE_CLKS)
     ) u_fabric (
         .clk(clk), .rst(rst),
         .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
@@ -89,7 +93,7 @@ module tl_soc #(
         .rpwm(rpwm), .lpwm(lpwm), .r_en(r_en), .l_en(l_en), .pwm(pwm), .dir(dir),
         .bridge_fault(bridge_fault), .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z),
         .uart_rx(uart_rx), .uart_tx(uart_tx), .uart_cts_n(uart_cts_n), .uart_rts_n(uart_rts_n),
-        .estop(estop)
+        .estop(estop), .lim_neg(lim_neg), .lim_pos(lim_pos), .wdog_alive(wdog_alive)
     );
 
 endmodule

@@ -9,12 +9,21 @@
 // is the PWM block's fault input, so the block enters its own safe state
 // within a clock and resumes only at a period start after the latch is
 // cleared; soc_safety_gate forces the PWM pins low on top of that.
+//
+// Limit switches (normally closed to GND, pulled up: 1 = open, tripped or
+// wire broken) are synchronised and debounced here; while PWM_CTRL.LIMIT_EN
+// is set, the bridge side that drives toward an open switch is held low in
+// hardware (RPWM toward the positive end, LPWM toward the negative, PWM in
+// PWM+DIR mode by its direction), whatever firmware commands; the other
+// direction stays free, so the axis can be driven back out.
 // Bus slave: see tl_soc_timer.v.
 // the register map's TL_* names (generated; the include guard makes a second include empty)
 `include "regmap.vh"
 `default_nettype none
 
-module tl_soc_axis (
+module tl_soc_axis #(
+    parameter integer LIMIT_DEBOUNCE_CLKS = 50_000   // 1 ms at 50 MHz: contact bounce of a limit switch
+) (
     input  wire        clk,
     input  wire        rst,
     // safety
@@ -24,6 +33,9 @@ module tl_soc_axis (
     input  wire        enc_a,
     input  wire        enc_b,
     input  wire        enc_z,
+    // limit switches, asynchronous, 1 = open (tripped): negative end, positive end
+    input  wire        lim_neg,
+    input  wire        lim_pos,
     // bridge pins (before soc_safety_gate)
     output wire        rpwm,
     output wire        lpwm,
@@ -88,6 +100,19 @@ module tl_soc_axis (
         end
     end
 
+    // --- limit switches: synchronised, debounced, and the hardware block -------------------
+    wire [1:0] lim_s, lim_d;   // {positive, negative}
+    tl_sync_2ff #(.WIDTH(2), .RESET_VAL(0)) u_sync_lim (
+        .clk(clk), .rst(rst), .async_in({lim_pos, lim_neg}), .sync_out(lim_s));
+    tl_debounce #(.WIDTH(2), .STABLE_CLKS(LIMIT_DEBOUNCE_CLKS), .RESET_VAL(0)) u_deb_lim (
+        .clk(clk), .rst(rst), .sync_in(lim_s), .q(lim_d));
+    wire block_neg = ctrl_q[`TL_AXIS_PWM_CTRL_LIMIT_EN_LSB] && lim_d[0];
+    wire block_pos = ctrl_q[`TL_AXIS_PWM_CTRL_LIMIT_EN_LSB] && lim_d[1];
+    wire rpwm_core, lpwm_core, pwm_core;
+    assign rpwm    = rpwm_core && !block_pos;
+    assign lpwm    = lpwm_core && !block_neg;
+    assign pwm_out = pwm_core && !(dir_out ? block_neg : block_pos);
+
     // --- frequency generator (eq. 2-4) ----------------------------------------------------
     wire [DIV_BITS-1:0] div;
     wire                tick;
@@ -115,7 +140,7 @@ module tl_soc_axis (
         .enable(ctrl_q[`TL_AXIS_PWM_CTRL_ENABLE_LSB]), .fault(safe),
         .brake_on_fault(ctrl_q[`TL_AXIS_PWM_CTRL_BRAKE_LSB]),
         .dir_mode(ctrl_q[`TL_AXIS_PWM_CTRL_DIR_MODE_LSB]),
-        .rpwm(rpwm), .lpwm(lpwm), .r_en(r_en), .l_en(l_en), .pwm_out(pwm_out), .dir_out(dir_out),
+        .rpwm(rpwm_core), .lpwm(lpwm_core), .r_en(r_en), .l_en(l_en), .pwm_out(pwm_core), .dir_out(dir_out),
         .period_start(period_event), .duty_applied(duty_applied), .dir_applied(dir_applied),
         .active(active)
     );
@@ -160,6 +185,8 @@ module tl_soc_axis (
                 rdata[`TL_AXIS_PWM_STATUS_DIR_LSB]          = dir_applied;
                 rdata[`TL_AXIS_PWM_STATUS_FORCED_LSB]       = safe;
                 rdata[`TL_AXIS_PWM_STATUS_BRIDGE_FAULT_LSB] = bridge_fault;
+                rdata[`TL_AXIS_PWM_STATUS_LIM_NEG_LSB]      = lim_d[0];
+                rdata[`TL_AXIS_PWM_STATUS_LIM_POS_LSB]      = lim_d[1];
                 rdata[`TL_AXIS_PWM_STATUS_DUTY_MSB:`TL_AXIS_PWM_STATUS_DUTY_LSB] = duty_applied;
             end
             `TL_AXIS_ENC_POS_IDX:    rdata = position;

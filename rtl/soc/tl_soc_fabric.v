@@ -32,7 +32,8 @@ module tl_soc_fabric #(
     parameter         RAM_INIT         = "",     // $readmemh image of the RAM
     parameter         ROM_INIT         = "",     // $readmemh image of the boot ROM
     parameter [31:0]  BUILD_ID         = 32'd0,
-    parameter integer CLK_HZ           = `TL_CLK_HZ
+    parameter integer CLK_HZ           = `TL_CLK_HZ,
+    parameter integer LIMIT_DEBOUNCE_CLKS = 50_000   // limit switch debounce, 1 ms
 ) (
     input  wire        clk,
     input  wire        rst,            // synchronous, active high
@@ -84,7 +85,12 @@ module tl_soc_fabric #(
     input  wire        uart_cts_n,
     output wire        uart_rts_n,
     // board: e-stop
-    input  wire        estop           // asynchronous, 1 = stop
+    input  wire        estop,          // asynchronous, 1 = stop
+    // limit switches, asynchronous, 1 = open (tripped or wire broken), per axis
+    input  wire [1:0]  lim_neg,
+    input  wire [1:0]  lim_pos,
+    // the hardware watchdog: armed and not expired (the board's drive interlock arms only then)
+    output wire        wdog_alive
 );
 
     localparam integer RAM_AW = $clog2(RAM_BYTES);
@@ -236,26 +242,29 @@ module tl_soc_fabric #(
         .clk(clk), .rst(rst),
         .bus_req(page_req[P_SYS*RQ +: RQ]), .bus_rsp(page_rsp[P_SYS*RS +: RS]),
         .estop(estop), .bridge_fault(bridge_fault), .bridge_fault_s(bridge_fault_s),
-        .safe(safe), .safety_event(safety_event)
+        .safe(safe), .safety_event(safety_event), .wdog_armed(wdog_armed), .wdog_alive(wdog_alive)
     );
+    /* verilator lint_off UNUSEDSIGNAL */
+    wire wdog_armed;   // readable in SYS.SAFETY; the board needs only wdog_alive
+    /* verilator lint_on UNUSEDSIGNAL */
 
     wire [1:0] rpwm_raw, lpwm_raw, pwm_raw;
 
-    tl_soc_axis u_axis0 (
+    tl_soc_axis #(.LIMIT_DEBOUNCE_CLKS(LIMIT_DEBOUNCE_CLKS)) u_axis0 (
         .clk(clk), .rst(rst),
         .bus_req(page_req[P_AXIS0*RQ +: RQ]), .bus_rsp(page_rsp[P_AXIS0*RS +: RS]),
         .safe(safe), .bridge_fault(bridge_fault_s[0]),
-        .enc_a(enc_a[0]), .enc_b(enc_b[0]), .enc_z(enc_z[0]),
+        .enc_a(enc_a[0]), .enc_b(enc_b[0]), .enc_z(enc_z[0]), .lim_neg(lim_neg[0]), .lim_pos(lim_pos[0]),
         .rpwm(rpwm_raw[0]), .lpwm(lpwm_raw[0]), .r_en(r_en[0]), .l_en(l_en[0]),
         .pwm_out(pwm_raw[0]), .dir_out(dir[0]),
         .period_event(period_event[0]), .index_event(index_event[0]), .fault_event(fault_event[0])
     );
 
-    tl_soc_axis u_axis1 (
+    tl_soc_axis #(.LIMIT_DEBOUNCE_CLKS(LIMIT_DEBOUNCE_CLKS)) u_axis1 (
         .clk(clk), .rst(rst),
         .bus_req(page_req[P_AXIS1*RQ +: RQ]), .bus_rsp(page_rsp[P_AXIS1*RS +: RS]),
         .safe(safe), .bridge_fault(bridge_fault_s[1]),
-        .enc_a(enc_a[1]), .enc_b(enc_b[1]), .enc_z(enc_z[1]),
+        .enc_a(enc_a[1]), .enc_b(enc_b[1]), .enc_z(enc_z[1]), .lim_neg(lim_neg[1]), .lim_pos(lim_pos[1]),
         .rpwm(rpwm_raw[1]), .lpwm(lpwm_raw[1]), .r_en(r_en[1]), .l_en(l_en[1]),
         .pwm_out(pwm_raw[1]), .dir_out(dir[1]),
         .period_event(period_event[1]), .index_event(index_event[1]), .fault_event(fault_event[1])

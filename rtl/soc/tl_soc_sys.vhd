@@ -23,11 +23,21 @@ entity tl_soc_sys is
         bridge_fault   : in  std_logic_vector(1 downto 0);    -- asynchronous, 1 = fault
         bridge_fault_s : out std_logic_vector(1 downto 0);
         safe           : out std_logic;
-        safety_event   : out std_logic
+        safety_event   : out std_logic;
+        wdog_armed     : out std_logic;
+        wdog_alive     : out std_logic
     );
 end entity tl_soc_sys;
 
 architecture rtl of tl_soc_sys is
+    function bool_sl(b : boolean) return std_logic is
+    begin
+        if b then
+            return '1';
+        end if;
+        return '0';
+    end function;
+
     signal estop_v   : std_logic_vector(0 downto 0);
     signal estop_sv  : std_logic_vector(0 downto 0);
     signal estop_s   : std_logic;
@@ -35,6 +45,9 @@ architecture rtl of tl_soc_sys is
 
     signal wdog_load : unsigned(31 downto 0);
     signal wdog_cnt  : unsigned(31 downto 0);
+    signal armed     : std_logic;
+    signal expired   : std_logic;
+    signal kick_a    : std_logic;
     signal scratch   : std_logic_vector(31 downto 0);
     signal latch     : std_logic_vector(3 downto 0);   -- {wdog, fault1, fault0, estop}
     signal event_q   : std_logic;
@@ -43,7 +56,12 @@ architecture rtl of tl_soc_sys is
     signal wr        : boolean;
     signal wmask     : std_logic_vector(31 downto 0);
     signal wbits     : std_logic_vector(31 downto 0);
-    signal kick      : boolean;
+    signal full      : boolean;
+    signal kick_wr   : boolean;
+    signal key_a     : boolean;
+    signal kick_ok   : boolean;
+    signal kick_bad  : boolean;
+    signal arm_wr    : boolean;
     signal wdog_fire : std_logic;
     signal cause     : std_logic_vector(3 downto 0);
     signal clr       : std_logic_vector(3 downto 0);
@@ -64,9 +82,15 @@ begin
     wmask <= bus_req.wmask;
     wbits <= bus_req.wbits;
 
-    kick      <= wr and (idx = TL_SYS_WDOG_KICK_IDX or idx = TL_SYS_WDOG_LOAD_IDX);
-    wdog_fire <= '1' when wdog_load /= 0 and wdog_cnt = 1 and not kick else '0';
-    cause     <= wdog_fire & fault_s & estop_s;
+    full      <= wmask = x"FFFFFFFF";
+    kick_wr   <= wr and idx = TL_SYS_WDOG_KICK_IDX;
+    key_a     <= kick_wr and full and wbits = TL_SYS_WDOG_KICK_KEY_KICK_A;
+    kick_ok   <= armed = '1' and kick_wr and kick_a = '1' and full and wbits = TL_SYS_WDOG_KICK_KEY_KICK_B;
+    kick_bad  <= armed = '1' and kick_wr and not key_a and not kick_ok;
+    arm_wr    <= armed = '0' and wr and idx = TL_SYS_WDOG_ARM_IDX and full
+                 and wbits = TL_SYS_WDOG_ARM_KEY_ARM_KEY and wdog_load /= 0;
+    wdog_fire <= '1' when armed = '1' and expired = '0' and not kick_ok and (kick_bad or wdog_cnt = 1) else '0';
+    cause     <= (wdog_fire or (expired and not bool_sl(kick_ok))) & fault_s & estop_s;
     clr       <= wbits(TL_SYS_SAFETY_WDOG_LSB downto TL_SYS_SAFETY_ESTOP_LSB)
                  when wr and idx = TL_SYS_SAFETY_IDX else (others => '0');
 
@@ -76,6 +100,9 @@ begin
             if rst = '1' then
                 wdog_load <= unsigned(TL_SYS_WDOG_LOAD_RESET);
                 wdog_cnt  <= (others => '0');
+                armed     <= '0';
+                expired   <= '0';
+                kick_a    <= '0';
                 scratch   <= TL_SYS_SCRATCH_RESET;
                 -- ESTOP set: no automatic restart after reset (firmware acknowledges).
                 latch     <= "0001";
@@ -84,24 +111,27 @@ begin
                 -- A cause present in the clear cycle keeps its bit set.
                 latch   <= (latch and not clr) or cause;
                 event_q <= or (cause and not latch);
-                if wr and idx = TL_SYS_WDOG_LOAD_IDX then
+                if wr and idx = TL_SYS_WDOG_LOAD_IDX and armed = '0' then
                     wdog_load <= unsigned((std_logic_vector(wdog_load) and not wmask) or wbits);
                 end if;
                 if wr and idx = TL_SYS_SCRATCH_IDX then
                     scratch <= (scratch and not wmask) or wbits;
                 end if;
-                -- Watchdog: counts down from WDOG_LOAD; reaching 1 fires and reloads.
-                if kick then
-                    if idx = TL_SYS_WDOG_LOAD_IDX then
-                        wdog_cnt <= unsigned((std_logic_vector(wdog_load) and not wmask) or wbits);
-                    else
-                        wdog_cnt <= wdog_load;
-                    end if;
-                elsif wdog_load = 0 then
-                    wdog_cnt <= (others => '0');
-                elsif wdog_cnt <= 1 then
+                if kick_wr then
+                    kick_a <= bool_sl(key_a);
+                end if;
+                if arm_wr then
+                    armed <= '1';
+                end if;
+                -- Armed: counts down from WDOG_LOAD; a kick restarts it; reaching 1 (or a
+                -- wrong kick) expires it, and it stays expired until the next kick.
+                if arm_wr or kick_ok then
                     wdog_cnt <= wdog_load;
-                else
+                    expired  <= '0';
+                elsif wdog_fire = '1' then
+                    wdog_cnt <= (others => '0');
+                    expired  <= '1';
+                elsif wdog_cnt /= 0 then
                     wdog_cnt <= wdog_cnt - 1;
                 end if;
             end if;
@@ -112,6 +142,8 @@ begin
     safe           <= safe_i;
     bridge_fault_s <= fault_s;
     safety_event   <= event_q;
+    wdog_armed     <= armed;
+    wdog_alive     <= armed and not expired;
 
     -- Read decode: this block's registers only; tl_soc_fabric acknowledges.
     process (all)
@@ -128,12 +160,14 @@ begin
         elsif idx = TL_SYS_SAFETY_IDX then
             bus_rsp.rdata(TL_SYS_SAFETY_SAFE_LSB)     <= safe_i;
             bus_rsp.rdata(TL_SYS_SAFETY_ESTOP_IN_LSB) <= estop_s;
+            bus_rsp.rdata(TL_SYS_SAFETY_WDOG_ARMED_LSB)   <= armed;
+            bus_rsp.rdata(TL_SYS_SAFETY_WDOG_EXPIRED_LSB) <= expired;
             bus_rsp.rdata(TL_SYS_SAFETY_WDOG_LSB downto TL_SYS_SAFETY_ESTOP_LSB) <= latch;
         elsif idx = TL_SYS_WDOG_LOAD_IDX then
             bus_rsp.rdata <= std_logic_vector(wdog_load);
         elsif idx = TL_SYS_SCRATCH_IDX then
             bus_rsp.rdata <= scratch;
-        elsif idx /= TL_SYS_WDOG_KICK_IDX then
+        elsif idx /= TL_SYS_WDOG_KICK_IDX and idx /= TL_SYS_WDOG_ARM_IDX then
             bus_rsp.err <= '1';
         end if;
     end process;

@@ -30,6 +30,8 @@ module de0_cv_top_tb #(
     input  wire [1:0] enc_a,
     input  wire [1:0] enc_b,
     input  wire [1:0] enc_z,
+    input  wire [1:0] lim_neg,      // limit switches, 1 = open (tripped); 0 = closed (NC switch to GND)
+    input  wire [1:0] lim_pos,
     // RN-XV side of the UART
     input  wire       rnxv_tx,      // into the FPGA
     output wire       rnxv_rx,      // out of the FPGA
@@ -52,7 +54,8 @@ module de0_cv_top_tb #(
     de0_cv_cable u_cable (
         .GPIO_0(GPIO_0), .GPIO_1(GPIO_1), .ibt2_rpwm_pin(rpwm), .ibt2_lpwm_pin(lpwm),
         .ibt2_r_en_pin(r_en), .ibt2_l_en_pin(l_en), .ibt2_fault_n_pin(fault_n), .enc_a_pin(enc_a),
-        .enc_b_pin(enc_b), .enc_z_pin(enc_z), .uart_rx_pin(rnxv_tx), .uart_tx_pin(rnxv_rx),
+        .enc_b_pin(enc_b), .enc_z_pin(enc_z), .lim_neg_pin(lim_neg), .lim_pos_pin(lim_pos),
+        .uart_rx_pin(rnxv_tx), .uart_tx_pin(rnxv_rx),
         .uart_cts_n_pin(rnxv_rts), .uart_rts_n_pin(rnxv_cts)
     );
 

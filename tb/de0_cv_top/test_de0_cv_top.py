@@ -54,6 +54,8 @@ PWM_PERIOD = 1023              # careless.c: FDIV = 1
 #: Clocks from a stop request on a pin to all bridge inputs low: two
 #: synchroniser flops, the interlock's armed register and its output register.
 STOP_LATENCY = 5
+#: careless.c's watchdog timeout (HANG_WDOG_CYCLES there).
+WDOG_CYCLES = 3000
 #: The servo firmware's simulation build: 50 clocks per bit.
 SERVO_BAUD_DIV = 49
 SERVO_BAUD = 50_000_000 // (SERVO_BAUD_DIV + 1)
@@ -113,6 +115,8 @@ async def _power_up(dut, sw: int, baud: int):
     dut.key.value = 0xF
     dut.sw.value = sw
     dut.fault_n.value = 0b11
+    dut.lim_neg.value = 0              # limit switches closed
+    dut.lim_pos.value = 0
     dut.enc_a.value = 0
     dut.enc_b.value = 0
     dut.enc_z.value = 0
@@ -224,9 +228,14 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
     assert i1 > 0.1 and plant.plant.motor_angle(0) > 0, f"axis 1 not driven forward: {i1} A"
     assert i2 < -0.1 and plant.plant.motor_angle(1) < 0, f"axis 2 not driven in reverse: {i2} A"
 
-    # 3. E-stop: off within STOP_LATENCY clocks, and off after release until re-armed.
-    await FallingEdge(dut.clk)
+    # 3. E-stop: every bridge input low with no clock edge (tl_estop_gate), and off
+    # after release until re-armed.
+    while not int(dut.r_en.value):
+        await FallingEdge(dut.clk)
+    await Timer(5, unit="ns")                     # away from any clock edge
     dut.key.value = 0xE
+    await Timer(1, unit="ns")
+    assert not any(_bridge(dut).values()), f"KEY[0] did not reach the pins without a clock: {_bridge(dut)}"
     await ClockCycles(dut.clk, STOP_LATENCY)
     await _expect_all_low(dut, PWM_PERIOD, "e-stop pressed")
     dut.key.value = 0xF
@@ -266,6 +275,31 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
     for _ in message:
         got += await sink.read(1)
     assert got == bytes((b + 1) & 0xFF for b in message), f"UART answered {got!r}"
+
+    # 6. The firmware hangs with interrupts off (SW[8], careless.c): it stops feeding the
+    # hardware watchdog, which expires WDOG_CYCLES after its last feed; the interlock
+    # drops every bridge input and keeps them low - through re-arm attempts while the
+    # firmware hangs, and after it recovers - until SW[0] is moved down and up again.
+    _check_driving(await _watch_armed(dut, PWM_PERIOD), PWM_PERIOD, "before the hang")
+    await FallingEdge(dut.clk)
+    dut.sw.value = int(dut.sw.value) | 0x100
+    t0 = tbutil.cycle_now()
+    while any(_bridge(dut).values()):
+        await FallingEdge(dut.clk)
+        assert tbutil.cycle_now() - t0 < 3 * WDOG_CYCLES, "a hung firmware still drives the bridges"
+    t_off = tbutil.cycle_now() - t0
+    dut._log.info(f"hung firmware: bridge inputs low {t_off} clocks after the hang (watchdog {WDOG_CYCLES})")
+    # the last feed came up to one loop of careless.c (about 40 clocks) after the switch
+    # moved, and the interlock adds its 2 clocks
+    assert WDOG_CYCLES - 100 <= t_off <= WDOG_CYCLES + 60, t_off
+    assert (int(dut.ledr.value) >> 8) == 0b01, "LEDR[8] = tripped, LEDR[9] = disarmed"
+    await _arm(dut)
+    await _expect_all_low(dut, 2 * PWM_PERIOD, "re-armed while the firmware hangs")
+    dut.sw.value = int(dut.sw.value) & ~0x100       # the firmware recovers and feeds the watchdog again
+    await _expect_all_low(dut, 2 * PWM_PERIOD, "firmware alive again, not re-armed")
+    await _arm(dut)
+    await ClockCycles(dut.clk, 2 * PWM_PERIOD)
+    _check_driving(await _watch_armed(dut, PWM_PERIOD), PWM_PERIOD, "re-armed after the hang")
 
 
 async def _exchange(dut, source, sink, decoder, frame: bytes, cycles: int):

@@ -16,6 +16,7 @@ def _apply(dut, i: InterlockInputs) -> None:
     dut.estop.value = int(i.estop)
     dut.arm_sw.value = int(i.arm_sw)
     dut.fault.value = i.fault
+    dut.alive.value = int(i.alive)
     dut.rpwm_in.value = i.rpwm
     dut.lpwm_in.value = i.lpwm
     dut.r_en_in.value = i.r_en
@@ -80,8 +81,26 @@ async def stays_safe_until_armed_and_follows_model(dut):
         exp = await _step(dut, model, demand, f"estop released {c}")
         assert not exp.armed and exp.r_en == 0
 
+    # Liveness: the SoC's watchdog expires (firmware hung) - off at once and tripped;
+    # alive again, the switch still has to be moved down and up.
+    await _step(dut, model, InterlockInputs(arm_sw=False), "switch down")
+    await _step(dut, model, demand, "switch up")
+    exp = await _step(dut, model, demand, "armed again")
+    assert exp.armed
+    dead = InterlockInputs(arm_sw=True, alive=False, rpwm=full, r_en=full, l_en=full)
+    exp = await _step(dut, model, dead, "watchdog expired")
+    assert not exp.armed and exp.tripped
+    exp = await _step(dut, model, dead, "watchdog expired, next clock")
+    assert exp.rpwm == 0 and exp.r_en == 0
+    await _step(dut, model, InterlockInputs(arm_sw=False, alive=False), "switch down while dead")
+    exp = await _step(dut, model, dead, "switch up while dead")
+    assert not exp.armed, "armed with the watchdog expired"
+    for c in range(3):
+        exp = await _step(dut, model, demand, f"alive again {c}")
+        assert not exp.armed, "alive again re-armed without the switch"
+
     # Random phase: switch moves, stop presses, fault bursts of random length.
-    arm_sw, estop, fault_bits = True, False, 0
+    arm_sw, estop, fault_bits, alive = True, False, 0, True
     armed_cycles = 0
     for c in range(2000):
         if random.random() < 0.02:
@@ -90,7 +109,9 @@ async def stays_safe_until_armed_and_follows_model(dut):
             estop = not estop if estop or random.random() < 0.3 else estop
         if random.random() < 0.03:
             fault_bits = random.getrandbits(axes) if random.random() < 0.3 else 0
-        i = InterlockInputs(estop=estop, arm_sw=arm_sw, fault=fault_bits,
+        if random.random() < 0.005:
+            alive = not alive
+        i = InterlockInputs(estop=estop, arm_sw=arm_sw, fault=fault_bits, alive=alive,
                             rpwm=random.getrandbits(axes), lpwm=random.getrandbits(axes),
                             r_en=random.getrandbits(axes), l_en=random.getrandbits(axes))
         exp = await _step(dut, model, i, f"random cycle {c}")

@@ -441,6 +441,35 @@ async def runaway_with_a_frozen_and_a_reversed_encoder(dut):
 
 
 @cocotb.test()
+async def lengthening_the_period_with_frames_queued_keeps_the_watchdog_fed(dut):
+    """Issue 17: lengthening PERIOD_US with frames queued behind it could trip the
+    watchdog (the firmware reloaded it with 4 old periods while the next tick was a
+    new period away).  The hardware watchdog is now the boot ROM's, fixed, and fed
+    by every tick: 0.5 ms -> 25 ms with 20 frames queued latches nothing, and an
+    axis enabled through it keeps driving."""
+    tb = TB(dut)
+    await tb.start()
+    await tb.fast_pwm()
+    await tb.set(P.GLOBAL_AXIS, "LINK_TIMEOUT_MS", 1000)
+    await _enable(tb, 1)
+    await tb.cmd("MOVE", axis=0, mode=U, target=300)
+    tb.seq += 1
+    burst = P.request("SET_PARAM", tb.seq, axis=P.GLOBAL_AXIS, param=P.PARAMS["PERIOD_US"].id, value=25_000)
+    for _ in range(20):                       # queued behind it: the main loop is busy for a while
+        tb.seq += 1
+        burst += P.request("STATUS", tb.seq, axis=0)
+    tb.reply_timeout_us = 20_000
+    await tb.send_raw(burst)
+    await Timer(120_000, unit="us")           # several new periods, beyond the old 4-period watchdog
+    tb.replies = type(tb.replies)()           # drop the burst's replies
+    st = await tb.status(0)
+    assert st["faults"] == 0 and st["enabled"], st
+    assert not st["safety"] & 0x01, f"the SoC latch forced the drives safe: {st}"
+    assert await tb.duty(0, "rpwm", 2 * PWM_PERIOD_US) > 0.03, "axis 0 no longer drives"
+    await tb.set(P.GLOBAL_AXIS, "PERIOD_US", PERIOD_US)
+
+
+@cocotb.test()
 async def corrupted_random_and_replayed_frames_change_nothing(dut):
     tb = TB(dut)
     await tb.start()

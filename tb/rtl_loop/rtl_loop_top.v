@@ -22,6 +22,8 @@ module rtl_loop_top #(
     input  wire [1:0] enc_a,
     input  wire [1:0] enc_b,
     input  wire [1:0] enc_z,
+    input  wire [1:0] lim_neg,      // limit switches, 1 = open (tripped); 0 = closed (NC switch to GND)
+    input  wire [1:0] lim_pos,
     input  wire       host_tx,      // RN-XV TX -> FPGA UART RX
     output wire       host_rx,      // FPGA UART TX -> RN-XV RX
     output wire [1:0] rpwm,
@@ -49,7 +51,8 @@ module rtl_loop_top #(
     de0_cv_cable u_cable (
         .GPIO_0(GPIO_0), .GPIO_1(GPIO_1), .ibt2_rpwm_pin(rpwm), .ibt2_lpwm_pin(lpwm),
         .ibt2_r_en_pin(r_en), .ibt2_l_en_pin(l_en), .ibt2_fault_n_pin(fault_n), .enc_a_pin(enc_a),
-        .enc_b_pin(enc_b), .enc_z_pin(enc_z), .uart_rx_pin(host_tx), .uart_tx_pin(host_rx),
+        .enc_b_pin(enc_b), .enc_z_pin(enc_z), .lim_neg_pin(lim_neg), .lim_pos_pin(lim_pos),
+        .uart_rx_pin(host_tx), .uart_tx_pin(host_rx),
         .uart_cts_n_pin(1'b0), .uart_rts_n_pin(rnxv_cts_n)   // RN-XV RTS low: the FPGA may always send
     );
 endmodule

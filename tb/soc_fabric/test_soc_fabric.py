@@ -383,16 +383,128 @@ async def estop_fault_and_watchdog_force_the_bridges_off(dut):
     await tb.dbus.write(regs.SYS_SAFETY, regs.SYS_SAFETY_FAULT1_MSK)
     assert await tb.dbus.read(regs.SYS_SAFETY) & regs.SYS_SAFETY_SAFE_MSK == 0
 
-    # Watchdog: kicked in time it stays quiet; left alone it fires.
-    await tb.dbus.write(regs.SYS_WDOG_LOAD, 200)
-    for _ in range(5):
-        await ClockCycles(dut.clk, 100)
-        await tb.dbus.write(regs.SYS_WDOG_KICK, 0)
+    assert int(dut.wdog_alive.value) == 0, "watchdog alive before it was armed"
+
+
+async def _kick(tb, a: int = regs.SYS_WDOG_KICK_KEY_KICK_A, b: int = regs.SYS_WDOG_KICK_KEY_KICK_B) -> None:
+    await tb.dbus.write(regs.SYS_WDOG_KICK, a)
+    await tb.dbus.write(regs.SYS_WDOG_KICK, b)
+
+
+async def _expired_within(tb, cycles: int) -> int:
+    """Clocks until SYS.SAFETY reads WDOG_EXPIRED (polled), or -1."""
+    t0 = tb.cycle
+    while tb.cycle - t0 < cycles:
+        if await tb.dbus.read(regs.SYS_SAFETY) & regs.SYS_SAFETY_WDOG_EXPIRED_MSK:
+            return tb.cycle - t0
+    return -1
+
+
+@cocotb.test()
+async def the_armed_watchdog_cannot_be_disabled_lengthened_or_fed_by_any_write(dut):
+    """Issue 17: the watchdog was off at reset, firmware could write it back to 0,
+    any write kicked it and firmware could clear its latch.  Now: unarmed it
+    does nothing; armed (ARM_KEY) it stays armed, WDOG_LOAD is frozen, only
+    KICK_A then KICK_B feed it, anything else on WDOG_KICK expires it at once,
+    and expired it holds the drives safe and wdog_alive low until fed again."""
+    tb = TB(dut)
+    await tb.reset()
+    await ClockCycles(dut.clk, 4)      # the e-stop synchroniser leaves its reset level (stop) first
+    await tb.ack_safety()
+    await _pwm_running(tb, regs.AXIS0_BASE)
+    load = 300
+    await tb.dbus.write(regs.SYS_WDOG_LOAD, load)
+    await ClockCycles(dut.clk, 2 * load)                       # not armed: no expiry
+    assert await tb.dbus.read(regs.SYS_SAFETY) & (regs.SYS_SAFETY_WDOG_MSK | regs.SYS_SAFETY_WDOG_ARMED_MSK) == 0
+    await tb.dbus.write(regs.SYS_WDOG_ARM, regs.SYS_WDOG_ARM_KEY_ARM_KEY ^ 1)   # a wrong key arms nothing
+    assert await tb.dbus.read(regs.SYS_SAFETY) & regs.SYS_SAFETY_WDOG_ARMED_MSK == 0
+    await tb.dbus.write(regs.SYS_WDOG_ARM, regs.SYS_WDOG_ARM_KEY_ARM_KEY)
+    assert await tb.dbus.read(regs.SYS_SAFETY) & regs.SYS_SAFETY_WDOG_ARMED_MSK
+    assert int(dut.wdog_alive.value) == 1
+    # armed: the timeout cannot be changed or switched off
+    for v in (0, 10 * load, 1):
+        await tb.dbus.write(regs.SYS_WDOG_LOAD, v)
+        assert await tb.dbus.read(regs.SYS_WDOG_LOAD) == load
+    # fed by the sequence it stays quiet for far longer than its timeout
+    for _ in range(8):
+        await ClockCycles(dut.clk, load // 2)
+        await _kick(tb)
     assert await tb.dbus.read(regs.SYS_SAFETY) & regs.SYS_SAFETY_SAFE_MSK == 0
-    await ClockCycles(dut.clk, 220)
+    assert await _rpwm_toggles(dut, 0)
+    # left alone it expires LOAD clocks after the last kick
+    await _kick(tb)
+    t = await _expired_within(tb, 3 * load)
+    assert load - 10 <= t <= load + 10, f"expired {t} clocks after the kick, timeout {load}"
     s = await tb.dbus.read(regs.SYS_SAFETY)
-    assert s & regs.SYS_SAFETY_WDOG_MSK and s & regs.SYS_SAFETY_SAFE_MSK
-    assert int(dut.rpwm.value) & 1 == 0 and int(dut.lpwm.value) & 1 == 0
+    assert s & regs.SYS_SAFETY_WDOG_MSK and s & regs.SYS_SAFETY_SAFE_MSK and int(dut.wdog_alive.value) == 0
+    assert int(dut.rpwm.value) & 1 == 0 and not await _rpwm_toggles(dut, 0, 300)
+    await tb.dbus.write(regs.SYS_SAFETY, regs.SYS_SAFETY_WDOG_MSK)     # cannot clear while expired
+    assert await tb.dbus.read(regs.SYS_SAFETY) & regs.SYS_SAFETY_WDOG_MSK
+    await _kick(tb)                                                  # fed again: alive, latch clearable
+    assert int(dut.wdog_alive.value) == 1
+    await tb.dbus.write(regs.SYS_SAFETY, regs.SYS_SAFETY_WDOG_MSK)
+    assert await tb.dbus.read(regs.SYS_SAFETY) & regs.SYS_SAFETY_SAFE_MSK == 0
+    # anything but the sequence expires it at once: any other word, B without A, A twice then junk
+    for a, b in ((0, 0), (regs.SYS_WDOG_KICK_KEY_KICK_B, regs.SYS_WDOG_KICK_KEY_KICK_B),
+                 (regs.SYS_WDOG_KICK_KEY_KICK_A, regs.SYS_WDOG_KICK_KEY_KICK_A ^ 0x100)):
+        await _kick(tb, a, b)
+        s = await tb.dbus.read(regs.SYS_SAFETY)
+        assert s & regs.SYS_SAFETY_WDOG_EXPIRED_MSK, f"kick {a:#x}, {b:#x} did not expire it"
+        await _kick(tb)
+        await tb.dbus.write(regs.SYS_SAFETY, regs.SYS_SAFETY_WDOG_MSK)
+    # a byte-lane write of the right key is not the key
+    await tb.dbus.write(regs.SYS_WDOG_KICK, regs.SYS_WDOG_KICK_KEY_KICK_A, be=0xF)
+    await tb.dbus.write(regs.SYS_WDOG_KICK, regs.SYS_WDOG_KICK_KEY_KICK_B, be=0x3)
+    assert await tb.dbus.read(regs.SYS_SAFETY) & regs.SYS_SAFETY_WDOG_EXPIRED_MSK
+    # only reset disarms it
+    await tb.reset()
+    assert await tb.dbus.read(regs.SYS_SAFETY) & regs.SYS_SAFETY_WDOG_ARMED_MSK == 0
+
+
+@cocotb.test()
+async def a_tripped_limit_switch_blocks_only_its_direction(dut):
+    """Limit switches through the debounce: the positive end blocks RPWM, the
+    negative end LPWM, the other side keeps running; LIMIT_EN = 0 ignores them."""
+    tb = TB(dut)
+    await tb.reset()
+    await ClockCycles(dut.clk, 4)
+    await tb.ack_safety()
+    deb = int(os.environ.get("TL_LIMIT_DEBOUNCE", "20"))
+    base = regs.AXIS0_BASE
+    await _pwm_running(tb, base)
+    await tb.dbus.write(base + regs.AXIS_PWM_CTRL_OFS, regs.AXIS_PWM_CTRL_ENABLE_MSK | regs.AXIS_PWM_CTRL_LIMIT_EN_MSK)
+    assert await _rpwm_toggles(dut, 0)
+    dut.lim_pos.value = 0b01
+    await ClockCycles(dut.clk, deb // 2)
+    dut.lim_pos.value = 0b00                     # a bounce shorter than the debounce: nothing
+    await ClockCycles(dut.clk, deb)
+    assert await _rpwm_toggles(dut, 0)
+    dut.lim_pos.value = 0b01
+    await ClockCycles(dut.clk, deb + 4)
+    st = await tb.dbus.read(base + regs.AXIS_PWM_STATUS_OFS)
+    assert st & regs.AXIS_PWM_STATUS_LIM_POS_MSK and not st & regs.AXIS_PWM_STATUS_LIM_NEG_MSK
+    assert not await _rpwm_toggles(dut, 0, 2200), "forward PWM toward an open positive switch"
+    await tb.dbus.write(base + regs.AXIS_PWM_CMD_OFS, -512 & 0x7FF)   # away from it: runs
+    lp = set()
+    for _ in range(2200):
+        await FallingEdge(dut.clk)
+        lp.add(int(dut.lpwm.value) & 1)
+    assert lp == {0, 1}, "reverse PWM blocked by the positive switch"
+    dut.lim_pos.value = 0
+    dut.lim_neg.value = 0b01
+    await ClockCycles(dut.clk, deb + 4)
+    lp = {int(dut.lpwm.value) & 1}
+    for _ in range(2200):
+        await FallingEdge(dut.clk)
+        lp.add(int(dut.lpwm.value) & 1)
+    assert lp == {0}, "reverse PWM toward an open negative switch"
+    await tb.dbus.write(base + regs.AXIS_PWM_CTRL_OFS, regs.AXIS_PWM_CTRL_ENABLE_MSK)    # LIMIT_EN = 0
+    lp = set()
+    for _ in range(2200):
+        await FallingEdge(dut.clk)
+        lp.add(int(dut.lpwm.value) & 1)
+    assert lp == {0, 1}, "LIMIT_EN = 0 still blocks"
+    dut.lim_neg.value = 0
 
 
 @cocotb.test()
@@ -531,5 +643,6 @@ def _images() -> tuple[Path, Path]:
 def test_soc_fabric(sim):
     rom, ram = _images()
     run("soc_fabric", sim, "test_soc_fabric",
-        parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"', "RAM_INIT": f'"{ram}"'},
-        extra_env={"SOC_ROM_HEX": str(rom), "SOC_RAM_HEX": str(ram)})
+        parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"', "RAM_INIT": f'"{ram}"',
+                    "LIMIT_DEBOUNCE_CLKS": 20},
+        extra_env={"SOC_ROM_HEX": str(rom), "SOC_RAM_HEX": str(ram), "TL_LIMIT_DEBOUNCE": "20"})

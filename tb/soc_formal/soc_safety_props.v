@@ -10,6 +10,14 @@
 //  3. `safe` never falls on its own: only in the cycle after a bus write to
 //     SYS.SAFETY (firmware's acknowledgement), and never straight out of
 //     reset - so a reset or power-up never restarts a drive by itself.
+//  4. The hardware watchdog: once armed it stays armed until reset (no bus
+//     write disarms it); alive only while armed; armed but not alive (expired)
+//     holds `safe`; and it comes back alive only in the cycle after a write
+//     to WDOG_KICK or WDOG_ARM.  With the invariants asserted inside
+//     tl_soc_sys (WDOG_LOAD frozen once armed, the count falls by one per
+//     clock unless the kick sequence restarts it, expiry at 1), an armed
+//     watchdog expires within WDOG_LOAD clocks of its last kick, whatever
+//     else firmware writes.
 // the register map's TL_* names (generated; the include guard makes a second include empty)
 `include "regmap.vh"
 `default_nettype none
@@ -24,13 +32,14 @@ module soc_safety_props (
     input wire [1:0]  lpwm_in,
     input wire [1:0]  pwm_in
 );
-    wire        safe, safety_event;
+    wire        safe, safety_event, wdog_armed, wdog_alive;
     wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp;
     wire [1:0]  fault_s, rpwm, lpwm, pwm;
 
     tl_soc_sys dut (
         .clk(clk), .rst(rst), .bus_req(bus_req), .bus_rsp(bus_rsp), .estop(estop), .bridge_fault(bridge_fault),
-        .bridge_fault_s(fault_s), .safe(safe), .safety_event(safety_event)
+        .bridge_fault_s(fault_s), .safe(safe), .safety_event(safety_event),
+        .wdog_armed(wdog_armed), .wdog_alive(wdog_alive)
     );
 
     tl_soc_safety_gate #(.N_AXES(2)) gate (
@@ -43,8 +52,19 @@ module soc_safety_props (
     reg       ack_write_q = 1'b0;   // last edge saw a write to SYS.SAFETY, outside reset
     reg       safe_q      = 1'b1;
     reg       past_valid  = 1'b0;
+    reg       rst_q       = 1'b1;
+    reg       armed_q     = 1'b0;
+    reg       alive_q     = 1'b0;
+    reg       wdog_write_q = 1'b0;  // last edge saw a write to WDOG_KICK or WDOG_ARM
+
+    wire [9:0] idx = bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB];
+    wire       wr  = bus_req[`TL_BUS_REQ_STB_LSB] && bus_req[`TL_BUS_REQ_WE_LSB];
 
     always @(posedge clk) begin
+        rst_q        <= rst;
+        armed_q      <= wdog_armed;
+        alive_q      <= wdog_alive;
+        wdog_write_q <= wr && (idx == `TL_SYS_WDOG_KICK_IDX || idx == `TL_SYS_WDOG_ARM_IDX);
         estop_edges <= !estop ? 2'd0 : (estop_edges == 2'd3 ? 2'd3 : estop_edges + 2'd1);
         ack_write_q <= !rst && bus_req[`TL_BUS_REQ_STB_LSB] && bus_req[`TL_BUS_REQ_WE_LSB]
                        && bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB] == `TL_SYS_SAFETY_IDX;
@@ -59,6 +79,14 @@ module soc_safety_props (
             assert (safe);
         if (past_valid && safe_q && !safe)
             assert (ack_write_q);
+        if (past_valid && !rst && !rst_q && armed_q)
+            assert (wdog_armed);
+        if (wdog_alive)
+            assert (wdog_armed);
+        if (wdog_armed && !wdog_alive)
+            assert (safe);
+        if (past_valid && !rst && !rst_q && wdog_alive && !alive_q)
+            assert (wdog_write_q);
     end
 endmodule
 

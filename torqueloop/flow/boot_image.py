@@ -38,10 +38,11 @@ class BootConfig:
     window_cycles: int = bootproto.ms_to_cycles(bootproto.WINDOW_MS)
     gap_cycles: int = bootproto.ms_to_cycles(bootproto.GAP_MS)
     baud_div: int = 0                      # UART.BAUD_DIV: 0 = 115200 baud
+    wdog_cycles: int = bootproto.ms_to_cycles(bootproto.WDOG_MS)   # the hardware watchdog the ROM arms
 
     @property
     def tag(self) -> str:
-        return f"w{self.window_cycles}_g{self.gap_cycles}_b{self.baud_div}"
+        return f"w{self.window_cycles}_g{self.gap_cycles}_b{self.baud_div}_d{self.wdog_cycles}"
 
 
 @dataclass(frozen=True)
@@ -86,7 +87,8 @@ def build_boot(cfg: BootConfig = BootConfig(), out: Path | None = None) -> BootB
     out = out or REPO / "build" / "firmware" / "boot" / cfg.tag
     out.mkdir(parents=True, exist_ok=True)
     _write_if_changed(out / "boot.ld", linker_script())
-    _write_if_changed(out / "boot_proto.h", bootproto.c_header(cfg.window_cycles, cfg.gap_cycles, cfg.baud_div))
+    _write_if_changed(out / "boot_proto.h", bootproto.c_header(cfg.window_cycles, cfg.gap_cycles, cfg.baud_div,
+                                                                   cfg.wdog_cycles))
     tmp_elf = out / f"boot.{os.getpid()}.elf"
     cmd = [CC, *CFLAGS, f"-I{out}", f"-I{HERE}", f"-I{REPO / 'firmware' / 'include'}", "-T", str(out / "boot.ld"),
            "-Wl,--gc-sections", "-Wl,--no-warn-rwx-segments", "-o", str(tmp_elf), *map(str, SOURCES)]

@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT
 """Build the servo firmware: ELF, raw binary, RAM initialisation file for
-$readmemh (one 32-bit word per line, word 0 = RAM base) and a boot-ROM image
-whose stub jumps to the RAM base (until the bootloader issue lands).
+$readmemh (one 32-bit word per line, word 0 = RAM base) and a boot-ROM stub
+for simulations that preload the RAM: it arms the hardware watchdog as the
+real boot ROM (firmware/boot) does, then jumps to the RAM base.
 
     python -m torqueloop.flow.firmware [--name servo] [-D NAME=VALUE ...] [--out DIR]
 
@@ -52,11 +53,41 @@ class Image:
     bss_bytes: int
 
 
-def boot_stub_words(entry: int) -> list[int]:
-    """lui t0, entry[31:12]; jalr x0, 0(t0): the boot ROM's jump to the image."""
+def _lui(rd: int, value: int) -> int:
+    return (value & 0xFFFFF000) | (rd << 7) | 0x37
+
+
+def _addi(rd: int, rs: int, imm: int) -> int:
+    return ((imm & 0xFFF) << 20) | (rs << 15) | (rd << 7) | 0x13
+
+
+def _sw(rs2: int, base: int, off: int) -> int:
+    return (((off >> 5) & 0x7F) << 25) | (rs2 << 20) | (base << 15) | (2 << 12) | ((off & 0x1F) << 7) | 0x23
+
+
+def _li(rd: int, value: int) -> list[int]:
+    """lui + addi for any 32-bit value (the addi's immediate is sign-extended)."""
+    lo = value & 0xFFF
+    lo = lo - 0x1000 if lo & 0x800 else lo
+    return [_lui(rd, (value - lo) & 0xFFFFFFFF), _addi(rd, rd, lo)]
+
+
+def boot_stub_words(entry: int, wdog_cycles: int | None = None) -> list[int]:
+    """The boot-ROM stub of a RAM-preloaded simulation: arm the SoC's hardware
+    watchdog with the real boot ROM's timeout (SYS.WDOG_LOAD, WDOG_ARM = ARM_KEY,
+    then one kick), then ``lui t0, entry; jalr x0, 0(t0)``."""
+    from torqueloop.spec import bootproto
+
     if entry & 0xFFF:
-        raise ValueError("entry must be 4 KiB aligned for the two-instruction stub")
-    return [(entry & 0xFFFFF000) | (5 << 7) | 0x37, (5 << 15) | 0x67]
+        raise ValueError("entry must be 4 KiB aligned for the stub's jump")
+    t0, t1 = 5, 6
+    wd = bootproto.ms_to_cycles(bootproto.WDOG_MS) if wdog_cycles is None else wdog_cycles
+    words = [_lui(t0, regs.SYS_BASE)]
+    for value, ofs in ((wd, regs.SYS_WDOG_LOAD_OFS), (regs.SYS_WDOG_ARM_KEY_ARM_KEY, regs.SYS_WDOG_ARM_OFS),
+                       (regs.SYS_WDOG_KICK_KEY_KICK_A, regs.SYS_WDOG_KICK_OFS),
+                       (regs.SYS_WDOG_KICK_KEY_KICK_B, regs.SYS_WDOG_KICK_OFS)):
+        words += _li(t1, value) + [_sw(t1, t0, ofs)]
+    return words + [_lui(t0, entry), (t0 << 15) | 0x67]
 
 
 def build(name: str = "servo", defines: dict[str, str] | None = None, out: Path | None = None,

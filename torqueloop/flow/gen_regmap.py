@@ -65,6 +65,8 @@ def verilog_header(rm: RegMap) -> str:
                 L.append(f"`define {q}_MSB {f.msb}")
                 L.append(f"`define {q}_WIDTH {f.width}")
                 L.append(f"`define {q}_RESET {f.width}'h{f.reset:X}")
+                for k, v in f.values:
+                    L.append(f"`define {q}_{k} {f.width}'h{v:X}")
     L += ["", "`endif", ""]
     return "\n".join(L)
 
@@ -100,6 +102,9 @@ def vhdl_package(rm: RegMap) -> str:
                 L.append(f"    constant {q}_LSB : natural := {f.lsb};")
                 L.append(f"    constant {q}_MSB : natural := {f.msb};")
                 L.append(f"    constant {q}_WIDTH : natural := {f.width};")
+                for k, v in f.values:
+                    L.append(f'    constant {q}_{k} : std_logic_vector({f.width - 1} downto 0) := '
+                             f'"{v:0{f.width}b}";')
     L += ["end package tl_regmap_pkg;", ""]
     return "\n".join(L)
 
@@ -139,6 +144,8 @@ def c_header(rm: RegMap) -> str:
                 q = f"TL_{kind}_{r.name}_{f.name}"
                 L.append(f"#define {q}_POS {f.lsb}u")
                 L.append(f"#define {q}_MSK 0x{f.mask:08X}u")
+                for k, v in f.values:
+                    L.append(f"#define {q}_{k} 0x{v:X}u")
     L += ["", "#endif /* TORQUELOOP_REGS_H */", ""]
     return "\n".join(L)
 
@@ -173,7 +180,9 @@ def markdown(rm: RegMap) -> str:
                   "| bits | field | access | reset | description |", "|---|---|---|---|---|"]
             for f in sorted(r.fields, key=lambda f: -f.lsb):
                 vol = " *(volatile)*" if f.volatile else ""
-                L.append(f"| {_bits(f)} | {f.name} | {f.access} | `0x{f.reset:X}` | {f.desc}{vol} |")
+                vals = "; ".join(f"{k} = `0x{v:X}`" for k, v in f.values)
+                L.append(f"| {_bits(f)} | {f.name} | {f.access} | `0x{f.reset:X}` | {f.desc}{vol}"
+                         f"{' (' + vals + ')' if vals else ''} |")
     L.append("")
     return "\n".join(L)
 

@@ -3,8 +3,10 @@
 
 Written from the behaviour the board needs (docs/hardware.md), not from the
 RTL: the H-bridge inputs pass only while the drives are armed; arming is a
-fresh up-move of the arm switch with no stop and no fault; a stop, a fault
-that lasted ``fault_filter_clks`` clocks, or the switch going down disarms.
+fresh up-move of the arm switch with no stop and no fault while the SoC's
+watchdog is alive; a stop, a fault that lasted ``fault_filter_clks`` clocks,
+the watchdog not alive, or the switch going down disarms; a stop, a fault or
+the watchdog expiring (alive falling) latches ``tripped``.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ class InterlockInputs:
     estop: bool = False
     arm_sw: bool = False
     fault: int = 0          # bit per axis
+    alive: bool = True      # the SoC's watchdog armed and not expired
     rpwm: int = 0
     lpwm: int = 0
     r_en: int = 0
@@ -43,6 +46,7 @@ class DriveInterlockModel:
     fault_filter_clks: int = 250
     _fault_run: list[int] = field(default_factory=list)   # consecutive fault clocks per axis
     _switch_was_up: bool = True
+    _was_alive: bool = False
     _out: InterlockOutputs = field(default_factory=InterlockOutputs)
 
     def __post_init__(self) -> None:
@@ -52,6 +56,7 @@ class DriveInterlockModel:
         self._fault_run = [0] * self.axes
         # A switch already up when reset ends must not arm the drives.
         self._switch_was_up = True
+        self._was_alive = False
         self._out = InterlockOutputs()
         return self._out
 
@@ -62,8 +67,10 @@ class DriveInterlockModel:
         prev = self._out
         confirmed = self._fault_confirmed()          # from the clocks before this edge
         armed, tripped, latched = prev.armed, prev.tripped, prev.fault_latched
-        if i.estop or confirmed:
-            armed, tripped, latched = False, True, latched | confirmed
+        stop = bool(i.estop or confirmed)
+        if stop or not i.alive:
+            lost = self._was_alive and not i.alive
+            armed, tripped, latched = False, tripped or stop or lost, latched | confirmed
         elif not i.arm_sw:
             armed = False
         elif not self._switch_was_up:
@@ -73,6 +80,7 @@ class DriveInterlockModel:
             rpwm=i.rpwm & gate, lpwm=i.lpwm & gate, r_en=i.r_en & gate, l_en=i.l_en & gate,
             armed=armed, tripped=tripped, fault_latched=latched)
         self._switch_was_up = i.arm_sw
+        self._was_alive = i.alive
         for a in range(self.axes):
             self._fault_run[a] = self._fault_run[a] + 1 if (i.fault >> a) & 1 else 0
         return self._out

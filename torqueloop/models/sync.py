@@ -24,6 +24,36 @@ class Sync2ffModel:
         return self.pipe[1]
 
 
+class DebounceModel:
+    """WIDTH debounce filters (rtl/common/tl_debounce): a bit of the output
+    takes the input's value once the input has differed from it on
+    ``stable_clks`` consecutive edges."""
+
+    def __init__(self, width: int, stable_clks: int, reset_val: int) -> None:
+        self.width, self.stable = width, stable_clks
+        self.reset_word = (1 << width) - 1 if reset_val & 1 else 0
+        self.reset()
+
+    def reset(self) -> None:
+        self.q = self.reset_word
+        self.cnt = [0] * self.width
+
+    def clock(self, sync_in: int) -> int:
+        """One rising edge with ``sync_in`` at it; returns q after the edge."""
+        q = self.q
+        for i in range(self.width):
+            bit, cur = (sync_in >> i) & 1, (self.q >> i) & 1
+            if bit == cur:
+                self.cnt[i] = 0
+            elif self.cnt[i] == self.stable - 1:
+                q = (q & ~(1 << i)) | (bit << i)
+                self.cnt[i] = 0
+            else:
+                self.cnt[i] += 1
+        self.q = q
+        return q
+
+
 class ResetSyncModel:
     """Asynchronous assert, STAGES-edge synchronous release."""
 

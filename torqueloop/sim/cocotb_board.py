@@ -60,7 +60,7 @@ class CocotbBoard:
         self._rx: list[tuple[int, int]] = []
         self._rx_errors = 0
         self._pin_sigs = (dut.rpwm, dut.lpwm, dut.r_en, dut.l_en)
-        for s, v in ((dut.reset_n, 0), (dut.key0_n, 1), (dut.sw0, 0), (dut.fault_n, 3), (dut.host_tx, 1),
+        for s, v in ((dut.reset_n, 0), (dut.key0_n, 1), (dut.sw0, 0), (dut.fault_n, 3), (dut.lim_neg, 0), (dut.lim_pos, 0), (dut.host_tx, 1),
                      (dut.enc_a, 0), (dut.enc_b, 0), (dut.enc_z, 0)):
             s.value = v
         cocotb.start_soon(self._rx_loop())

@@ -119,6 +119,7 @@ def _load(lib_path: Path) -> ctypes.CDLL:
         "tl_create": ([], vp), "tl_destroy": ([vp], None),
         "tl_set_board": ([vp, ctypes.c_int, ctypes.c_int, ctypes.c_int, ctypes.c_int], None),
         "tl_set_uart_div": ([vp, ctypes.c_uint32], None),
+        "tl_set_limits": ([vp, ctypes.c_int, ctypes.c_int], None),
         "tl_cycle": ([vp], ctypes.c_uint64), "tl_pins": ([vp], ctypes.c_int),
         "tl_push_edges": ([vp, ctypes.c_int, _U64P, _U8P, _U8P, _U8P, _U8P], None),
         "tl_clear_edges": ([vp], None), "tl_edges_pending": ([vp], ctypes.c_int),
@@ -158,6 +159,10 @@ class NativeBoard:
     # board inputs
     def set_board(self, reset_n: int, key0_n: int, sw0: int, fault_n: int = 3) -> None:
         self.lib.tl_set_board(self.h, reset_n, key0_n, sw0, fault_n)
+
+    def set_limits(self, neg: int, pos: int) -> None:
+        """Limit switch pins, bit per axis, 1 = open (tripped)."""
+        self.lib.tl_set_limits(self.h, neg, pos)
 
     def set_uart_div(self, clocks_per_bit: int) -> None:
         self.lib.tl_set_uart_div(self.h, clocks_per_bit)

@@ -74,6 +74,9 @@ class PlantOnPins:
     horizon_cycles: int = 50_000            # 1 ms: longest speculative step
     stats: BridgeStats = field(default_factory=BridgeStats)
     _changes: list[list[int]] = field(default_factory=lambda: [[], []])
+    #: injected encoder faults per axis: None, "frozen" (no edge reaches the pins
+    #: any more) or "reversed" (A and B swapped: the count runs the wrong way)
+    encoder_fault: list = field(default_factory=lambda: [None, None])
     _last_code: int = -1
 
     def _predict(self, now: int) -> int | None:
@@ -105,9 +108,15 @@ class PlantOnPins:
         keep = cyc >= first_cycle
         if not keep.any():
             return
+        fault = self.encoder_fault
+        keep &= np.fromiter((fault[e.axis] != "frozen" for e in edges), bool, len(edges))
+        if not keep.any():
+            return
         sel = [e for e, k in zip(edges, keep) if k]
+        swap = [fault[e.axis] == "reversed" for e in sel]
         self.board.push_edges(cyc[keep].astype(np.uint64), np.array([e.axis for e in sel]),
-                              np.array([e.a for e in sel]), np.array([e.b for e in sel]),
+                              np.array([e.b if s else e.a for e, s in zip(sel, swap)]),
+                              np.array([e.a if s else e.b for e, s in zip(sel, swap)]),
                               np.array([e.z for e in sel]))
         self.stats.edges += len(sel)
 

@@ -71,6 +71,7 @@ class Field:
     reset: int
     desc: str
     volatile: bool = False
+    values: tuple[tuple[str, int], ...] = ()   # named values of the field (keys, codes)
 
     @property
     def width(self) -> int:
@@ -201,6 +202,8 @@ class RegMap:
                 for f in r.fields:
                     out[f"{kind}_{r.name}_{f.name}_POS"] = f.lsb
                     out[f"{kind}_{r.name}_{f.name}_MSK"] = f.mask
+                    for k, v in f.values:
+                        out[f"{kind}_{r.name}_{f.name}_{k}"] = v
         return out
 
 
@@ -212,13 +215,17 @@ def _field(d: dict, where: str) -> Field:
     msb, lsb = d["bits"]
     f = Field(name=d["name"], msb=int(msb), lsb=int(lsb), access=d["access"],
               reset=int(resolve(d.get("reset", 0), f"{where}.{d.get('name', '?')}.reset")), desc=d.get("desc", ""),
-              volatile=bool(d.get("volatile", False)))
+              volatile=bool(d.get("volatile", False)),
+              values=tuple((str(k), int(v)) for k, v in d.get("values", {}).items()))
     if f.access not in ACCESS_TYPES:
         raise RegMapError(f"{where}.{f.name}: access {f.access!r} not in {ACCESS_TYPES}")
     if not 0 <= f.lsb <= f.msb <= 31:
         raise RegMapError(f"{where}.{f.name}: bits [{f.msb}:{f.lsb}] outside a 32-bit word")
     if f.reset >> f.width:
         raise RegMapError(f"{where}.{f.name}: reset {f.reset:#x} does not fit {f.width} bits")
+    for k, v in f.values:
+        if not 0 <= v < (1 << f.width):
+            raise RegMapError(f"{where}.{f.name}: value {k} = {v:#x} does not fit {f.width} bits")
     return f
 
 

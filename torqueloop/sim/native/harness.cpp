@@ -148,6 +148,8 @@ void *tl_create(void)
     h->top->key0_n = 1;
     h->top->sw0 = 0;
     h->top->fault_n = 3;
+    h->top->lim_neg = 0;   // limit switches closed: not at a limit
+    h->top->lim_pos = 0;
     h->top->host_tx = 1;
     h->top->eval();
     return h;
@@ -168,6 +170,14 @@ void tl_set_board(void *p, int reset_n, int key0_n, int sw0, int fault_n)
     h->top->key0_n = key0_n & 1;
     h->top->sw0 = sw0 & 1;
     h->top->fault_n = fault_n & 3;
+}
+
+// Limit switch pins, bit per axis, 1 = open (tripped).
+void tl_set_limits(void *p, int neg, int pos)
+{
+    Harness *h = static_cast<Harness *>(p);
+    h->top->lim_neg = neg & 3;
+    h->top->lim_pos = pos & 3;
 }
 
 void tl_set_uart_div(void *p, uint32_t clocks_per_bit) { static_cast<Harness *>(p)->div = clocks_per_bit; }
