@@ -12,16 +12,21 @@ whatever the firmware does:
   - SW[0] down and up arms the drives: the firmware's PWM reaches the pins
     (axis 1 forward on RPWM, axis 2 reverse on LPWM, enables high) and the
     plant's motor currents and angles follow with the right signs;
-  - KEY[0] (e-stop) drops every bridge input within a few clocks, and they
-    stay low after release although the firmware has cleared its latch,
-    until SW[0] is moved down and up again; the motor currents decay to zero;
+  - KEY[0] (e-stop) drops every bridge input with no clock edge (the
+    e-stop gate), and they stay low after release although the firmware has
+    cleared its latch, until SW[0] is moved down and up again; the motor
+    currents decay to zero;
   - a bridge fault lasting 250 clocks trips the same way, a shorter glitch
     does not;
   - the UART on GPIO_0 pins 13/14 carries bytes both ways (the firmware
     echoes each byte plus one; an independent UART model on the RN-XV side);
   - the encoders on pins 7/8 count in the decoder's direction (A leading B
     counts up), shown by the firmware on LEDR[7:0];
-  - no spare header pin is driven (four-state simulators only).
+  - no spare header pin is driven (four-state simulators only);
+  - the firmware hanging with interrupts off (SW[8]) stops feeding the
+    hardware watchdog careless.c armed: every bridge input drops within its
+    timeout, stays low through a re-arm while it hangs and after it
+    recovers, until SW[0] is moved down and up again.
 A second test runs the real servo firmware (firmware/servo, built by
 torqueloop.flow.firmware with a 1 Mbaud link for simulation speed): it
 answers the link protocol's IDENTIFY through the header UART, refuses
