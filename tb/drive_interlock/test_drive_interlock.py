@@ -109,8 +109,11 @@ async def stays_safe_until_armed_and_follows_model(dut):
             estop = not estop if estop or random.random() < 0.3 else estop
         if random.random() < 0.03:
             fault_bits = random.getrandbits(axes) if random.random() < 0.3 else 0
-        if random.random() < 0.005:
-            alive = not alive
+        # the watchdog expires now and then and is soon fed again
+        if alive and random.random() < 0.002:
+            alive = False
+        elif not alive and random.random() < 0.05:
+            alive = True
         i = InterlockInputs(estop=estop, arm_sw=arm_sw, fault=fault_bits, alive=alive,
                             rpwm=random.getrandbits(axes), lpwm=random.getrandbits(axes),
                             r_en=random.getrandbits(axes), l_en=random.getrandbits(axes))
