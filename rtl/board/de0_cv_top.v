@@ -149,6 +149,7 @@ module de0_cv_top #(
     tl_sync_2ff #(.WIDTH(AXES), .RESET_VAL(1)) u_sync_fault (
         .clk(clk), .rst(rst), .async_in(ibt2_fault_n_pin), .sync_out(fault_n_s));
 
+    wire [AXES-1:0] il_rpwm, il_lpwm, il_r_en, il_l_en;   // the interlock's registered outputs
     tl_drive_interlock #(.AXES(AXES), .FAULT_FILTER_CLKS(250)) u_interlock (
         .clk(clk),
         .rst(rst),
@@ -170,7 +171,6 @@ module de0_cv_top #(
     );
 
     // ---- KEY[0] to the pins without the clock: one AND gate per bridge input ----
-    wire [AXES-1:0] il_rpwm, il_lpwm, il_r_en, il_l_en;   // the interlock's registered outputs
     tl_estop_gate #(.N(4 * AXES)) u_estop_gate (
         .key_n(KEY[0]),
         .drive_in({il_l_en, il_r_en, il_lpwm, il_rpwm}),

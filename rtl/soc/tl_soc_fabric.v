@@ -238,15 +238,15 @@ module tl_soc_fabric #(
         .key_event(key_event)
     );
 
+    /* verilator lint_off UNUSEDSIGNAL */
+    wire wdog_armed;   // readable in SYS.SAFETY; the board needs only wdog_alive
+    /* verilator lint_on UNUSEDSIGNAL */
     tl_soc_sys #(.BUILD_ID(BUILD_ID), .CLK_HZ(CLK_HZ)) u_sys (
         .clk(clk), .rst(rst),
         .bus_req(page_req[P_SYS*RQ +: RQ]), .bus_rsp(page_rsp[P_SYS*RS +: RS]),
         .estop(estop), .bridge_fault(bridge_fault), .bridge_fault_s(bridge_fault_s),
         .safe(safe), .safety_event(safety_event), .wdog_armed(wdog_armed), .wdog_alive(wdog_alive)
     );
-    /* verilator lint_off UNUSEDSIGNAL */
-    wire wdog_armed;   // readable in SYS.SAFETY; the board needs only wdog_alive
-    /* verilator lint_on UNUSEDSIGNAL */
 
     wire [1:0] rpwm_raw, lpwm_raw, pwm_raw;
 
