@@ -13,13 +13,41 @@
 //     (RPWM, LPWM, R_EN, L_EN of either axis) differs from before.
 // Time: cycle n is the n-th rising edge of CLOCK_50; outputs read after it
 // hold from n * 20 ns on.
+//
+// Evaluation (compile-time switches, set by native.py's Variant):
+//   TL_EVAL_PER_CLOCK 2: eval() at the rising and at the falling edge, the
+//     textbook loop and Verilator's public API only;
+//   TL_EVAL_PER_CLOCK 1: one evaluation per clock.  Every flop of the design
+//     is clocked on the rising edge and no logic looks at the clock level, so
+//     the falling-edge evaluation changes nothing; the harness instead clears
+//     the model's record of the last clock level, so the next evaluation sees
+//     a rising edge;
+//   TL_DIRECT_EVAL: call the generated evaluation step itself instead of
+//     eval(), which adds a runtime wrapper per call (a mutex, a message queue
+//     and thread-local look-ups, for threads and DPI this model has none of);
+//   TL_SKIP_ICO: when no input changed since the last evaluation, skip the
+//     input-combinational phase, whose only job is to propagate input changes
+//     (logic that reads both inputs and state is also recomputed after the
+//     edge).
+// The last three use names Verilator generates but does not document
+// (__Vtrigprevexpr___TOP__clk__0, ___eval, ___eval_phase__act/__nba); if a
+// Verilator renames them this file stops compiling and native.py falls back
+// to the public-API build.  The co-simulation test and bench_rtl_loop check
+// that every build gives the same telemetry.
 #include <cstdint>
 #include <cstring>
 #include <deque>
 #include <vector>
 
 #include "Vrtl_loop_top.h"
+#include "Vrtl_loop_top___024root.h"
 #include "verilated.h"
+
+// Verilator's generated evaluation steps (not in its headers): the harness
+// calls them directly, without the per-call runtime wrapper of eval().
+void Vrtl_loop_top___024root___eval(Vrtl_loop_top___024root *vlSelf);
+bool Vrtl_loop_top___024root___eval_phase__act(Vrtl_loop_top___024root *vlSelf);
+bool Vrtl_loop_top___024root___eval_phase__nba(Vrtl_loop_top___024root *vlSelf);
 
 namespace {
 
@@ -48,6 +76,7 @@ struct Harness {
     uint32_t rx_cnt = 0;
     uint8_t rx_byte = 0;
     uint32_t rx_errors = 0;
+    bool inputs_changed = true;   // an input differs from the last evaluation
 };
 
 uint8_t pins_of(const Vrtl_loop_top *t)
@@ -71,15 +100,18 @@ inline void host_line(Harness *h)
         h->tx_bits = 10;
         h->tx_cnt = h->div;
     }
+    uint8_t line = 1;
     if (h->tx_bits) {
-        h->top->host_tx = h->tx_frame & 1u;
+        line = h->tx_frame & 1u;
         if (--h->tx_cnt == 0) {
             h->tx_frame >>= 1;
             h->tx_bits--;
             h->tx_cnt = h->div;
         }
-    } else {
-        h->top->host_tx = 1;
+    }
+    if (line != h->top->host_tx) {
+        h->top->host_tx = line;
+        h->inputs_changed = true;
     }
 }
 
@@ -112,24 +144,61 @@ inline void fpga_line(Harness *h)
     }
 }
 
-inline void tick(Harness *h)
+// Evaluate the model at a rising clock edge, with the inputs set before it.
+inline void posedge(Harness *h)
 {
-    while (!h->edges.empty() && h->edges.front().cycle <= h->cycle) {
-        const EncEdge &e = h->edges.front();
-        uint8_t m = (uint8_t)(1u << e.axis);
-        h->enc_a = (uint8_t)((h->enc_a & ~m) | (e.a << e.axis));
-        h->enc_b = (uint8_t)((h->enc_b & ~m) | (e.b << e.axis));
-        h->enc_z = (uint8_t)((h->enc_z & ~m) | (e.z << e.axis));
-        h->edges.pop_front();
-    }
-    h->top->enc_a = h->enc_a;
-    h->top->enc_b = h->enc_b;
-    h->top->enc_z = h->enc_z;
-    host_line(h);
+    Vrtl_loop_top___024root *r = h->top->rootp;
+#if TL_EVAL_PER_CLOCK == 2
+    (void)r;
     h->top->clk = 1;
     h->top->eval();
     h->top->clk = 0;
     h->top->eval();
+#else
+    // The design has no logic on the falling edge: instead of evaluating it
+    // there, tell the model the clock was low before this evaluation.
+    h->top->clk = 1;
+    r->__Vtrigprevexpr___TOP__clk__0 = 0;
+#if TL_DIRECT_EVAL
+#if TL_SKIP_ICO
+    if (!h->inputs_changed) {
+        // The input-combinational phase only propagates input changes (logic
+        // that also reads state is recomputed after the edge anyway): with the
+        // inputs as at the last evaluation, run the clocked phases alone.
+        do {
+            r->__VactIterCount = 0;
+            while (Vrtl_loop_top___024root___eval_phase__act(r)) {
+            }
+        } while (Vrtl_loop_top___024root___eval_phase__nba(r));
+        return;
+    }
+    h->inputs_changed = false;
+#endif
+    Vrtl_loop_top___024root___eval(r);
+#else
+    h->top->eval();
+#endif
+#endif
+}
+
+inline void tick(Harness *h)
+{
+    if (!h->edges.empty() && h->edges.front().cycle <= h->cycle) {
+        do {
+            const EncEdge &e = h->edges.front();
+            uint8_t m = (uint8_t)(1u << e.axis);
+            h->enc_a = (uint8_t)((h->enc_a & ~m) | (e.a << e.axis));
+            h->enc_b = (uint8_t)((h->enc_b & ~m) | (e.b << e.axis));
+            h->enc_z = (uint8_t)((h->enc_z & ~m) | (e.z << e.axis));
+            h->edges.pop_front();
+        } while (!h->edges.empty() && h->edges.front().cycle <= h->cycle);
+        h->top->enc_a = h->enc_a;
+        h->top->enc_b = h->enc_b;
+        h->top->enc_z = h->enc_z;
+        h->inputs_changed = true;
+    }
+    host_line(h);
+    posedge(h);
     h->cycle++;
     fpga_line(h);
 }
@@ -170,6 +239,7 @@ void tl_set_board(void *p, int reset_n, int key0_n, int sw0, int fault_n)
     h->top->key0_n = key0_n & 1;
     h->top->sw0 = sw0 & 1;
     h->top->fault_n = fault_n & 3;
+    h->inputs_changed = true;
 }
 
 // Limit switch pins, bit per axis, 1 = open (tripped).
