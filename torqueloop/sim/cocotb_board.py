@@ -190,7 +190,7 @@ class CocotbBoard:
 async def rtl_loop_run(dut) -> None:
     """One experiment run (configuration from TL_COSIM_CFG), result pickled to TL_COSIM_OUT."""
     kw = json.loads(os.environ["TL_COSIM_CFG"])
-    kw["pwm_hz"] = tuple(kw["pwm_hz"])
+    kw = {k: tuple(v) if isinstance(v, list) else v for k, v in kw.items()}   # JSON has no tuples
     cfg = experiment.ExperimentConfig(**kw)
     Clock(dut.clk, 20, unit="ns").start(start_high=False)
     board = CocotbBoard(dut)
