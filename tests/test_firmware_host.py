@@ -115,6 +115,75 @@ def test_control_matches_the_reference_across_the_encoder_wrap(host_tests: Path)
         f"{next(i for i, (g, w) in enumerate(zip(got, want)) if g != w)}"
 
 
+def test_division_matches_python(host_tests: Path, seed: int) -> None:
+    """tl_div64_32 (control.c's 64-by-32-bit division from two 32-bit divides)
+    against Python integers: the quotient when it fits 32 bits, UINT32_MAX when not."""
+    rng = random.Random(seed)
+    cases = [(0, 0, 1), (0, 7, 7), (1, 0, 2), (0xFFFF_FFFE, 0xFFFF_FFFF, 0xFFFF_FFFF), (1, 0, 1), (0x7FFF, 0, 0x8000)]
+    for _ in range(20_000):
+        d = rng.choice([rng.randrange(1, 1 << 16), rng.randrange(1, 1 << 32), (1 << 32) - rng.randrange(1, 100),
+                        1 << rng.randrange(32)])
+        hi = rng.choice([0, rng.randrange(d), d - 1, rng.randrange(1 << 32)])
+        cases.append((hi, rng.randrange(1 << 32), d))
+    script = "".join(f"D {h} {lo} {d}\n" for h, lo, d in cases)
+    out = subprocess.run([str(host_tests), "ctl"], input=script, capture_output=True, text=True, check=True)
+    got = [int(x) for x in out.stdout.split()]
+    for (h, lo, d), g in zip(cases, got):
+        n = (h << 32) | lo
+        want = n // d if n // d < (1 << 32) else (1 << 32) - 1
+        assert g == want, f"seed {seed}: {n} / {d}: C {g}, Python {want}"
+
+
+def test_velocity_estimate_matches_the_reference_model(host_tests: Path, seed: int) -> None:
+    """The edge-timestamp velocity (VEL_MODE 1: one or two 32-bit divides, or the
+    64-bit path) and the Euler difference against the reference over the whole
+    range of times: counts per sample up to beyond the fast path, edge spans and
+    standstills from one clock to 2^31 clocks."""
+    rng = random.Random(seed)
+    lines, want = [], []
+    for _ in range(60):
+        mode, period = rng.randrange(2), rng.choice([50, 200, 25_000, rng.randrange(50, 25_001)])
+        p = AxisParams(law=1, kp_q16=0, vel_mode=mode)
+        ax = Axis(p, period)
+        lines.append(f"P 1 0 0 0 0 1023 {mode} {p.vmax_cps} {p.amax_cps2} {period}")
+        pos, t = rng.randrange(-2**31, 2**31), rng.randrange(2**32)
+        ax.reset(pos, t)
+        lines.append(f"R {pos} {t}")
+        edge = t
+        for _ in range(40):
+            span = 1 << rng.randrange(33)
+            t = (t + rng.randrange(1, span + 1)) & 0xFFFF_FFFF
+            if rng.random() < 0.6:
+                pos = ((pos + rng.choice([1, -1]) * rng.randrange(1, 1 << rng.randrange(1, 12)) + 2**31)
+                       % 2**32) - 2**31
+                edge = (t - rng.randrange(0, max(1, span))) & 0xFFFF_FFFF
+            interval = rng.randrange(1, 1 << rng.randrange(1, 33))
+            ax.step(pos, edge, t, False, interval)
+            lines.append(f"S {pos} {edge} {t} 0 {interval}")
+            want.append(ax.vel_q8)
+    # targeted: d counts over dt clocks and the standstill bound after dt3 clocks, dt up to 2^32
+    for _ in range(3000):
+        ax = Axis(AxisParams(law=1, kp_q16=0, vel_mode=1), 50)
+        lines.append(f"P 1 0 0 0 0 1023 1 {ax.p.vmax_cps} {ax.p.amax_cps2} 50")
+        pos, t = rng.randrange(-2**31, 2**31 - 200), rng.randrange(2**32)
+        d = rng.choice([1, rng.randrange(1, 100), rng.randrange(1, 5000)])
+        dt, dt3 = (rng.randrange(1, 1 << rng.randrange(1, 33)) for _ in range(2))
+        ax.reset(pos, t)
+        lines.append(f"R {pos} {t}")
+        for q, e, now in ((pos + 1, t + 5, t + 10), (pos + 1 + d, t + 5 + dt, t + 5 + dt),
+                          (pos + 1 + d, t + 5 + dt, t + 5 + dt + dt3)):
+            e, now = e & 0xFFFF_FFFF, now & 0xFFFF_FFFF
+            ax.step(q, e, now, False, 100)
+            lines.append(f"S {q} {e} {now} 0 100")
+            want.append(ax.vel_q8)
+    out = subprocess.run([str(host_tests), "ctl"], input="\n".join(lines) + "\n", capture_output=True, text=True,
+                         check=True)
+    got = [int(ln.split()[2]) for ln in out.stdout.splitlines()]
+    assert len(got) == len(want)
+    for i, (g, w) in enumerate(zip(got, want)):
+        assert g == w, f"seed {seed}, sample {i}: C velocity {g}, reference {w}"
+
+
 def test_gain_conversion_matches_python(host_tests: Path) -> None:
     rng = random.Random(7)
     cases = [(820_000, 2400, 8400, 17134), (960_000, 2080, 8400, 0)] + [

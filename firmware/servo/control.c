@@ -10,7 +10,6 @@
  *    so the PI does not hunt between two encoder counts. */
 #include "control.h"
 
-#define INT64_MAXV ((int64_t)0x7FFFFFFFFFFFFFFFLL)
 
 static int64_t clamp64(int64_t v, int64_t lo, int64_t hi) { return v < lo ? lo : (v > hi ? hi : v); }
 static int64_t abs64(int64_t v) { return v < 0 ? -v : v; }
@@ -18,11 +17,66 @@ static int64_t abs64(int64_t v) { return v < 0 ? -v : v; }
  * difference is taken modulo 2^32 (a signed subtraction would overflow). */
 static int32_t count_diff(int32_t a, int32_t b) { return (int32_t)((uint32_t)a - (uint32_t)b); }
 
+/* x, hidden from the optimiser: n - (n / d) * d stays a multiply (4 cycles on
+ * this CPU) instead of becoming a second divide (35). */
+static inline uint32_t opaque(uint32_t x)
+{
+    __asm__("" : "+r"(x));
+    return x;
+}
+
+static uint32_t clz32(uint32_t x)
+{
+    uint32_t n = 0;
+    if (x <= 0x0000FFFFu) { n += 16u; x <<= 16; }
+    if (x <= 0x00FFFFFFu) { n += 8u; x <<= 8; }
+    if (x <= 0x0FFFFFFFu) { n += 4u; x <<= 4; }
+    if (x <= 0x3FFFFFFFu) { n += 2u; x <<= 2; }
+    if (x <= 0x7FFFFFFFu) { n += 1u; }
+    return n;
+}
+
+/* Long division in base 2^16 of a normalised divisor (Knuth's algorithm D,
+ * two quotient digits), each digit from one 32-bit divide and at most two
+ * corrections: the per-sample quotients without libgcc's 64-bit division. */
+uint32_t tl_div64_32(uint64_t n, uint32_t d)
+{
+    uint32_t hi = (uint32_t)(n >> 32), lo = (uint32_t)n;
+    if (hi == 0u)
+        return lo / d;
+    if (hi >= d)
+        return UINT32_MAX;
+    uint32_t s = clz32(d);
+    d <<= s;
+    uint32_t dh = d >> 16, dl = d & 0xFFFFu;
+    uint32_t u32 = s ? (hi << s) | (lo >> (32u - s)) : hi;
+    uint32_t u10 = lo << s;
+    uint32_t u1 = u10 >> 16, u0 = u10 & 0xFFFFu;
+    uint32_t q1 = u32 / dh, r = u32 - opaque(q1) * dh;
+    while (q1 > 0xFFFFu || q1 * dl > ((r << 16) | u1)) {
+        q1--;
+        r += dh;
+        if (r > 0xFFFFu)
+            break;
+    }
+    uint32_t u21 = (u32 << 16) + u1 - q1 * d;   /* modulo 2^32: the true remainder fits */
+    uint32_t q0 = u21 / dh;
+    r = u21 - opaque(q0) * dh;
+    while (q0 > 0xFFFFu || q0 * dl > ((r << 16) | u0)) {
+        q0--;
+        r += dh;
+        if (r > 0xFFFFu)
+            break;
+    }
+    return (q1 << 16) | q0;
+}
+
 void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now)
 {
     c->sp_q16 = (int64_t)pos * 65536;
     c->target_q16 = c->sp_q16;
     c->prof_v_q16 = 0;
+    c->prof_m = 0;
     c->moving = false;
     c->integ_q32 = 0;
     c->saturated = false;
@@ -36,19 +90,46 @@ void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now)
     c->cmd = 0;
 }
 
+/* floor(x * num / den) for x >= 0 whose quotient by den fits 32 bits, den and
+ * (den - 1) * num below 2^32: the conversions per period, without libgcc's 64-bit
+ * division, so that a SET_PARAM holds interrupts off for a few hundred cycles. */
+static int64_t muldiv(uint64_t x, uint32_t num, uint32_t den)
+{
+    uint32_t q = tl_div64_32(x, den);
+    uint32_t r = (uint32_t)(x - (uint64_t)q * den);
+    return (int64_t)q * num + (int64_t)(r * num / den);
+}
+
+static uint32_t bitlen64(uint64_t x)
+{
+    uint32_t hi = (uint32_t)(x >> 32);
+    return hi ? 64u - clz32(hi) : (x ? 32u - clz32((uint32_t)x) : 0u);
+}
+
 void tl_ctl_derive(tl_ctl_t *c, const tl_ctl_params_t *p, uint32_t period_us, uint32_t clk_hz)
 {
-    /* x * 2^16 / 1e6 = x * 1024 / 15625 and x * 2^16 / 1e12 = x * 16 / 5^12: exact, no overflow. */
+    /* x * 2^16 / 1e6 = x * 1024 / 15625 and x * 2^16 / 1e12 = x * 16 / 5^12: exact. */
     c->period_us = period_us;
     c->clk_hz = clk_hz;
-    c->ki_dt_q32 = (int64_t)p->ki_q16 * (int64_t)period_us * 1024 / 15625;
-    c->e_max_for_ki = c->ki_dt_q32 > 0 ? INT64_MAXV / 4 / c->ki_dt_q32 : INT64_MAXV;
-    c->vmax_q16 = (int64_t)p->vmax_cps * (int64_t)period_us * 1024 / 15625;
-    if (c->vmax_q16 < 1)
-        c->vmax_q16 = 1;
-    c->amax_q16 = (int64_t)p->amax_cps2 * (int64_t)period_us * (int64_t)period_us * 16 / 244140625;
-    if (c->amax_q16 < 1)
-        c->amax_q16 = 1;
+    c->ki_dt_q32 = p->ki_q16 > 0 ? muldiv((uint64_t)p->ki_q16 * period_us, 1024u, 15625u) : 0;
+    /* |e| up to 2^(61 - bitlen(ki_dt)) keeps ki_dt * e below 2^61; beyond it the
+     * increment is 2^12 PWM steps or more, so the integrator saturates either way. */
+    uint32_t kb = bitlen64((uint64_t)c->ki_dt_q32);
+    c->ki_e_max = kb <= 30u ? 0x7FFFFFFF : (int32_t)(1u << (61u - kb));
+    c->lim_q32 = (int64_t)p->cmd_limit << 32;
+    /* u > limit  <=>  u_q16 + 2^15 >= (limit + 1) 2^16;  u < -limit  <=>  u_q16 + 2^15 < -limit 2^16 */
+    c->sat_hi_q16 = ((int64_t)p->cmd_limit + 1) * 65536;
+    c->sat_lo_q16 = -(int64_t)p->cmd_limit * 65536;
+    c->vmax_q16 = (int32_t)clamp64(muldiv((uint64_t)(p->vmax_cps > 0 ? p->vmax_cps : 0) * period_us, 1024u, 15625u),
+                                   1, TL_CTL_VMAX_Q16_MAX);
+    c->amax_q16 = (int32_t)clamp64(muldiv((uint64_t)(p->amax_cps2 > 0 ? p->amax_cps2 : 0) * period_us * period_us,
+                                          16u, 244140625u), 1, TL_CTL_AMAX_Q16_MAX);
+    c->m_vmax = (uint32_t)c->vmax_q16 / (uint32_t)c->amax_q16;
+    uint32_t v = (uint32_t)(c->prof_v_q16 < 0 ? -c->prof_v_q16 : c->prof_v_q16);
+    c->prof_m = v / (uint32_t)c->amax_q16;
+    c->euler_k = (int32_t)((256000000u + period_us / 2u) / period_us);
+    c->clk_q8 = (uint64_t)clk_hz * 256u;
+    c->fast_counts = clk_hz ? UINT32_MAX / clk_hz : 0u;
 }
 
 void tl_ctl_move(tl_ctl_t *c, int32_t target, bool trapezoid)
@@ -59,6 +140,7 @@ void tl_ctl_move(tl_ctl_t *c, int32_t target, bool trapezoid)
     } else {
         c->sp_q16 = c->target_q16;   /* the paper's step experiment */
         c->prof_v_q16 = 0;
+        c->prof_m = 0;
         c->moving = false;
     }
 }
@@ -68,79 +150,117 @@ void tl_ctl_hold(tl_ctl_t *c, int32_t pos)
     c->sp_q16 = (int64_t)pos * 65536;
     c->target_q16 = c->sp_q16;
     c->prof_v_q16 = 0;
+    c->prof_m = 0;
     c->moving = false;
 }
 
-static uint64_t isqrt64(uint64_t x)
-{
-    uint64_t r = 0, bit = (uint64_t)1 << 62;
-    while (bit > x)
-        bit >>= 2;
-    while (bit) {
-        if (x >= r + bit) {
-            x -= r + bit;
-            r = (r >> 1) + bit;
-        } else {
-            r >>= 1;
-        }
-        bit >>= 2;
-    }
-    return r;
-}
-
-/* Fastest speed v (counts per sample, q16) from which braking by a per sample
- * stops exactly after d: v + (v - a) + ... + (v - n a) = d with n = floor(v / a),
- * i.e. n = largest with a n (n + 1) / 2 <= d, v = (d + a n (n + 1) / 2) / (n + 1). */
-static int64_t v_allow(uint64_t d, int64_t a)
-{
-    uint64_t ua = (uint64_t)a;
-    uint64_t n = (isqrt64(8u * (d / ua) + 1u) - 1u) / 2u;
-    while (n > 0u && ua * n * (n + 1u) / 2u > d)
-        n--;
-    while (ua * (n + 1u) * (n + 2u) / 2u <= d)
-        n++;
-    return (int64_t)((d + ua * n * (n + 1u) / 2u) / (n + 1u));
-}
-
 /* Trapezoidal profile: each sample the speed toward the target rises by at
- * most a, never exceeds vmax, and never exceeds the speed from which braking
- * by a per sample lands exactly on the target; the last step lands on it. */
-static void profile(tl_ctl_t *c)
+ * most a, never exceeds vmax, and never exceeds v_allow(d), the speed from
+ * which braking by a per sample lands exactly on the target after d; the last
+ * step lands on it (never beyond).
+ *
+ * Braking by a from v covers D(v) = v + (v - a) + ... + (v - m a) = (m + 1)(2v - a m) / 2
+ * with m = floor(v / a), increasing in v, and D(v_allow(d)) <= d < D(v_allow(d) + 1), so
+ * "v <= v_allow(d)" is "D(v) <= d": no square root.  m is carried from sample to sample
+ * (v + a has m + 1, vmax has m_vmax, v_allow has n), so no sample divides by a.  When
+ * braking, v_allow(d) = floor((d + a n (n + 1) / 2) / (n + 1)) with n = m(v_allow);
+ * because D(v - a) = D(v) - v, the last speed v was on or inside the braking curve and
+ * v_allow lies in [v - a, v + a): n is m(v + a) or one or two less, and the quotient is
+ * v - a plus a remainder over n + 1 that fits 32 bits.  If a new target or a lower vmax
+ * leaves the axis unable to stop in time (D(v - a) > d), it brakes by a and comes back. */
+static uint64_t stop_distance(uint32_t v, uint32_t m, uint32_t a)
 {
-    if (!c->moving)
-        return;
+    return ((uint64_t)(m + 1u) * (uint64_t)(2u * v - a * m)) >> 1;   /* 2v - a m = v + (v mod a) < 2^31 */
+}
+
+/* Out of line: the profile's registers are saved only while a move runs. */
+__attribute__((noinline)) static void profile(tl_ctl_t *c)
+{
     int64_t d = c->target_q16 - c->sp_q16;
-    int64_t dir = d >= 0 ? 1 : -1;
+    int32_t dir = d >= 0 ? 1 : -1;
     uint64_t ad = (uint64_t)abs64(d);
-    int64_t vs = c->prof_v_q16 * dir + c->amax_q16;   /* speed toward the target, accelerated */
-    int64_t va = v_allow(ad, c->amax_q16);
-    if (vs > c->vmax_q16)
+    uint32_t a = (uint32_t)c->amax_q16;
+    int32_t v = c->prof_v_q16 * dir;                 /* speed toward the target, accelerated: */
+    int32_t vs = v + (int32_t)a;
+    uint32_t m = v >= 0 ? c->prof_m + 1u : (c->prof_m ? c->prof_m - 1u : 0u);
+    if (vs > c->vmax_q16) {
         vs = c->vmax_q16;
-    if (vs > va)
-        vs = va;
+        m = c->m_vmax;
+    }
+    if (vs > 0 && stop_distance((uint32_t)vs, m, a) > ad) {
+        uint32_t lo = v > (int32_t)a ? (uint32_t)v - a : 0u;   /* v_allow(d) >= lo when on the curve */
+        uint32_t mlo = v > (int32_t)a ? c->prof_m - 1u : 0u;
+        if (lo > 0u && stop_distance(lo, mlo, a) > ad) {
+            vs = (int32_t)lo;                        /* cannot stop in time: brake by a */
+            m = mlo;
+        } else {
+            uint32_t n = m;
+            uint64_t tn = ((uint64_t)(a * n) * (n + 1u)) >> 1;
+            while (n > 0u && tn > ad) {
+                n--;
+                tn -= (uint64_t)a * (n + 1u);
+            }
+            uint64_t x = ad + tn - (uint64_t)(n + 1u) * lo;   /* >= 0: v_allow >= lo */
+            vs = (int32_t)(lo + ((x >> 32) ? tl_div64_32(x, n + 1u) : (uint32_t)x / (n + 1u)));
+            m = n;
+        }
+    }
     if (vs >= 0 && (uint64_t)vs >= ad) {
         c->sp_q16 = c->target_q16;
         c->prof_v_q16 = 0;
+        c->prof_m = 0;
         c->moving = false;
         return;
     }
     c->prof_v_q16 = vs * dir;
+    c->prof_m = m;
     c->sp_q16 += c->prof_v_q16;
 }
 
-static void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t edge_time, uint32_t now,
-                     uint32_t interval)
+/* |d| counts over dt cycles in q8 counts/s, saturated to INT32_MAX: floor(|d| clk 2^8 / dt),
+ * exact, with one or two 32-bit divides for up to fast_counts counts:
+ *   dt <= 2^24: |d| clk / dt, then 8 more bits from the remainder (< dt, so r 2^8 fits);
+ *   dt >  2^24: |d| clk / (dt >> 8) overestimates by less than one (the speed is below
+ *               2^16 q8), so at most two steps down make it exact. */
+static inline int32_t edge_speed(const tl_ctl_t *c, uint32_t ad, uint32_t dt)
+{
+    if (ad > TL_CTL_DCOUNT_MAX)
+        ad = TL_CTL_DCOUNT_MAX;
+    uint32_t q;
+    if (ad <= c->fast_counts) {
+        uint32_t n = ad * c->clk_hz;                     /* < 2^32 */
+        if (dt <= 0x00FFFFFFu) {
+            uint32_t q1 = n / dt;
+            uint32_t r1 = n - opaque(q1) * dt;           /* < dt <= 2^24 */
+            if (q1 > 0x7FFFFFu)
+                return 0x7FFFFFFF;
+            q = (q1 << 8) + ((r1 << 8) / dt);
+        } else {
+            q = n / (dt >> 8);
+            uint64_t num = (uint64_t)n << 8;
+            while ((uint64_t)q * dt > num)
+                q--;
+        }
+    } else {
+        q = tl_div64_32((uint64_t)ad * c->clk_q8, dt);
+    }
+    return q > 0x7FFFFFFFu ? 0x7FFFFFFF : (int32_t)q;
+}
+
+static inline void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos,
+                                              uint32_t edge_time, uint32_t now, uint32_t interval)
 {
     if (p->vel_mode == 0u) {
-        /* The paper: Euler difference over T_s, low-pass weight 1/2 (torqueloop/sim/model_loop.py). */
-        int64_t euler = (int64_t)count_diff(pos, c->pos_prev) * 256 * 1000000 / (int64_t)c->period_us;
+        /* The paper: Euler difference over T_s, low-pass weight 1/2 (torqueloop/sim/model_loop.py),
+         * with 2^8 1e6 / T_s rounded once per configuration (exact for T_s dividing 2^14 5^6 us). */
+        int64_t euler = (int64_t)count_diff(pos, c->pos_prev) * c->euler_k;
         c->vel_q8 = (int32_t)clamp64((euler + c->vel_q8) / 2, -0x7FFFFFFF, 0x7FFFFFFF);
     } else if (pos != c->pos_ref) {
         /* Moving since the last sample: distance over the time between the decoder's edge
          * timestamps - the exact average speed, free of sampling quantisation.  First counts
          * after a silent sample: the old reference edge dates from before the standstill,
          * so take one count over the decoder's last edge interval instead. */
-        int64_t d = count_diff(pos, c->pos_ref);
+        int32_t d = count_diff(pos, c->pos_ref);
         uint32_t dt = edge_time - c->t_ref;
         if (!c->moved_last) {
             d = d > 0 ? 1 : -1;
@@ -148,8 +268,8 @@ static void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_
         }
         if (dt == 0u)
             dt = 1u;
-        int64_t v = d * 256 * (int64_t)c->clk_hz / (int64_t)dt;
-        c->vel_q8 = (int32_t)clamp64(v, -0x7FFFFFFF, 0x7FFFFFFF);
+        int32_t v = edge_speed(c, d < 0 ? 0u - (uint32_t)d : (uint32_t)d, dt);
+        c->vel_q8 = d < 0 ? -v : v;
         c->pos_ref = pos;
         c->t_ref = edge_time;
         c->moved_last = true;
@@ -160,51 +280,98 @@ static void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_
         uint32_t dt = now - c->t_ref;
         if (dt > 0x7FFFFFFFu)
             c->t_ref = now - 0x7FFFFFFFu;   /* keep the reference inside the 32-bit window */
-        int64_t bound = dt ? 256 * (int64_t)c->clk_hz / (int64_t)dt : 0x7FFFFFFF;
-        int64_t v = c->vel_q8;
-        if (abs64(v) > bound)
-            c->vel_q8 = (int32_t)(v > 0 ? bound : -bound);
+        int32_t bound = dt ? edge_speed(c, 1u, dt) : 0x7FFFFFFF;
+        if (c->vel_q8 > bound)
+            c->vel_q8 = bound;
+        else if (c->vel_q8 < -bound)
+            c->vel_q8 = -bound;
     }
     c->pos_prev = pos;
+}
+
+/* The 64-bit product of two 32-bit numbers: mul and mulh on RV32IM (GCC 12
+ * otherwise sign-extends an operand it cannot see is 32-bit and multiplies
+ * 64 by 32 bits, four multiplies). */
+static inline int64_t mul32(int32_t a, int32_t b)
+{
+#if defined(__riscv) && __riscv_xlen == 32
+    int32_t hi;
+    __asm__("mulh %0, %1, %2" : "=r"(hi) : "r"(a), "r"(b));
+    return (int64_t)(((uint64_t)(uint32_t)hi << 32) | ((uint32_t)a * (uint32_t)b));
+#else
+    return (int64_t)a * (int64_t)b;
+#endif
+}
+
+/* v saturated to +-0x7FFFFFFF (the law's error range). */
+static int32_t sat31(int64_t v) { return v > 0x7FFFFFFF ? 0x7FFFFFFF : (v < -0x7FFFFFFF ? -0x7FFFFFFF : (int32_t)v); }
+
+static inline int32_t law(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, bool run_law)
+{
+    /* The error, q16 counts: 32 bits within +-32767 counts (the usual case), saturated beyond. */
+    int64_t e_q16 = c->sp_q16 - (int64_t)pos * 65536;
+    int32_t e = (int32_t)e_q16;
+    bool fits = (int32_t)(e_q16 >> 32) == (e >> 31) && e != INT32_MIN;
+    if (fits) {
+        c->err_counts = (e >> 16) + ((e >> 15) & 1);   /* (e + 2^15) >> 16 without overflow */
+    } else {
+        c->err_counts = sat31((e_q16 + 32768) >> 16);
+        e = e_q16 < 0 ? -0x7FFFFFFF : 0x7FFFFFFF;
+    }
+    if (!run_law || p->law == TL_LAW_OFF) {
+        c->integ_q32 = 0;
+        c->cmd = 0;
+        return 0;
+    }
+    if (fits && (e < 0 ? -e : e) <= p->deadband_q16)
+        e = 0;
+    int32_t limit = p->cmd_limit;
+    /* eq. (20): P;  eq. (21): + Kd * (0 - v);  eq. (22): + Ki * integral(e) */
+    int64_t u_q16 = mul32(p->kp_q16, e) >> 16;
+    if (p->law >= TL_LAW_PD)
+        u_q16 -= mul32(p->kd_q16, c->vel_q8) >> 8;
+    if (p->law == TL_LAW_PID) {
+        int32_t e_sign = e > 0 ? 1 : (e < 0 ? -1 : 0);
+        if (!(c->sat_sign != 0 && e_sign == c->sat_sign)) {
+            int32_t ek = e > c->ki_e_max ? c->ki_e_max : (e < -c->ki_e_max ? -c->ki_e_max : e);
+            int64_t i = c->integ_q32 + ((c->ki_dt_q32 * ek) >> 16);
+            /* clamp to +-cmd_limit q32, whose low word is zero: compare high words */
+            int32_t ih = (int32_t)(i >> 32);
+            if (ih >= limit && (ih > limit || (uint32_t)i != 0u))
+                i = c->lim_q32;
+            else if (ih < -limit)
+                i = -c->lim_q32;
+            c->integ_q32 = i;
+        }
+        u_q16 += c->integ_q32 >> 16;
+    } else {
+        c->integ_q32 = 0;
+    }
+    /* round to the nearest PWM step and saturate (eq. 19/25): u = (u_q16 + 2^15) >> 16 */
+    int64_t t = u_q16 + 32768;
+    int32_t cmd;
+    if (t >= c->sat_hi_q16) {
+        cmd = limit;
+        c->sat_sign = 1;
+    } else if (t < c->sat_lo_q16) {
+        cmd = -limit;
+        c->sat_sign = -1;
+    } else {
+        cmd = (int32_t)(t >> 16);
+        c->sat_sign = 0;
+    }
+    c->saturated = c->sat_sign != 0;
+    c->cmd = cmd;
+    return cmd;
 }
 
 int32_t tl_ctl_step(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t edge_time, uint32_t now,
                     uint32_t interval, bool run_law)
 {
     velocity(c, p, pos, edge_time, now, interval);
-    profile(c);
-    int64_t e_q16 = c->sp_q16 - (int64_t)pos * 65536;
-    c->err_counts = (int32_t)clamp64((e_q16 + 32768) >> 16, -0x7FFFFFFF, 0x7FFFFFFF);
-    if (!run_law || p->law == TL_LAW_OFF) {
-        c->integ_q32 = 0;
-        c->cmd = 0;
-        return 0;
-    }
-    if (abs64(e_q16) <= p->deadband_q16)
-        e_q16 = 0;
-    e_q16 = clamp64(e_q16, -0x7FFFFFFF, 0x7FFFFFFF);
-    int64_t limit = p->cmd_limit;
-    /* eq. (20): P;  eq. (21): + Kd * (0 - v);  eq. (22): + Ki * integral(e) */
-    int64_t u_q16 = ((int64_t)p->kp_q16 * e_q16) >> 16;
-    if (p->law >= TL_LAW_PD)
-        u_q16 -= ((int64_t)p->kd_q16 * c->vel_q8) >> 8;
-    if (p->law == TL_LAW_PID) {
-        int32_t e_sign = e_q16 > 0 ? 1 : (e_q16 < 0 ? -1 : 0);
-        if (!(c->saturated && e_sign == c->sat_sign)) {
-            int64_t e = clamp64(e_q16, -c->e_max_for_ki, c->e_max_for_ki);
-            c->integ_q32 = clamp64(c->integ_q32 + ((c->ki_dt_q32 * e) >> 16),
-                                   -(limit << 32), limit << 32);
-        }
-        u_q16 += c->integ_q32 >> 16;
-    } else {
-        c->integ_q32 = 0;
-    }
-    int64_t u = (u_q16 + 32768) >> 16;   /* round to the nearest PWM step */
-    /* eq. (19)/(25): saturate to the command range */
-    c->saturated = u > limit || u < -limit;
-    c->sat_sign = u > limit ? 1 : (u < -limit ? -1 : 0);
-    c->cmd = (int32_t)clamp64(u, -limit, limit);
-    return c->cmd;
+    if (c->moving)
+        profile(c);
+    return law(c, p, pos, run_law);
 }
 
 /* 2 pi ~ 710 / 113 (error 2.7e-7); the Python side (torqueloop/spec/protocol.py) uses the same. */

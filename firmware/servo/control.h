@@ -10,6 +10,10 @@
  *          positions: counts)
  *   *_q8   8 fractional bits (velocity: counts/s)
  *   *_q32  32 fractional bits, int64 (integrator: PWM steps)
+ * The per-sample arithmetic divides only 32-bit numbers (docs/firmware.md,
+ * "Control"): a 64-bit numerator over a 32-bit divisor goes through
+ * tl_div64_32, two hardware divides; the only quotients computed per sample
+ * are the edge-timestamp velocity and the braking speed of the profile.
  * PWM command: signed steps -1023..1023, the delta_PW of eq. (1); the PWM
  * block adds the dead zone PW0 and scales to PW_max in hardware. */
 #ifndef TL_CONTROL_H
@@ -23,6 +27,13 @@
 #define TL_LAW_PD 2u
 #define TL_LAW_PID 3u
 #define TL_PWM_FULL 1023
+/* Profile limits per sample (q16 counts): speeds and their sum with one
+ * acceleration step stay below 2^31.  16384 counts per sample is 655 000
+ * counts/s at the longest period, far beyond the encoders. */
+#define TL_CTL_VMAX_Q16_MAX 0x40000000
+#define TL_CTL_AMAX_Q16_MAX 0x20000000
+/* Counts between two velocity samples beyond this are clamped to it (not physical). */
+#define TL_CTL_DCOUNT_MAX 0x0FFFFFFF
 
 typedef struct {
     uint32_t law;
@@ -36,15 +47,22 @@ typedef struct {
 typedef struct {
     /* derived from params and the period (tl_ctl_derive) */
     int64_t ki_dt_q32;          /* PWM steps q32 added per count of error per sample */
-    int64_t e_max_for_ki;       /* |e_q16| clamp that keeps ki_dt_q32 * e in int64 */
-    int64_t vmax_q16;           /* counts per sample, q16 */
-    int64_t amax_q16;           /* counts per sample^2, q16 (>= 1) */
+    int32_t ki_e_max;           /* |e_q16| clamp that keeps ki_dt_q32 * e below 2^61 */
+    int64_t lim_q32;            /* cmd_limit, q32: the integrator's clamp */
+    int64_t sat_hi_q16, sat_lo_q16;   /* the command's saturation, as bounds of u_q16 + 2^15 */
+    int32_t vmax_q16;           /* counts per sample, q16, 1 .. TL_CTL_VMAX_Q16_MAX */
+    int32_t amax_q16;           /* counts per sample^2, q16, 1 .. TL_CTL_AMAX_Q16_MAX */
+    uint32_t m_vmax;            /* floor(vmax_q16 / amax_q16) */
+    int32_t euler_k;            /* Euler difference: q8 counts/s per count per sample, round(2^8 1e6 / T_us) */
+    uint64_t clk_q8;            /* decoder clock, q8: counts/s q8 = counts * clk_q8 / cycles */
+    uint32_t fast_counts;       /* counts whose product with clk_hz fits 32 bits */
     uint32_t period_us;
     uint32_t clk_hz;
     /* state */
     int64_t sp_q16;             /* set-point, counts q16 */
     int64_t target_q16;
-    int64_t prof_v_q16;         /* profile speed, counts per sample q16 (signed) */
+    int32_t prof_v_q16;         /* profile speed, counts per sample q16 (signed) */
+    uint32_t prof_m;            /* floor(|prof_v_q16| / amax_q16), kept so no sample divides by amax */
     bool moving;
     int64_t integ_q32;
     bool saturated;             /* last output hit cmd_limit */
@@ -66,6 +84,10 @@ int32_t tl_ctl_step(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t
                     uint32_t interval, bool run_law);
 void tl_ctl_move(tl_ctl_t *c, int32_t target, bool trapezoid);
 void tl_ctl_hold(tl_ctl_t *c, int32_t pos);
+
+/* floor(n / d) for a 64-bit n and 32-bit d > 0 whose quotient fits 32 bits
+ * (n >> 32 < d), with 32-bit hardware divides only; UINT32_MAX if it does not fit. */
+uint32_t tl_div64_32(uint64_t n, uint32_t d);
 
 /* Physical <-> raw gains: micro N m per rad (per rad/s, per rad s) <-> q16 PWM steps per
  * count (per count/s, per count*s), through tau_max (PWM 1023) and counts per screw turn. */

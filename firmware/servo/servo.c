@@ -32,25 +32,11 @@ _Static_assert(TL_HAL_LIM_NEG == TLP_LIMIT_NEG && TL_HAL_LIM_POS == TLP_LIMIT_PO
 enum { HOME_SEEK, HOME_SETTLE, HOME_CREEP, HOME_BACKOFF, HOME_INDEX };
 #define HOME_SLOW_SHIFT 4
 
-/* id -> index into TLP_PARAM_INFO, built once: the control iteration reads
- * parameters by id, and a search per read cost ~1000 cycles per iteration. */
-static int8_t param_idx[256];
-static bool param_idx_ready;
+int tl_param_index(uint8_t id) { return TLP_PARAM_INDEX[id]; }
 
-int tl_param_index(uint8_t id)
-{
-    if (!param_idx_ready) {
-        for (int i = 0; i < 256; i++)
-            param_idx[i] = IDX_NONE;
-        for (int i = 0; i < (int)TLP_PARAM_COUNT; i++)
-            param_idx[TLP_PARAM_INFO[i].id] = (int8_t)i;
-        param_idx_ready = true;
-    }
-    return param_idx[id];
-}
-
-static int32_t pv(const tl_axis_t *a, uint8_t id) { return a->p[tl_param_index(id)]; }
-static int32_t gv(const tl_servo_t *s, uint8_t id) { return s->g[tl_param_index(id)]; }
+/* TLP_PARAM_INDEX is a constant table: with a constant id each read is one load. */
+static inline int32_t pv(const tl_axis_t *a, uint8_t id) { return a->p[TLP_PARAM_INDEX[id]]; }
+static inline int32_t gv(const tl_servo_t *s, uint8_t id) { return s->g[TLP_PARAM_INDEX[id]]; }
 
 static void sync_axis(tl_servo_t *s, uint32_t i)
 {
@@ -164,6 +150,7 @@ void tl_servo_init(tl_servo_t *s)
     s->ticks = 0;
     s->link_idle_ticks = 0;
     s->telem_every = 0;
+    s->telem_phase = 0;
     s->telem_seq = 0;
     s->telem_due = false;
     s->bootloader_req = false;
@@ -378,8 +365,11 @@ void tl_servo_tick(tl_servo_t *s)
         a->cmd = a->enabled ? cmd : 0;
         hal_pwm_cmd(i, a->cmd);
     }
-    if (s->telem_every && (s->ticks % s->telem_every) == 0u)
+    /* telem_phase = ticks mod telem_every, counted: no divide in the interrupt */
+    if (s->telem_every && ++s->telem_phase >= s->telem_every) {
+        s->telem_phase = 0;
         s->telem_due = true;
+    }
 }
 
 /* ---- link ---------------------------------------------------------------- */
@@ -785,7 +775,10 @@ static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
         break;
     }
     case TLP_CMD_TELEMETRY:
+        hal_irq_off();
         s->telem_every = tl_get_u16(&q[TLP_TELEMETRY_REQ_EVERY]);
+        s->telem_phase = s->telem_every ? (uint16_t)(s->ticks % s->telem_every) : 0u;
+        hal_irq_on();
         break;
     case TLP_CMD_CLEAR_FAULT:
         st = do_clear(s, q[TLP_CLEAR_FAULT_REQ_MASK]);

@@ -53,6 +53,7 @@ typedef struct {
     uint32_t ticks;               /* control periods since start */
     uint32_t link_idle_ticks;     /* control periods since the last valid command */
     uint16_t telem_every;
+    uint16_t telem_phase;         /* ticks mod telem_every */
     uint16_t telem_seq;
     bool telem_due;
     bool bootloader_req;

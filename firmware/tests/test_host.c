@@ -769,6 +769,11 @@ static int ctl_main(void)
             printf("%" PRId32 " %" PRId64 " %" PRId32 " %" PRId64 "\n", cmd, c.sp_q16, c.vel_q8, c.integ_q32);
             break;
         }
+        case 'D': {   /* tl_div64_32(hi:lo, d) */
+            uint64_t n = ((uint64_t)(uint32_t)a[0] << 32) | (uint32_t)a[1];
+            printf("%" PRIu32 "\n", tl_div64_32(n, (uint32_t)a[2]));
+            break;
+        }
         case 'G':
             printf("%" PRId32 " %" PRId32 "\n", tl_gain_raw_from_phys((int32_t)a[0], (int32_t)a[1], (int32_t)a[2]),
                    tl_gain_phys_from_raw((int32_t)a[3], (int32_t)a[1], (int32_t)a[2]));

@@ -89,6 +89,15 @@ def c_header() -> str:
         mn = f"(-{-p.min}L)" if p.min < 0 else f"{p.min}L"
         L.append(f"    {{{p.id}u, {1 if p.scope == 'global' else 0}u, {p.tighten}, {mn}, {p.max}L, "
                  f"{{{', '.join(_c_int(d) for d in _axis_defaults(p))}}}}},  /* {p.name} */")
+    L.append("};")
+    # id -> index: a constant table, so a read with a constant id folds to one load
+    index = [-1] * 256
+    for k, p in enumerate(P.PARAMS.values()):
+        index[p.id] = k
+    L += ["/* parameter id -> index into TLP_PARAM_INFO, -1: no such parameter */",
+          "static const int8_t TLP_PARAM_INDEX[256] = {"]
+    for row in range(0, 256, 16):
+        L.append("    " + ", ".join(f"{v:2d}" for v in index[row:row + 16]) + ",")
     L += ["};", "", "#endif", ""]
     return "\n".join(L)
 

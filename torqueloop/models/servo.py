@@ -17,7 +17,6 @@ import math
 from dataclasses import dataclass
 from torqueloop.spec.system import SYSTEM
 
-INT64_MAX = (1 << 63) - 1
 
 
 def clamp(v: int, limit: int) -> int:
@@ -33,6 +32,31 @@ def count_diff(a: int, b: int) -> int:
     """Counts between two decoder readings, modulo 2^32 like the 32-bit counter
     (control.c's count_diff: the counter wraps, the difference does not jump)."""
     return ((a - b + (1 << 31)) & 0xFFFF_FFFF) - (1 << 31)
+
+
+#: control.c's limits: profile speed and acceleration per sample (q16 counts),
+#: counts between two velocity samples
+VMAX_Q16_MAX = 0x4000_0000
+AMAX_Q16_MAX = 0x2000_0000
+DCOUNT_MAX = 0x0FFF_FFFF
+
+
+def stop_distance(v: int, a: int) -> int:
+    """Distance covered braking by ``a`` per sample from speed ``v`` until the
+    speed would reach zero: v + (v - a) + ... + (v - m a), m = floor(v / a)."""
+    m = v // a
+    return (m + 1) * (2 * v - a * m) // 2
+
+
+def v_allow(d: int, a: int) -> int:
+    """Fastest speed from which braking by ``a`` per sample stops exactly after
+    ``d``: v + (v - a) + ... + (v - n a) = d, n = largest with a n (n + 1) / 2 <= d."""
+    n = (math.isqrt(8 * (d // a) + 1) - 1) // 2
+    while n > 0 and a * n * (n + 1) // 2 > d:
+        n -= 1
+    while a * (n + 1) * (n + 2) // 2 <= d:
+        n += 1
+    return (d + a * n * (n + 1) // 2) // (n + 1)
 
 
 def _tdiv(a: int, b: int) -> int:
@@ -79,9 +103,14 @@ class Axis:
     def derive(self) -> None:
         p, T = self.p, self.period_us
         self.ki_dt_q32 = _tdiv(p.ki_q16 * T * 1024, 15625)
-        self.e_max = _tdiv(INT64_MAX // 4, self.ki_dt_q32) if self.ki_dt_q32 > 0 else INT64_MAX
-        self.vmax_q16 = max(1, _tdiv(p.vmax_cps * T * 1024, 15625))
-        self.amax_q16 = max(1, _tdiv(p.amax_cps2 * T * T * 16, 244140625))
+        # |e| up to 2^(61 - bitlen(ki_dt)) keeps ki_dt * e below 2^61 (control.c); beyond
+        # it the integrator saturates either way
+        kb = self.ki_dt_q32.bit_length()
+        self.e_max = 0x7FFF_FFFF if kb <= 30 else 1 << (61 - kb)
+        self.vmax_q16 = min(VMAX_Q16_MAX, max(1, _tdiv(p.vmax_cps * T * 1024, 15625)))
+        self.amax_q16 = min(AMAX_Q16_MAX, max(1, _tdiv(p.amax_cps2 * T * T * 16, 244140625)))
+        # the Euler difference's scale, rounded once: q8 counts/s per count per sample
+        self.euler_k = (256_000_000 + T // 2) // T
 
     def reset(self, pos: int, now: int) -> None:
         self.sp_q16 = self.target_q16 = pos << 16
@@ -100,20 +129,25 @@ class Axis:
             self.sp_q16, self.prof_v_q16, self.moving = self.target_q16, 0, False
 
     def _profile(self) -> None:
+        """Each sample the speed toward the target rises by at most a, never
+        exceeds vmax nor v_allow(remaining distance); the last step lands on
+        the target.  After a new target (or a lower vmax) that leaves the axis
+        unable to stop in time - stop_distance(v - a) beyond the target - it
+        brakes by a and comes back instead of dropping its speed at once."""
         if not self.moving:
             return
         d = self.target_q16 - self.sp_q16
         direction = 1 if d >= 0 else -1
         ad, a = abs(d), self.amax_q16
-        # fastest speed from which braking by a per sample stops exactly after ad
-        n = (math.isqrt(8 * (ad // a) + 1) - 1) // 2
-        while n > 0 and a * n * (n + 1) // 2 > ad:
-            n -= 1
-        while a * (n + 1) * (n + 2) // 2 <= ad:
-            n += 1
-        v_allow = (ad + a * n * (n + 1) // 2) // (n + 1)
-        vs = min(self.prof_v_q16 * direction + a, self.vmax_q16, v_allow)
-        if vs >= ad:
+        v = self.prof_v_q16 * direction
+        vs = min(v + a, self.vmax_q16)
+        if vs > 0 and stop_distance(vs, a) > ad:
+            lo = v - a if v > a else 0
+            if lo > 0 and stop_distance(lo, a) > ad:
+                vs = lo
+            else:
+                vs = v_allow(ad, a)
+        if 0 <= vs and vs >= ad:
             self.sp_q16, self.prof_v_q16, self.moving = self.target_q16, 0, False
             return
         self.prof_v_q16 = vs * direction
@@ -122,7 +156,7 @@ class Axis:
     def _velocity(self, pos: int, edge_time: int, now: int, interval: int) -> None:
         clamp32 = (1 << 31) - 1
         if self.p.vel_mode == 0:
-            euler = _tdiv(count_diff(pos, self.pos_prev) * 256 * 1_000_000, self.period_us)
+            euler = count_diff(pos, self.pos_prev) * self.euler_k
             self.vel_q8 = clamp(_tdiv(euler + self.vel_q8, 2), clamp32)
         elif pos != self.pos_ref:
             # edge-to-edge average while moving; one count over the last edge interval
@@ -130,6 +164,7 @@ class Axis:
             d, dt = count_diff(pos, self.pos_ref), (edge_time - self.t_ref) & 0xFFFFFFFF
             if not self.moved_last:
                 d, dt = (1 if d > 0 else -1), interval
+            d = max(-DCOUNT_MAX, min(DCOUNT_MAX, d))
             self.vel_q8 = clamp(_tdiv(d * 256 * self.clk_hz, dt or 1), clamp32)
             self.pos_ref, self.t_ref, self.moved_last = pos, edge_time, True
         else:
