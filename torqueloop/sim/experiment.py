@@ -386,3 +386,86 @@ def run_fast(cfg: ExperimentConfig) -> ModelRun:
                     {"arm": "fast path", "plant": cfg.plant, "law": cfg.law, "board": list(board),
                      "pwm_hz": list(cfg.pwm_hz_actual), "implementation": "torqueloop.models.servo (firmware law)"},
                     tuple(a.resistance_ohm for a in params.axes))
+
+
+@dataclass
+class FastLoopRun:
+    """The control loop at a short period on the board image (docs/firmware.md, Timing)."""
+    period_us: int
+    seconds: float
+    baud: float
+    telemetry_every: int
+    loop_cycles_max: int           # worst control iteration (mcycle, the firmware's STATUS)
+    jitter_cycles_max: int         # worst lateness of the timer interrupt
+    frames: int                    # telemetry frames received over the run
+    frames_expected: int
+    frames_missing: int            # gaps in the frames' time stamps
+    tx_dropped: int                # frames the firmware could not queue (COUNTERS)
+    faults: list[int]
+    moved_counts: list[int]        # encoder counts travelled per axis during the run
+    cycles: int = 0
+    cpu_s: float = 0.0
+
+
+def run_fast_loop(period_us: int = 50, seconds: float = 0.5, law: str = "PID", baud_div: int = 53,
+                  telemetry_every: int = 20, travel_counts: int = SYSTEM.counts_per_turn, move_mode: int = 0,
+                  board_factory=None) -> FastLoopRun:
+    """Both axes under ``law`` (Table 1 gains) at ``period_us`` (50 us: 20 kHz)
+    on the board image with the plant on the pins, edge-timestamp velocity
+    (VEL_MODE 1), moves of ``travel_counts`` (a screw turn) in opposite
+    directions started at once (``move_mode`` 0: steps, 1: trapezoids); the link at ``50 MHz / (baud_div + 1)`` (53: 925 926 baud, what the
+    RN-XV's 921 600 setting gives) with one telemetry frame every
+    ``telemetry_every`` periods.  After ``seconds`` of motion STATUS gives
+    the worst iteration and interrupt lateness, COUNTERS the dropped frames."""
+    from torqueloop.sim.native import NativeBoard
+    img = firmware_image()
+    board = (board_factory or NativeBoard.create)(img.rom_hex, img.ram_hex)
+    plant = TwoAxisPlant(ExperimentConfig().plant_params(), seed=0)
+    bridge = PlantOnPins(plant, board)
+    c0 = time.process_time()
+    try:
+        board.set_board(0, 1, 0)
+        bridge.run_to(20)
+        board.set_board(1, 1, 0)
+        bridge.run_to(40_000)
+        board.set_board(1, 1, 1)
+        link = Link(board.uart_send, board.uart_recv, lambda n: bridge.run_to(board.cycle + n),
+                    lambda: board.cycle)
+        link.call("IDENTIFY")
+        link.set_param(tp.GLOBAL_AXIS, "BAUD_DIV", baud_div)
+        board.set_uart_div(baud_div + 1)
+        link.set_param(tp.GLOBAL_AXIS, "PERIOD_US", period_us)
+        # the run sends nothing that feeds the link watchdog for `seconds`
+        link.set_param(tp.GLOBAL_AXIS, "LINK_TIMEOUT_MS", max(500, round(seconds * 2000)))
+        for ax in (0, 1):
+            g = TABLE1[law][ax]
+            link.set_param(ax, "LAW", LAWS[law])
+            link.set_param(ax, "KP_UNM_RAD", round(g.kp * 1e6))
+            link.set_param(ax, "KD_UNMS_RAD", round(g.kd * 1e6))
+            link.set_param(ax, "KI_UNM_RADS", round(g.ki * 1e6))
+            link.set_param(ax, "VEL_MODE", 1)
+        link.call("ENABLE", mask=3, enable=1)
+        start = [link.call("STATUS", axis=ax)["position"] for ax in (0, 1)]
+        for ax in (0, 1):
+            link.call("MOVE", axis=ax, mode=move_mode | tp.MOVE_UNHOMED, target=start[ax] + travel_counts * (1 - 2 * ax))
+        link.call("TELEMETRY", every=telemetry_every)
+        n0 = len(link.telemetry)
+        t_end = board.cycle + round(seconds * CLK_HZ)
+        while board.cycle < t_end:
+            link.advance(min(20_000, t_end - board.cycle))
+            link.poll()
+        frames = link.telemetry[n0:]
+        link.call("TELEMETRY", every=0)
+        st = [link.call("STATUS", axis=ax) for ax in (0, 1)]
+        cnt = link.call("COUNTERS")
+        cycles = board.cycle
+    finally:
+        if hasattr(board, "close"):
+            board.close()
+    step_us = period_us * telemetry_every
+    gaps = sum(max(0, (b.time_us - a.time_us) // step_us - 1) for a, b in zip(frames, frames[1:]))
+    return FastLoopRun(period_us, seconds, CLK_HZ / (baud_div + 1), telemetry_every, st[0]["loop_cycles_max"],
+                       st[0]["jitter_cycles_max"], len(frames), int(seconds * 1e6 / step_us), gaps,
+                       cnt["tx_dropped"], [s["faults"] for s in st],
+                       [abs(s["position"] - p0) for s, p0 in zip(st, start)], cycles,
+                       time.process_time() - c0)
