@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import random
+import re
 import subprocess
 from pathlib import Path
 
@@ -233,3 +234,44 @@ def test_rv32_image_builds_and_fits() -> None:
                       (regs.SYS_WDOG_KICK, regs.SYS_WDOG_KICK_KEY_KICK_B)], stores
 
 
+
+
+def _call_graph(elf: Path) -> tuple[dict[str, set[str]], set[str]]:
+    """Direct calls between the functions of an RV32 ELF (jal targets), and the
+    functions that make an indirect call (jalr through a register other than ra's return)."""
+    dis = subprocess.run(["riscv64-unknown-elf-objdump", "-d", str(elf)], capture_output=True, text=True,
+                         check=True).stdout
+    calls: dict[str, set[str]] = {}
+    indirect: set[str] = set()
+    fn = None
+    for line in dis.splitlines():
+        m = re.match(r"[0-9a-f]+ <([^>]+)>:", line)
+        if m:
+            fn = m.group(1)
+            calls[fn] = set()
+            continue
+        m = re.search(r"\tjal\t(?:ra,)?[0-9a-f]+ <([^+>]+)>", line)
+        if m and fn:
+            calls[fn].add(m.group(1))
+        elif fn and re.search(r"\tjalr\t(?!zero,0\(ra\))", line) and "\tret" not in line:
+            indirect.add(fn)
+    return calls, indirect
+
+
+def test_control_interrupt_never_divides_64_bit() -> None:
+    """No libgcc 64-bit division is reachable from the interrupt handler (the
+    control iteration): issue 16's formats divide 32-bit numbers only."""
+    from torqueloop.flow.firmware import build
+    img = build("servo_check", out=REPO / "build" / "firmware" / "check")
+    calls, indirect = _call_graph(img.elf)
+    seen, todo = set(), ["trap_handler"]
+    assert "trap_handler" in calls, "the interrupt handler is not in the image under that name"
+    while todo:
+        f = todo.pop()
+        if f not in seen:
+            seen.add(f)
+            todo += calls.get(f, ())
+    div64 = {"__divdi3", "__udivdi3", "__moddi3", "__umoddi3"}
+    assert not seen & div64, f"the interrupt reaches {seen & div64} via {sorted(seen)}"
+    assert not seen & indirect, f"indirect calls from the interrupt path are not followed: {seen & indirect}"
+    assert "tl_servo_tick" in seen and any(f.startswith("tl_div64_32") for f in seen), sorted(seen)

@@ -106,30 +106,42 @@ static uint32_t bitlen64(uint64_t x)
     return hi ? 64u - clz32(hi) : (x ? 32u - clz32((uint32_t)x) : 0u);
 }
 
-void tl_ctl_derive(tl_ctl_t *c, const tl_ctl_params_t *p, uint32_t period_us, uint32_t clk_hz)
+void tl_ctl_derived(tl_ctl_derived_t *d, const tl_ctl_params_t *p, uint32_t period_us, uint32_t clk_hz)
 {
     /* x * 2^16 / 1e6 = x * 1024 / 15625 and x * 2^16 / 1e12 = x * 16 / 5^12: exact. */
-    c->period_us = period_us;
-    c->clk_hz = clk_hz;
-    c->ki_dt_q32 = p->ki_q16 > 0 ? muldiv((uint64_t)p->ki_q16 * period_us, 1024u, 15625u) : 0;
+    d->period_us = period_us;
+    d->clk_hz = clk_hz;
+    d->ki_dt_q32 = p->ki_q16 > 0 ? muldiv((uint64_t)p->ki_q16 * period_us, 1024u, 15625u) : 0;
     /* |e| up to 2^(61 - bitlen(ki_dt)) keeps ki_dt * e below 2^61; beyond it the
      * increment is 2^12 PWM steps or more, so the integrator saturates either way. */
-    uint32_t kb = bitlen64((uint64_t)c->ki_dt_q32);
-    c->ki_e_max = kb <= 30u ? 0x7FFFFFFF : (int32_t)(1u << (61u - kb));
-    c->lim_q32 = (int64_t)p->cmd_limit << 32;
+    uint32_t kb = bitlen64((uint64_t)d->ki_dt_q32);
+    d->ki_e_max = kb <= 30u ? 0x7FFFFFFF : (int32_t)(1u << (61u - kb));
+    d->lim_q32 = (int64_t)p->cmd_limit << 32;
     /* u > limit  <=>  u_q16 + 2^15 >= (limit + 1) 2^16;  u < -limit  <=>  u_q16 + 2^15 < -limit 2^16 */
-    c->sat_hi_q16 = ((int64_t)p->cmd_limit + 1) * 65536;
-    c->sat_lo_q16 = -(int64_t)p->cmd_limit * 65536;
-    c->vmax_q16 = (int32_t)clamp64(muldiv((uint64_t)(p->vmax_cps > 0 ? p->vmax_cps : 0) * period_us, 1024u, 15625u),
+    d->sat_hi_q16 = ((int64_t)p->cmd_limit + 1) * 65536;
+    d->sat_lo_q16 = -(int64_t)p->cmd_limit * 65536;
+    d->vmax_q16 = (int32_t)clamp64(muldiv((uint64_t)(p->vmax_cps > 0 ? p->vmax_cps : 0) * period_us, 1024u, 15625u),
                                    1, TL_CTL_VMAX_Q16_MAX);
-    c->amax_q16 = (int32_t)clamp64(muldiv((uint64_t)(p->amax_cps2 > 0 ? p->amax_cps2 : 0) * period_us * period_us,
+    d->amax_q16 = (int32_t)clamp64(muldiv((uint64_t)(p->amax_cps2 > 0 ? p->amax_cps2 : 0) * period_us * period_us,
                                           16u, 244140625u), 1, TL_CTL_AMAX_Q16_MAX);
-    c->m_vmax = (uint32_t)c->vmax_q16 / (uint32_t)c->amax_q16;
+    d->m_vmax = (uint32_t)d->vmax_q16 / (uint32_t)d->amax_q16;
+    d->euler_k = (int32_t)((256000000u + period_us / 2u) / period_us);
+    d->clk_q8 = (uint64_t)clk_hz * 256u;
+    d->fast_counts = clk_hz ? UINT32_MAX / clk_hz : 0u;
+}
+
+void tl_ctl_apply(tl_ctl_t *c, const tl_ctl_derived_t *d)
+{
+    c->d = *d;
     uint32_t v = (uint32_t)(c->prof_v_q16 < 0 ? -c->prof_v_q16 : c->prof_v_q16);
-    c->prof_m = v / (uint32_t)c->amax_q16;
-    c->euler_k = (int32_t)((256000000u + period_us / 2u) / period_us);
-    c->clk_q8 = (uint64_t)clk_hz * 256u;
-    c->fast_counts = clk_hz ? UINT32_MAX / clk_hz : 0u;
+    c->prof_m = v / (uint32_t)d->amax_q16;   /* the profile's m, for a changed amax */
+}
+
+void tl_ctl_derive(tl_ctl_t *c, const tl_ctl_params_t *p, uint32_t period_us, uint32_t clk_hz)
+{
+    tl_ctl_derived_t d;
+    tl_ctl_derived(&d, p, period_us, clk_hz);
+    tl_ctl_apply(c, &d);
 }
 
 void tl_ctl_move(tl_ctl_t *c, int32_t target, bool trapezoid)
@@ -179,13 +191,13 @@ __attribute__((noinline)) static void profile(tl_ctl_t *c)
     int64_t d = c->target_q16 - c->sp_q16;
     int32_t dir = d >= 0 ? 1 : -1;
     uint64_t ad = (uint64_t)abs64(d);
-    uint32_t a = (uint32_t)c->amax_q16;
+    uint32_t a = (uint32_t)c->d.amax_q16;
     int32_t v = c->prof_v_q16 * dir;                 /* speed toward the target, accelerated: */
     int32_t vs = v + (int32_t)a;
     uint32_t m = v >= 0 ? c->prof_m + 1u : (c->prof_m ? c->prof_m - 1u : 0u);
-    if (vs > c->vmax_q16) {
-        vs = c->vmax_q16;
-        m = c->m_vmax;
+    if (vs > c->d.vmax_q16) {
+        vs = c->d.vmax_q16;
+        m = c->d.m_vmax;
     }
     if (vs > 0 && stop_distance((uint32_t)vs, m, a) > ad) {
         uint32_t lo = v > (int32_t)a ? (uint32_t)v - a : 0u;   /* v_allow(d) >= lo when on the curve */
@@ -227,8 +239,8 @@ static inline int32_t edge_speed(const tl_ctl_t *c, uint32_t ad, uint32_t dt)
     if (ad > TL_CTL_DCOUNT_MAX)
         ad = TL_CTL_DCOUNT_MAX;
     uint32_t q;
-    if (ad <= c->fast_counts) {
-        uint32_t n = ad * c->clk_hz;                     /* < 2^32 */
+    if (ad <= c->d.fast_counts) {
+        uint32_t n = ad * c->d.clk_hz;                     /* < 2^32 */
         if (dt <= 0x00FFFFFFu) {
             uint32_t q1 = n / dt;
             uint32_t r1 = n - opaque(q1) * dt;           /* < dt <= 2^24 */
@@ -242,7 +254,7 @@ static inline int32_t edge_speed(const tl_ctl_t *c, uint32_t ad, uint32_t dt)
                 q--;
         }
     } else {
-        q = tl_div64_32((uint64_t)ad * c->clk_q8, dt);
+        q = tl_div64_32((uint64_t)ad * c->d.clk_q8, dt);
     }
     return q > 0x7FFFFFFFu ? 0x7FFFFFFF : (int32_t)q;
 }
@@ -253,7 +265,7 @@ static inline void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos,
     if (p->vel_mode == 0u) {
         /* The paper: Euler difference over T_s, low-pass weight 1/2 (torqueloop/sim/model_loop.py),
          * with 2^8 1e6 / T_s rounded once per configuration (exact for T_s dividing 2^14 5^6 us). */
-        int64_t euler = (int64_t)count_diff(pos, c->pos_prev) * c->euler_k;
+        int64_t euler = (int64_t)count_diff(pos, c->pos_prev) * c->d.euler_k;
         c->vel_q8 = (int32_t)clamp64((euler + c->vel_q8) / 2, -0x7FFFFFFF, 0x7FFFFFFF);
     } else if (pos != c->pos_ref) {
         /* Moving since the last sample: distance over the time between the decoder's edge
@@ -333,14 +345,14 @@ static inline int32_t law(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, bo
     if (p->law == TL_LAW_PID) {
         int32_t e_sign = e > 0 ? 1 : (e < 0 ? -1 : 0);
         if (!(c->sat_sign != 0 && e_sign == c->sat_sign)) {
-            int32_t ek = e > c->ki_e_max ? c->ki_e_max : (e < -c->ki_e_max ? -c->ki_e_max : e);
-            int64_t i = c->integ_q32 + ((c->ki_dt_q32 * ek) >> 16);
+            int32_t ek = e > c->d.ki_e_max ? c->d.ki_e_max : (e < -c->d.ki_e_max ? -c->d.ki_e_max : e);
+            int64_t i = c->integ_q32 + ((c->d.ki_dt_q32 * ek) >> 16);
             /* clamp to +-cmd_limit q32, whose low word is zero: compare high words */
             int32_t ih = (int32_t)(i >> 32);
             if (ih >= limit && (ih > limit || (uint32_t)i != 0u))
-                i = c->lim_q32;
+                i = c->d.lim_q32;
             else if (ih < -limit)
-                i = -c->lim_q32;
+                i = -c->d.lim_q32;
             c->integ_q32 = i;
         }
         u_q16 += c->integ_q32 >> 16;
@@ -350,10 +362,10 @@ static inline int32_t law(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, bo
     /* round to the nearest PWM step and saturate (eq. 19/25): u = (u_q16 + 2^15) >> 16 */
     int64_t t = u_q16 + 32768;
     int32_t cmd;
-    if (t >= c->sat_hi_q16) {
+    if (t >= c->d.sat_hi_q16) {
         cmd = limit;
         c->sat_sign = 1;
-    } else if (t < c->sat_lo_q16) {
+    } else if (t < c->d.sat_lo_q16) {
         cmd = -limit;
         c->sat_sign = -1;
     } else {

@@ -44,8 +44,10 @@ typedef struct {
     int32_t vmax_cps, amax_cps2;
 } tl_ctl_params_t;
 
+/* What the parameters and the period give (tl_ctl_derived): computed apart
+ * from the state, so a caller can compute it with interrupts on and hand it
+ * to the control iteration in one short copy (tl_ctl_apply). */
 typedef struct {
-    /* derived from params and the period (tl_ctl_derive) */
     int64_t ki_dt_q32;          /* PWM steps q32 added per count of error per sample */
     int32_t ki_e_max;           /* |e_q16| clamp that keeps ki_dt_q32 * e below 2^61 */
     int64_t lim_q32;            /* cmd_limit, q32: the integrator's clamp */
@@ -58,6 +60,10 @@ typedef struct {
     uint32_t fast_counts;       /* counts whose product with clk_hz fits 32 bits */
     uint32_t period_us;
     uint32_t clk_hz;
+} tl_ctl_derived_t;
+
+typedef struct {
+    tl_ctl_derived_t d;
     /* state */
     int64_t sp_q16;             /* set-point, counts q16 */
     int64_t target_q16;
@@ -77,7 +83,10 @@ typedef struct {
 } tl_ctl_t;
 
 void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now);
+/* tl_ctl_derived (slow: divisions) then tl_ctl_apply (a copy and one divide). */
 void tl_ctl_derive(tl_ctl_t *c, const tl_ctl_params_t *p, uint32_t period_us, uint32_t clk_hz);
+void tl_ctl_derived(tl_ctl_derived_t *d, const tl_ctl_params_t *p, uint32_t period_us, uint32_t clk_hz);
+void tl_ctl_apply(tl_ctl_t *c, const tl_ctl_derived_t *d);
 /* One sample: update velocity from (pos, edge_time, now) in decoder clock
  * cycles, advance the profile, run the law.  Returns the PWM command. */
 int32_t tl_ctl_step(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t edge_time, uint32_t now,

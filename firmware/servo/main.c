@@ -66,21 +66,27 @@ __attribute__((interrupt("machine"))) static void trap_handler(void)
     uint32_t cause;
     __asm__ volatile("csrr %0, mcause" : "=r"(cause));
     if (cause == 0x80000007u) {   /* machine timer */
-        uint32_t late = TL_TIMER_MTIME_LO - (uint32_t)deadline;
+        uint64_t due = deadline;
+        uint32_t late = TL_TIMER_MTIME_LO - (uint32_t)due;
         uint32_t c0 = mcycle();
         tl_servo_tick(&servo);
-        uint32_t period = tl_servo_period_cycles(&servo);
+        uint32_t period = servo.period_cycles;
         kick_watchdog();
-        deadline += period;
-        uint64_t now = mtime();
-        if (deadline <= now) {
+        uint64_t next = due + period;
+        /* The low word of mtime decides whether the next deadline has passed
+         * (an overrun is far shorter than 2^31 clocks); the full time only then. */
+        if ((int32_t)(TL_TIMER_MTIME_LO - (uint32_t)next) >= 0) {
             /* Overrun: the iteration (plus the link interrupts) took more than a period.
              * Re-anchor instead of firing back-to-back to catch up, which would starve
              * the main loop and the link for good. */
             overruns++;
-            deadline = now + period;
+            next = mtime() + period;
         }
-        arm_timer(deadline);
+        deadline = next;
+        if ((uint32_t)(next >> 32) == (uint32_t)(due >> 32))
+            TL_TIMER_MTIMECMP_LO = (uint32_t)next;   /* raising the low word alone never fires early */
+        else
+            arm_timer(next);
         uint32_t used = mcycle() - c0;
         if (used > servo.loop_cycles_max)
             servo.loop_cycles_max = used;

@@ -38,35 +38,70 @@ int tl_param_index(uint8_t id) { return TLP_PARAM_INDEX[id]; }
 static inline int32_t pv(const tl_axis_t *a, uint8_t id) { return a->p[TLP_PARAM_INDEX[id]]; }
 static inline int32_t gv(const tl_servo_t *s, uint8_t id) { return s->g[TLP_PARAM_INDEX[id]]; }
 
-static void sync_axis(tl_servo_t *s, uint32_t i)
+/* What an axis's parameters and the period give the control iteration. */
+typedef struct {
+    tl_ctl_params_t ctl;
+    tl_ctl_derived_t d;
+    uint32_t stall_limit_ticks;   /* STALL_MS in periods, rounded up */
+    int64_t home_step_q16;        /* HOME_VEL per period, q16 counts */
+} axis_cfg_t;
+
+#define PI(id) TLP_PARAM_INDEX[id]
+
+/* From a parameter array; divides, so it runs with interrupts on. */
+static void axis_cfg(const int32_t *p, uint32_t period_us, uint32_t clk_hz, axis_cfg_t *out)
+{
+    out->ctl.law = (uint32_t)p[PI(TLP_P_LAW)];
+    out->ctl.kp_q16 = p[PI(TLP_P_KP_Q16)];
+    out->ctl.kd_q16 = p[PI(TLP_P_KD_Q16)];
+    out->ctl.ki_q16 = p[PI(TLP_P_KI_Q16)];
+    out->ctl.deadband_q16 = p[PI(TLP_P_DEADBAND_Q16)];
+    out->ctl.cmd_limit = p[PI(TLP_P_CMD_LIMIT)];
+    out->ctl.vel_mode = (uint32_t)p[PI(TLP_P_VEL_MODE)];
+    out->ctl.vmax_cps = p[PI(TLP_P_VMAX)];
+    out->ctl.amax_cps2 = p[PI(TLP_P_AMAX)];
+    tl_ctl_derived(&out->d, &out->ctl, period_us, clk_hz);
+    out->stall_limit_ticks = ((uint32_t)p[PI(TLP_P_STALL_MS)] * 1000u + period_us - 1u) / period_us;
+    /* counts/s * us * 2^16 / 1e6 = x * 1024 / 15625, as control.c's vmax */
+    out->home_step_q16 = (int64_t)p[PI(TLP_P_HOME_VEL)] * (int64_t)period_us * 1024 / 15625;
+    if (out->home_step_q16 < (1 << HOME_SLOW_SHIFT))
+        out->home_step_q16 = 1 << HOME_SLOW_SHIFT;
+}
+
+/* Hand a configuration to the control iteration: copies, for a critical section. */
+static void commit_axis(tl_servo_t *s, uint32_t i, const axis_cfg_t *cfg)
 {
     tl_axis_t *a = &s->ax[i];
-    a->ctl.law = (uint32_t)pv(a, TLP_P_LAW);
-    a->ctl.kp_q16 = pv(a, TLP_P_KP_Q16);
-    a->ctl.kd_q16 = pv(a, TLP_P_KD_Q16);
-    a->ctl.ki_q16 = pv(a, TLP_P_KI_Q16);
-    a->ctl.deadband_q16 = pv(a, TLP_P_DEADBAND_Q16);
-    a->ctl.cmd_limit = pv(a, TLP_P_CMD_LIMIT);
-    a->ctl.vel_mode = (uint32_t)pv(a, TLP_P_VEL_MODE);
-    a->ctl.vmax_cps = pv(a, TLP_P_VMAX);
-    a->ctl.amax_cps2 = pv(a, TLP_P_AMAX);
-    tl_ctl_derive(&a->c, &a->ctl, (uint32_t)gv(s, TLP_P_PERIOD_US), s->clk_hz);
-    s->period_cycles = (uint32_t)((uint64_t)(uint32_t)gv(s, TLP_P_PERIOD_US) * s->clk_hz / 1000000u);
-    s->link_timeout_ticks = (uint32_t)gv(s, TLP_P_LINK_TIMEOUT_MS) * 1000u / (uint32_t)gv(s, TLP_P_PERIOD_US);
-    if (s->link_timeout_ticks == 0u)
-        s->link_timeout_ticks = 1u;
-    uint32_t period_us = (uint32_t)gv(s, TLP_P_PERIOD_US);
-    a->stall_limit_ticks = ((uint32_t)pv(a, TLP_P_STALL_MS) * 1000u + period_us - 1u) / period_us;
-    /* counts/s * us * 2^16 / 1e6 = x * 1024 / 15625, as control.c's vmax */
-    a->home_step_q16 = (int64_t)pv(a, TLP_P_HOME_VEL) * (int64_t)period_us * 1024 / 15625;
-    if (a->home_step_q16 < (1 << HOME_SLOW_SHIFT))
-        a->home_step_q16 = 1 << HOME_SLOW_SHIFT;
+    a->ctl = cfg->ctl;
+    tl_ctl_apply(&a->c, &cfg->d);
+    a->stall_limit_ticks = cfg->stall_limit_ticks;
+    a->home_step_q16 = cfg->home_step_q16;
     hal_pwm_config(i, (uint32_t)pv(a, TLP_P_FDIV), (uint32_t)pv(a, TLP_P_PW0), (uint32_t)pv(a, TLP_P_PWMAX));
     hal_limit_block(i, pv(a, TLP_P_LIMIT_SW) != 0);
 }
 
 /* Positions wrap modulo 2^32 like the decoder's counter: no signed overflow. */
 static int32_t wrap_add(int32_t x, int32_t y) { return (int32_t)((uint32_t)x + (uint32_t)y); }
+
+/* The period in clock cycles and the link timeout in periods, from global parameters g. */
+static void global_cfg(const int32_t *g, uint32_t clk_hz, uint32_t *period_cycles, uint32_t *link_timeout_ticks)
+{
+    uint32_t period_us = (uint32_t)g[PI(TLP_P_PERIOD_US)];
+    *period_cycles = (uint32_t)((uint64_t)period_us * clk_hz / 1000000u);
+    *link_timeout_ticks = (uint32_t)g[PI(TLP_P_LINK_TIMEOUT_MS)] * 1000u / period_us;
+    if (*link_timeout_ticks == 0u)
+        *link_timeout_ticks = 1u;
+}
+
+static void sync_all(tl_servo_t *s)
+{
+    axis_cfg_t cfg;
+    for (uint32_t i = 0; i < TL_AXES; i++) {
+        axis_cfg(s->ax[i].p, (uint32_t)gv(s, TLP_P_PERIOD_US), s->clk_hz, &cfg);
+        commit_axis(s, i, &cfg);
+    }
+    global_cfg(s->g, s->clk_hz, &s->period_cycles, &s->link_timeout_ticks);
+}
 
 static void disable_axis(tl_servo_t *s, uint32_t i)
 {
@@ -176,9 +211,10 @@ void tl_servo_init(tl_servo_t *s)
         a->home = TLP_HOME_STATE_NOT_HOMED;
         a->stall_dir = 0;
         tl_ctl_reset(&a->c, e.pos, e.now);
-        sync_axis(s, i);
-        disable_axis(s, i);
     }
+    sync_all(s);
+    for (uint32_t i = 0; i < TL_AXES; i++)
+        disable_axis(s, i);
     hal_set_baud_div((uint32_t)gv(s, TLP_P_BAUD_DIV));
 }
 
@@ -491,22 +527,49 @@ static uint8_t set_param(tl_servo_t *s, uint8_t axis, uint8_t id, int32_t v)
         hal_irq_on();
         return st;
     }
+    /* The new value goes into copies of the parameters, and everything derived
+     * from them is worked out with interrupts on (the conversions divide); one
+     * short critical section then swaps it in, so a SET_PARAM delays the
+     * control interrupt by a few copies, not by the arithmetic.  The check above
+     * stays valid meanwhile: only commands enable an axis, and they run here. */
+    hal_irq_on();
+    axis_cfg_t cfg[TL_AXES];
     if (info->global) {
+        int32_t g[TLP_PARAM_COUNT];
+        for (uint32_t j = 0; j < TLP_PARAM_COUNT; j++)
+            g[j] = s->g[j];
+        g[k] = v;
+        uint32_t period_cycles, timeout_ticks;
+        global_cfg(g, s->clk_hz, &period_cycles, &timeout_ticks);
+        for (uint32_t i = 0; i < TL_AXES; i++)
+            axis_cfg(s->ax[i].p, (uint32_t)g[PI(TLP_P_PERIOD_US)], s->clk_hz, &cfg[i]);
+        hal_irq_off();
         if (id == TLP_P_BAUD_DIV)
             s->baud_div_pending = (uint32_t)v;
         s->g[k] = v;
         for (uint32_t i = 0; i < TL_AXES; i++)
-            sync_axis(s, i);
+            commit_axis(s, i, &cfg[i]);
+        s->period_cycles = period_cycles;
+        s->link_timeout_ticks = timeout_ticks;
     } else {
         tl_axis_t *a = &s->ax[axis];
         int32_t tau = pv(a, TLP_P_TAU_MAX_MNM), cpr = pv(a, TLP_P_COUNTS_PER_REV);
+        int slot = k;
+        int32_t value = v;
         switch (id) {
-        case TLP_P_KP_UNM_RAD: a->p[tl_param_index(TLP_P_KP_Q16)] = tl_gain_raw_from_phys(v, tau, cpr); break;
-        case TLP_P_KD_UNMS_RAD: a->p[tl_param_index(TLP_P_KD_Q16)] = tl_gain_raw_from_phys(v, tau, cpr); break;
-        case TLP_P_KI_UNM_RADS: a->p[tl_param_index(TLP_P_KI_Q16)] = tl_gain_raw_from_phys(v, tau, cpr); break;
-        default: a->p[k] = v; break;
+        case TLP_P_KP_UNM_RAD: slot = PI(TLP_P_KP_Q16); value = tl_gain_raw_from_phys(v, tau, cpr); break;
+        case TLP_P_KD_UNMS_RAD: slot = PI(TLP_P_KD_Q16); value = tl_gain_raw_from_phys(v, tau, cpr); break;
+        case TLP_P_KI_UNM_RADS: slot = PI(TLP_P_KI_Q16); value = tl_gain_raw_from_phys(v, tau, cpr); break;
+        default: break;
         }
-        sync_axis(s, axis);
+        int32_t p[TLP_PARAM_COUNT];
+        for (uint32_t j = 0; j < TLP_PARAM_COUNT; j++)
+            p[j] = a->p[j];
+        p[slot] = value;
+        axis_cfg(p, (uint32_t)gv(s, TLP_P_PERIOD_US), s->clk_hz, &cfg[0]);
+        hal_irq_off();
+        a->p[slot] = value;
+        commit_axis(s, axis, &cfg[0]);
         if (id == TLP_P_BRAKE && a->enabled)
             hal_pwm_enable(axis, true, v != 0);
     }

@@ -725,7 +725,7 @@ static void test_profile(void)
             (void)tl_ctl_step(&c, &p, start, 0, 0, 0, false);
             int64_t v = c.sp_q16 - prev_sp;
             int64_t dv = v - prev_v;
-            if ((v < 0 ? -v : v) > c.vmax_q16 + c.amax_q16 || (dv < 0 ? -dv : dv) > c.amax_q16)
+            if ((v < 0 ? -v : v) > c.d.vmax_q16 + c.d.amax_q16 || (dv < 0 ? -dv : dv) > c.d.amax_q16)
                 ok = false;
             int64_t before = (int64_t)target * 65536 - prev_sp, after = (int64_t)target * 65536 - c.sp_q16;
             if ((before > 0 && after < 0) || (before < 0 && after > 0))
