@@ -10,7 +10,6 @@
  *    so the PI does not hunt between two encoder counts. */
 #include "control.h"
 
-
 static int64_t clamp64(int64_t v, int64_t lo, int64_t hi) { return v < lo ? lo : (v > hi ? hi : v); }
 static int64_t abs64(int64_t v) { return v < 0 ? -v : v; }
 /* Counts between two decoder readings: the 32-bit counter wraps, so the
