@@ -144,6 +144,7 @@ def _pin_trace(variant) -> _Recorder:
     from sim_models.stepper import TwoAxisPlant
     from torqueloop.sim import native
     from torqueloop.sim.link import Link
+    from torqueloop.spec import protocol as tp
     from torqueloop.sim.pins import PlantOnPins
     img = experiment.firmware_image()
     board = _Recorder(native.NativeBoard.create(img.rom_hex, img.ram_hex, variant=variant))
@@ -165,7 +166,7 @@ def _pin_trace(variant) -> _Recorder:
         link.call("TELEMETRY", every=1)
         link.call("ENABLE", mask=3, enable=1)
         for ax in (0, 1):
-            link.call("MOVE", axis=ax, mode=0, target=300 * (1 - 2 * ax))
+            link.call("MOVE", axis=ax, mode=tp.MOVE_UNHOMED, target=300 * (1 - 2 * ax))
         link.advance(1_500_000)                          # 30 ms of both axes moving
         link.poll()
         board.set_board(1, 0, 1)                         # e-stop: pins drop combinationally
