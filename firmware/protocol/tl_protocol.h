@@ -31,6 +31,9 @@
 #define TLP_ST_STATE 9u
 #define TLP_ST_LOOSEN 10u
 #define TLP_ST_NOT_HOMED 11u
+#define TLP_ST_AUTH 12u
+#define TLP_ST_NO_SESSION 13u
+#define TLP_ST_NO_KEY 14u
 
 #define TLP_FAULT_ESTOP 0x0001u
 #define TLP_FAULT_BRIDGE 0x0002u
@@ -97,6 +100,10 @@
 #define TLP_CMD_HOME_REQ_LEN 3u
 #define TLP_CMD_HOME_REP_LEN 1u
 #define TLP_CMD_HOME_FEEDS_LINK 1u
+#define TLP_CMD_SESSION 0x0Eu
+#define TLP_CMD_SESSION_REQ_LEN 16u
+#define TLP_CMD_SESSION_REP_LEN 33u
+#define TLP_CMD_SESSION_FEEDS_LINK 0u
 /* bit cmd set: that command, executed, feeds the link watchdog */
 #define TLP_LINK_FEED_MASK ((1u << TLP_CMD_ENABLE) | (1u << TLP_CMD_MOVE) | (1u << TLP_CMD_STOP) | (1u << TLP_CMD_HEARTBEAT) | (1u << TLP_CMD_HOME))
 #define TLP_MOVE_TRAPEZOID 0x01u
@@ -174,6 +181,10 @@
 #define TLP_HOME_REQ_MODE 1u
 #define TLP_HOME_REQ_INDEX 2u
 #define TLP_HOME_REP_STATUS 0u
+#define TLP_SESSION_REQ_HOST_NONCE 0u
+#define TLP_SESSION_REP_STATUS 0u
+#define TLP_SESSION_REP_BOARD_NONCE 1u
+#define TLP_SESSION_REP_PROOF 17u
 #define TLP_TELEM_TIME_US 0u
 #define TLP_TELEM_HEAD_LEN 4u
 #define TLP_TELEM_AX_SETPOINT 0u
@@ -185,6 +196,37 @@
 #define TLP_TELEM_AX_ENABLED 20u
 #define TLP_TELEM_AX_LEN 21u
 #define TLP_TELEM_LEN 46u
+
+/* Authentication ([auth] of protocol.toml; docs/security.md). */
+#define TLP_AUTH_KEY_BYTES 32u
+#define TLP_AUTH_TAG_BYTES 16u
+#define TLP_AUTH_UPLOAD_TAG_BYTES 32u
+#define TLP_AUTH_NONCE_BYTES 16u
+#define TLP_AUTH_SESSION_WINDOW 32768u
+#define TLP_AUTH_LABEL_FRAME "TLCF"
+#define TLP_AUTH_LABEL_PROOF "TLSP"
+#define TLP_AUTH_LABEL_NONCE "TLNG"
+#define TLP_AUTH_LABEL_UPLOAD "TLUP"
+#define TLP_AUTH_LABEL_CHECK "TLKC"
+#define TLP_AUTH_KEY_SLOT_BYTES 64u
+#define TLP_AUTH_KEY_SLOT_MAGIC 0x594B4C54u
+#define TLP_AUTH_KEY_SLOT_ALGORITHM 1u
+#define TLP_AUTH_LABEL_BYTES 4u
+/* 1 if cmd with this request payload needs the key (auth = "key" and no open_when match). */
+static inline int tlp_needs_key(uint8_t cmd, const uint8_t *payload)
+{
+    (void)payload;
+    switch (cmd) {
+    case TLP_CMD_SET_PARAM: return 1;
+    case TLP_CMD_ENABLE: return !(payload[TLP_ENABLE_REQ_ENABLE] == 0u);
+    case TLP_CMD_MOVE: return 1;
+    case TLP_CMD_CLEAR_FAULT: return 1;
+    case TLP_CMD_BOOTLOADER: return 1;
+    case TLP_CMD_HEARTBEAT: return 1;
+    case TLP_CMD_HOME: return 1;
+    default: return 0;   /* open, or unknown (answered UNKNOWN_CMD) */
+    }
+}
 
 #define TLP_GLOBAL_AXIS 0xFFu
 #define TLP_P_LAW 0u

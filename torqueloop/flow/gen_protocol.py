@@ -75,6 +75,7 @@ def c_header() -> str:
         L.append(f"#define TLP_TELEM_AX_{n.upper()} {off}u")
         off += struct.calcsize(P._FMT[t])
     L += [f"#define TLP_TELEM_AX_LEN {off}u", f"#define TLP_TELEM_LEN {P.telemetry_payload_bytes()}u", ""]
+    L += _c_auth()
     L.append("#define TLP_GLOBAL_AXIS 0xFFu")
     for p in P.PARAMS.values():
         L.append(f"#define TLP_P_{p.name} {p.id}u")
@@ -100,6 +101,33 @@ def c_header() -> str:
         L.append("    " + ", ".join(f"{v:2d}" for v in index[row:row + 16]) + ",")
     L += ["};", "", "#endif", ""]
     return "\n".join(L)
+
+
+def _c_auth() -> list[str]:
+    """The [auth] constants and which command needs the key with which payload."""
+    A = P.SPEC["auth"]
+    L = ["/* Authentication ([auth] of protocol.toml; docs/security.md). */"]
+    for k, v in A.items():
+        val = f'"{v}"' if isinstance(v, str) else (f"0x{v:08X}u" if k.endswith("magic") else f"{v}u")
+        L.append(f"#define TLP_AUTH_{k.upper()} {val}")
+    L.append(f"#define TLP_AUTH_LABEL_BYTES {len(A['label_frame'])}u")
+    L += ["/* 1 if cmd with this request payload needs the key (auth = \"key\" and no open_when match). */",
+          "static inline int tlp_needs_key(uint8_t cmd, const uint8_t *payload)", "{", "    (void)payload;",
+          "    switch (cmd) {"]
+    for c in P.COMMANDS.values():
+        if c.auth != "key":
+            continue
+        cond = " || ".join(f"payload[TLP_{c.name}_REQ_{f.upper()}] == {v}u" for f, v in c.open_when.items())
+        L.append(f"    case TLP_CMD_{c.name}: return {f'!({cond})' if cond else '1'};")
+    L += ["    default: return 0;   /* open, or unknown (answered UNKNOWN_CMD) */", "    }", "}", ""]
+    return L
+
+
+def _auth_text(c: P.Command) -> str:
+    if c.auth == "open":
+        return "open: no key needed (a MAC may be appended)"
+    unless = " or ".join(f"{f} = {v}" for f, v in c.open_when.items())
+    return f"needs the key (MAC appended)" + (f", except with {unless}" if unless else "")
 
 
 def markdown() -> str:
@@ -129,7 +157,12 @@ def markdown() -> str:
          "accepted seq, so a reconnecting host continues from there.",
          f"* **Replies** carry the command's seq and cmd | 0x{P.REPLY_FLAG:02X}; the first payload byte is the status. "
          f"A chunk too damaged to trust its seq is answered with seq 0, cmd 0x{P.ERROR_CMD:02X} and the status.",
-         f"* **Telemetry** frames (cmd 0x{P.TELEMETRY_CMD:02X}) carry a running count as seq.", "",
+         f"* **Telemetry** frames (cmd 0x{P.TELEMETRY_CMD:02X}) carry a running count as seq.",
+         f"* **Authentication** ([docs/security.md](security.md)): a command marked \"needs the key\" must end its "
+         f"payload with a {P.SPEC['auth']['tag_bytes']}-byte MAC, HMAC-SHA-256 under the board's key over the "
+         "session's two nonces (SESSION), seq, cmd, len and the payload, truncated; len counts the MAC. "
+         "Open commands (reading, STOP, disabling) work without it. An authenticated command must also be "
+         "newer than the session's last authenticated one, whatever other frames did to the seq.", "",
          f"Protocol version {P.PROTO_VERSION}.  Default link 115200 baud 8N1 (parameter BAUD_DIV).", "",
          "## Status codes", "", "| code | name | meaning |", "|---|---|---|"]
     for s in P.SPEC["status"]:
@@ -145,7 +178,7 @@ def markdown() -> str:
     L += ["", "## Commands", ""]
     for c in P.COMMANDS.values():
         L.append(f"### 0x{c.cmd:02X} {c.name}")
-        L += ["", c.desc, ""]
+        L += ["", c.desc, "", f"authentication: {_auth_text(c)}", ""]
         L.append("request: " + (", ".join(f"`{n}:{t}`" for n, t in c.req) or "(empty)"))
         L.append("")
         L.append(f"reply (0x{c.cmd | P.REPLY_FLAG:02X}): " + ", ".join(f"`{n}:{t}`" for n, t in c.rep))

@@ -14,13 +14,13 @@ from __future__ import annotations
 import math
 import struct
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from torqueloop.spec.refs import resolve
 from torqueloop.spec.system import SYSTEM
 
 PROTOCOL_TOML = Path(__file__).resolve().with_name("protocol.toml")
-_FMT = {"u8": "B", "i8": "b", "u16": "H", "i16": "h", "u32": "I", "i32": "i"}
+_FMT = {"u8": "B", "i8": "b", "u16": "H", "i16": "h", "u32": "I", "i32": "i", "b16": "16s"}
 
 
 @dataclass(frozen=True)
@@ -31,6 +31,8 @@ class Command:
     req: tuple[tuple[str, str], ...]
     rep: tuple[tuple[str, str], ...]
     feeds_link: bool = False    # executed with a new seq, it feeds the link watchdog
+    auth: str = "key"                 # "key": needs a MAC (docs/security.md); "open": may come without
+    open_when: dict = field(default_factory=dict)   # field -> value with which a "key" command is open
 
     @property
     def req_fmt(self) -> str:
@@ -98,11 +100,25 @@ STATUS_NAME: dict[int, str] = {v: k for k, v in STATUS.items()}
 FAULT: dict[str, int] = {f["name"]: 1 << f["bit"] for f in SPEC["fault"]}
 #: faults that only block motion toward one end (the axis may be enabled and driven back out)
 DIRECTIONAL_FAULTS: int = sum(1 << f["bit"] for f in SPEC["fault"] if f.get("blocks") == "direction")
-COMMANDS: dict[str, Command] = {
-    c["name"]: Command(c["name"], c["cmd"], c["desc"],
-                       tuple(tuple(x) for x in c["req"]), tuple(tuple(x) for x in c["rep"]),
-                       bool(c.get("feeds_link", False)))
-    for c in SPEC["command"]}
+
+
+def _command(c: dict) -> Command:
+    cmd = Command(c["name"], c["cmd"], c["desc"], tuple(tuple(x) for x in c["req"]),
+                  tuple(tuple(x) for x in c["rep"]), bool(c.get("feeds_link", False)), c.get("auth", ""),
+                  dict(c.get("open_when", {})))
+    if cmd.auth not in ("key", "open"):
+        raise ProtocolSpecError(f"protocol.toml command {cmd.name}: auth must be 'key' or 'open'")
+    fields = dict(cmd.req)
+    if cmd.open_when and (cmd.auth != "key" or any(fields.get(f) != "u8" for f in cmd.open_when)):
+        raise ProtocolSpecError(f"protocol.toml command {cmd.name}: open_when names u8 request fields of a 'key' command")
+    return cmd
+
+
+class ProtocolSpecError(ValueError):
+    """protocol.toml breaks a rule; the message names the parameter."""
+
+
+COMMANDS: dict[str, Command] = {c["name"]: _command(c) for c in SPEC["command"]}
 #: MOVE mode bits
 MOVE_TRAPEZOID = 0x01
 MOVE_UNHOMED = 0x80
@@ -116,10 +132,6 @@ AXIS_COUNT = len(SYSTEM.axes)
 GLOBAL_AXIS = 0xFF
 #: a raw gain's default follows from its physical default (and TAU_MAX_MNM, COUNTS_PER_REV)
 RAW_GAIN_OF = {"KP_Q16": "KP_UNM_RAD", "KD_Q16": "KD_UNMS_RAD", "KI_Q16": "KI_UNM_RADS"}
-
-
-class ProtocolSpecError(ValueError):
-    """protocol.toml breaks a rule; the message names the parameter."""
 
 
 def _params(spec: list[dict]) -> dict[str, Param]:
