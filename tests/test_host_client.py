@@ -1,25 +1,33 @@
 # SPDX-License-Identifier: MIT
 """The host tool's protocol client against scripted fake links: timeouts,
 retries, lost and damaged frames, RN-XV text (``*HELLO*``, ``CMD``), seq
-resynchronisation, telemetry between replies, and a seeded random lossy
-channel around the real servo firmware (the simulated board's C) checking
-that no command is ever executed twice.
+resynchronisation, telemetry between replies, authentication (a wrong key,
+no key, a board without a key, a session the board lost, stopping without
+a key), and a seeded random lossy channel around the real servo firmware
+(the simulated board's C) checking that no command is ever executed twice.
 
 The scripted board follows docs/protocol.md's rules (seq window, REPLAY
-without executing, error replies to damaged chunks), written here from the
-document, not from the firmware."""
+without executing, error replies to damaged chunks, SESSION and the MAC of
+commands that need the key), written here from the document with hmac
+directly, not from the firmware."""
 
 from __future__ import annotations
 
+import hashlib
+import hmac
 import os
 import random
 import struct
 
 import pytest
 
+from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
-from torqueloop.host.client import Client, CommandRejected, NoAnswer, ReplyLost
+from torqueloop.host.client import (AuthFailed, BoardHasNoKey, Client, CommandRejected, KeyMissing, NoAnswer,
+                                    ReplyLost)
 from torqueloop.host.transport import LinkInfo
+
+KEY = bytes(range(100, 132))
 
 
 class FakeClock:
@@ -34,11 +42,42 @@ class DocBoard:
     """A board as docs/protocol.md describes it, minimal: STATUS, SET/GET of one
     parameter, MOVE counted, TELEMETRY on request."""
 
-    def __init__(self, last_seq: int = 0, any_seq: bool = False) -> None:
+    def __init__(self, last_seq: int = 0, any_seq: bool = False, key: bytes | None = KEY) -> None:
         self.last, self.any = last_seq, any_seq
         self.moves: list[int] = []
         self.kp = 17132
         self.dec = P.FrameDecoder()
+        self.key = key
+        self.nonces: tuple[bytes, bytes] | None = None    # (host, board) of the open session
+        self.auth_seqs: list[int] = []                     # authenticated seqs of this session
+        self.enabled = True
+
+    def _tag_ok(self, f: P.Frame) -> bool:
+        """docs/security.md: HMAC-SHA-256(key, 'TLCF' | board nonce | host nonce | seq cmd len | payload)[:16]."""
+        hn, bn = self.nonces
+        mac = hmac.new(self.key, b"TLCF" + bn + hn + struct.pack("<HBB", f.seq, f.cmd, len(f.payload))
+                       + f.payload[:-16], hashlib.sha256).digest()[:16]
+        return hmac.compare_digest(mac, f.payload[-16:])
+
+    def _auth(self, c: P.Command, f: P.Frame, tagged: bool, args: dict) -> int | None:
+        """The status that refuses the frame, or None if it may run."""
+        needs = c.auth == "key" and not any(args.get(k) == v for k, v in c.open_when.items())
+        if not tagged:
+            return (P.STATUS["NO_KEY"] if self.key is None else P.STATUS["AUTH"]) if needs else None
+        if self.key is None:
+            return P.STATUS["NO_KEY"]
+        if self.nonces is None:
+            return P.STATUS["NO_SESSION"]
+        if self.auth_seqs:
+            off = (f.seq - self.auth_seqs[0]) & 0xFFFF
+            if off >= auth.SESSION_WINDOW:
+                return P.STATUS["NO_SESSION"]
+            if off <= (self.auth_seqs[-1] - self.auth_seqs[0]) & 0xFFFF:
+                return P.STATUS["REPLAY"]
+        if not self._tag_ok(f):
+            return P.STATUS["AUTH"]
+        self.auth_seqs.append(f.seq)
+        return None
 
     def _new(self, seq: int) -> bool:
         return not self.any or 0 < ((seq - self.last) & 0xFFFF) < P.SEQ_WINDOW
@@ -51,13 +90,32 @@ class DocBoard:
                 continue
             c = P.BY_CMD[f.cmd]
             rc = f.cmd | P.REPLY_FLAG
-            if c.name != "IDENTIFY":
+            n = struct.calcsize(c.req_fmt)
+            tagged = len(f.payload) == n + auth.TAG_BYTES
+            args = dict(zip((n for n, _ in c.req), struct.unpack(c.req_fmt, f.payload[:n])))
+            if not tagged and (st := self._auth(c, f, False, args)) is not None:
+                out += P.encode_frame(f.seq, rc, bytes([st]))
+                continue
+            if c.name not in ("IDENTIFY", "SESSION"):
                 if not self._new(f.seq):
                     out += P.encode_frame(f.seq, rc, bytes([P.STATUS["REPLAY"]]))
                     continue
+            if tagged and (st := self._auth(c, f, True, args)) is not None:
+                out += P.encode_frame(f.seq, rc, bytes([st]))
+                continue
+            if c.name not in ("IDENTIFY", "SESSION"):
                 self.last, self.any = f.seq, True
-            args = dict(zip((n for n, _ in c.req), struct.unpack(c.req_fmt, f.payload)))
-            if c.name == "IDENTIFY":
+            if c.name == "SESSION":
+                if self.key is None:
+                    out += P.encode_frame(f.seq, rc, bytes([P.STATUS["NO_KEY"]]))
+                    continue
+                bn = os.urandom(16)
+                self.nonces, self.auth_seqs = (args["host_nonce"], bn), []
+                rep = b"\x00" + bn + hmac.new(self.key, b"TLSP" + args["host_nonce"] + bn, hashlib.sha256).digest()[:16]
+            elif c.name == "ENABLE":
+                self.enabled = bool(args["enable"])
+                rep = b"\x00"
+            elif c.name == "IDENTIFY":
                 rep = struct.pack(c.rep_fmt, 0, P.PROTO_VERSION, 0x100, 0xB11D, 2, self.last, 50_000_000)
             elif c.name == "STATUS":
                 vals = {"enabled": 1, "home": 2, "position": 1234, "setpoint": 1234}
@@ -139,11 +197,13 @@ class ScriptedLink(FakeSerial):
 
 
 
-def make(script: list[str] | None = None, board: DocBoard | None = None, kind: str = "tcp"):
+def make(script: list[str] | None = None, board: DocBoard | None = None, kind: str = "tcp",
+         key: bytes | None = KEY):
     clock = FakeClock()
     board = board if board is not None else DocBoard()
     link = ScriptedLink(board, clock, script)
-    c = Client(link, LinkInfo("socket://fake:2000", kind, 115200), timeout=0.5, retries=3, clock=clock)
+    c = Client(link, LinkInfo("socket://fake:2000", kind, 115200), timeout=0.5, retries=3, clock=clock, key=key,
+               key_source="test.key")
     return c, link, board, clock
 
 
@@ -194,17 +254,17 @@ def test_hello_text_before_a_reply_is_counted_and_skipped() -> None:
 
 def test_lost_reply_of_a_move_is_not_executed_twice() -> None:
     # the MOVE reaches the board, its reply is lost; the retry (same seq) gets REPLAY
-    c, link, board, _ = make(["ok", "drop_reply", "ok"])
+    c, link, board, _ = make(["ok", "ok", "drop_reply", "ok"])    # IDENTIFY, SESSION, MOVE, its retry
     c.connect()
     with pytest.raises(ReplyLost) as e:
         c.move(0, 4200)
     assert board.moves == [4200]
     assert "status" in str(e.value)
-    assert link.writes[1] == link.writes[2]           # the retry is byte-identical: same seq
+    assert link.writes[2] == link.writes[3]           # the retry is byte-identical: same seq and MAC
 
 
 def test_lost_request_is_resent_and_executed_once() -> None:
-    c, link, board, _ = make(["ok", "drop_request"])
+    c, link, board, _ = make(["ok", "ok", "drop_request"])
     c.connect()
     c.move(0, -100)
     assert board.moves == [-100]
@@ -220,7 +280,7 @@ def test_lost_reply_of_a_read_is_asked_again_with_a_new_seq() -> None:
 
 
 def test_lost_reply_of_a_set_is_read_back() -> None:
-    c, link, board, _ = make(["ok", "drop_reply"])
+    c, link, board, _ = make(["ok", "ok", "drop_reply"])
     c.connect()
     assert c.set_param("KP_Q16", 4321) == 4321
     assert board.kp == 4321
@@ -234,7 +294,7 @@ def test_damaged_reply_counts_a_crc_error_and_retries() -> None:
 
 
 def test_damaged_request_gets_an_error_reply_and_is_resent_at_once() -> None:
-    c, link, board, clock = make(["ok", "corrupt_request"])
+    c, link, board, clock = make(["ok", "ok", "corrupt_request"])
     c.connect()
     t0 = clock.t
     c.move(1, 77)
@@ -264,11 +324,79 @@ def test_refusals_are_named() -> None:
                     return DocBoard.receive(self, data)
             return out
 
-    c, *_ = make([], Refuser())
+    c, *_ = make([], Refuser(), key=None)
     c.connect()
+    c.key = KEY         # past the client's own check: the board's refusal is what is named here
     with pytest.raises(CommandRejected) as e:
         c.move(0, 1)
     assert "STATE" in str(e.value) and "disabled" in str(e.value)
+
+
+# ---- authentication ---------------------------------------------------------------
+
+def test_with_the_key_commands_carry_a_mac_and_reads_do_not() -> None:
+    c, link, board, _ = make()
+    c.connect()
+    c.move(0, 10)
+    c.status(0)
+    c.stop(1)
+    cmds = [P.parse_packet(w.strip(b"\x00")) for w in link.writes]
+    assert [(P.BY_CMD[f.cmd].name, len(f.payload)) for f in cmds] == [
+        ("IDENTIFY", 0), ("SESSION", 16), ("MOVE", 6 + 16), ("STATUS", 1), ("STOP", 1 + 16)]
+    assert board.moves == [10] and len(board.auth_seqs) == 2
+
+
+def test_a_wrong_key_says_authentication_failed_at_once() -> None:
+    c, link, board, clock = make(key=bytes(32))
+    c.connect()
+    with pytest.raises(AuthFailed, match="authentication failed.*test.key.*key id") as e:
+        c.move(0, 10)
+    assert "another key" in str(e.value) and clock.t < 0.2    # from the board's proof: no timeout
+    assert board.moves == [] and c.stats.timeouts == 0
+
+
+def test_no_key_sends_nothing_that_needs_one() -> None:
+    c, link, board, _ = make(key=None)
+    c.connect()
+    n = len(link.writes)
+    for call in (lambda: c.move(0, 10), lambda: c.enable(1), lambda: c.set_param("KP_Q16", 5),
+                 lambda: c.clear_fault(1), c.bootloader):
+        with pytest.raises(KeyMissing, match="needs the link key.*--key-file.*TORQUELOOP_KEY_FILE"):
+            call()
+    assert len(link.writes) == n and board.moves == []
+    # stopping is always allowed: STOP and disable go without a MAC, reads work
+    c.stop(3)
+    c.enable(3, False)
+    assert not board.enabled and c.status(0)["position"] == 1234
+
+
+def test_a_board_without_a_key_is_named() -> None:
+    c, link, board, _ = make(board=DocBoard(key=None))
+    c.connect()
+    with pytest.raises(BoardHasNoKey, match="board has no link key.*Key provisioning"):
+        c.move(0, 10)
+    c.enable(3, False)                                  # the untagged copy: disabling works
+    assert not board.enabled and board.moves == []
+
+
+def test_a_lost_session_is_opened_again_and_stopping_survives_a_wrong_key() -> None:
+    c, link, board, _ = make()
+    c.connect()
+    c.move(0, 1)
+    board.nonces = None                                 # the board restarted (or another host took over)
+    c.move(0, 2)
+    assert board.moves == [1, 2] and sum(P.parse_packet(w.strip(b"\x00")).cmd == P.COMMANDS["SESSION"].cmd
+                                         for w in link.writes) == 2
+    # another host opened its own session: our MAC no longer verifies, a new session fixes it
+    board.nonces = (bytes(16), bytes(16))
+    c.move(0, 3)
+    assert board.moves == [1, 2, 3]
+    # a host whose key is wrong can still stop and disable
+    w, _, board2, _ = make(key=bytes(32))
+    w.connect()
+    w.stop(1)
+    w.enable(1, False)
+    assert not board2.enabled
 
 
 def test_client_checks_ranges_before_sending() -> None:
@@ -331,10 +459,10 @@ def test_random_lossy_link_never_runs_a_command_twice() -> None:
     seed = int(os.environ.get("TL_SEED", random.randrange(1, 2**32)))
     print(f"seed {seed} (rerun with TL_SEED={seed})")
     rng = random.Random(seed)
-    board = SimBoard()
+    board = SimBoard(key=KEY)
     clock = FakeClock()
     c = Client(LossyLink(board, rng, clock, 0.08), LinkInfo("loop://", "other", 115200),
-               timeout=0.3, retries=8, clock=clock)
+               timeout=0.3, retries=8, clock=clock, key=KEY)
     c.connect()
     link = c.link
     value = c.get_param("FOLLOW_LIMIT", 0)
@@ -345,10 +473,11 @@ def test_random_lossy_link_never_runs_a_command_twice() -> None:
             c.status(1)
     assert c.get_param("FOLLOW_LIMIT", 0) == value, f"seed {seed}"
     cnt = c.counters()
-    # Exactly once: the board executed (frames_ok) every IDENTIFY copy it got plus one
-    # per distinct seq, and answered every other copy of a seq with REPLAY.
-    ident = P.COMMANDS["IDENTIFY"].cmd
-    others = [d for d in link.delivered if d[1] != ident]
+    # Exactly once: the board executed (frames_ok) every IDENTIFY and SESSION copy it got
+    # (both answer any seq) plus one per distinct seq, and answered every other copy of a
+    # seq with REPLAY.
+    any_seq = {P.COMMANDS["IDENTIFY"].cmd, P.COMMANDS["SESSION"].cmd}
+    others = [d for d in link.delivered if d[1] not in any_seq]
     expect_ok = len(link.delivered) - len(others) + len(set(others))
     assert cnt["frames_ok"] == expect_ok, f"seed {seed}: {cnt} vs {expect_ok}"
     assert cnt["replay"] == len(others) - len(set(others)), f"seed {seed}"

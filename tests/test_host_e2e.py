@@ -9,12 +9,16 @@ Checked: info, set/get round trips in physical units, a move the plant
 follows, a step test's files and figures, a following-error fault decoded
 and cleared, config save/load round trip (and the characterisation file),
 an upload that changes the build id, and a corrupted one that the boot ROM
-refuses, leaving the factory firmware working; and the careless user of
+refuses, leaving the factory firmware working; the careless user of
 issue 17: every bad value refused with one line and exit status 2 before
 anything is sent, a refused `move --enable` that leaves the axis disabled, a
 step beyond the following limit refused with the reason, a busy board named
 busy, safety limits that cannot be loosened while an axis is enabled, and
-`get` reading back what `set` wrote at the extremes of the gains.
+`get` reading back what `set` wrote at the extremes of the gains.  The
+simulated board and the tool share a key file through
+``$TORQUELOOP_KEY_FILE`` (docs/security.md); without it, with a wrong one, or
+against a board without a key, the tool says so in one line and stop /
+disable still work.
 
 Tests may run in any order and on different pytest-xdist workers (each its
 own simulated board), so each one sets up the state it needs.
@@ -32,15 +36,31 @@ from pathlib import Path
 import pytest
 
 from torqueloop import cli
+from torqueloop.spec import auth
 
 BUILD_ID = 0x0DDC0DE5
 
 
 @pytest.fixture(scope="module")
-def url():
+def keyfile(tmp_path_factory):
+    """The key the simulated board is built with and the tool reads, named by
+    $TORQUELOOP_KEY_FILE for the whole module (as a user would set it)."""
+    path = tmp_path_factory.mktemp("key") / "link.key"
+    auth.write_key_file(path, auth.new_key())
+    old = os.environ.get(auth.KEY_FILE_ENV)
+    os.environ[auth.KEY_FILE_ENV] = str(path)
+    yield path
+    if old is None:
+        del os.environ[auth.KEY_FILE_ENV]
+    else:
+        os.environ[auth.KEY_FILE_ENV] = old
+
+
+def _sim(keyless: bool = False):
+    env = {k: v for k, v in os.environ.items() if not (keyless and k == auth.KEY_FILE_ENV)}
     p = subprocess.Popen([sys.executable, "-m", "torqueloop.cli", "sim", "--port", "0", "--hello",
                           "--build-id", hex(BUILD_ID)], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                         text=True)
+                         text=True, env=env)
     try:
         line = p.stdout.readline()
         assert "socket://" in line, line
@@ -51,6 +71,11 @@ def url():
             p.wait(5)
         except subprocess.TimeoutExpired:
             p.kill()
+
+
+@pytest.fixture(scope="module")
+def url(keyfile):
+    yield from _sim()
 
 
 def run(url: str, capsys, *args: str, rc: int = 0):
@@ -240,13 +265,31 @@ def test_corrupted_upload_is_refused_and_the_board_keeps_working(url, capsys, tm
     from torqueloop.host.upload import run_upload
 
     link, info = open_link(url)
-    c = Client(link, info)
+    c = Client(link, info, key=auth.read_key_file(os.environ[auth.KEY_FILE_ENV]))
     try:
         r = run_upload(c, os.urandom(2000), port=FlipOneImageByte(link, bp.FRAME_OVERHEAD + 1500))
     finally:
         c.close()
     assert not r.ok and "CRC-32" in r.message and "factory" in r.message
     assert r.replies == ["W", "C", "F"]
+    assert r.new_build_id == BUILD_ID
+    # signed with another key: the boot ROM says A and starts the factory firmware
+    link, info = open_link(url)
+    c = Client(link, info, key=auth.read_key_file(os.environ[auth.KEY_FILE_ENV]))
+    try:
+        from torqueloop.host import upload as up
+        res = up.upload("", os.urandom(1000), key=bytes(32), port=link, enter=b"", wait_window_s=0)
+        assert not res.ok        # no window open: nothing was sent
+        c.connect()
+        c.raw_tap = bytearray()
+        c.bootloader()
+        c.pump(0.2)
+        assert b"TLBW" in c.raw_tap
+        c.raw_tap = None
+        res = up.upload("", os.urandom(1000), key=bytes(32), port=link, wait_window_s=0)
+    finally:
+        c.close()
+    assert not res.ok and "authentication failed" in res.message and res.factory_running
     assert r.new_build_id == BUILD_ID               # the factory firmware answers
     # ... and works: a move the plant follows
     run(url, capsys, "clear-fault", "--all")
@@ -378,3 +421,64 @@ def test_a_busy_board_is_reported_as_busy(url, capsys) -> None:
     finally:
         holder.close()
     assert "busy" in err and "another client" in err and "reset by peer" not in err.split("(")[0]
+
+
+def test_key_errors_are_one_line_and_stopping_needs_no_key(url, keyfile, capsys, tmp_path, monkeypatch) -> None:
+    # no key at all: refused by the tool before anything is sent; reading, stop and disable work
+    monkeypatch.delenv(auth.KEY_FILE_ENV)
+    _, err = run(url, capsys, "enable", "--axis", "0", rc=1)
+    assert "needs the link key" in err and "--key-file" in err and "Traceback" not in err
+    st, _ = run(url, capsys, "status", "--axis", "0")
+    assert st["0"]["enabled"] == 0
+    run(url, capsys, "stop", "--all")
+    run(url, capsys, "disable", "--all")
+    # a key file that is not there, or not a key file, or readable by others
+    _, err = run(url, capsys, "-k", str(tmp_path / "nope.key"), "move", "10", rc=1)
+    assert "no key file at" in err and "nope.key" in err
+    bad = tmp_path / "bad.key"
+    bad.write_text("hello\n")
+    bad.chmod(0o600)
+    _, err = run(url, capsys, "-k", str(bad), "move", "10", rc=1)
+    assert "not a torqueloop key file" in err
+    loose = tmp_path / "loose.key"
+    loose.write_text(keyfile.read_text())
+    loose.chmod(0o644)
+    _, err = run(url, capsys, "-k", str(loose), "move", "10", rc=1)
+    assert "chmod 600" in err
+    _, err = run(url, capsys, "-k", "ab" * 32, "move", "10", rc=1)
+    assert "looks like a key" in err                 # a key typed on the command line is refused
+    # the wrong key: "authentication failed", at once, and stop/disable still work with it
+    wrong = tmp_path / "wrong.key"
+    auth.write_key_file(wrong, auth.new_key())
+    _, err = run(url, capsys, "-k", str(wrong), "move", "10", "--enable", rc=1)
+    assert "authentication failed" in err and "wrong.key" in err
+    run(url, capsys, "-k", str(wrong), "disable", "--all")
+    # and with the right key the same command runs
+    res, _ = run(url, capsys, "-k", str(keyfile), "move", "10", "--relative", "--enable")
+    run(url, capsys, "-k", str(keyfile), "disable", "--all")
+    info_, _ = run(url, capsys, "info")
+    assert "auth" in info_["board_counters"]         # refusals for a MAC are counted on the board
+
+
+def test_key_files(capsys, tmp_path) -> None:
+    p = tmp_path / "new.key"
+    assert cli.main(["--json", "key", "new", str(p)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert (p.stat().st_mode & 0o777) == 0o600 and out["key_id"] == auth.key_id(auth.read_key_file(p))
+    assert cli.main(["key", "new", str(p)]) == 1 and "never overwritten" in capsys.readouterr().err
+    assert cli.main(["-k", str(p), "key", "id"]) == 0 and out["key_id"] in capsys.readouterr().out
+
+
+@pytest.fixture(scope="module")
+def keyless_url(url):
+    """A second simulated board, built without a key."""
+    yield from _sim(keyless=True)
+
+
+def test_a_board_without_a_key_says_so(keyless_url, capsys) -> None:
+    _, err = run(keyless_url, capsys, "move", "10", "--enable", rc=1)
+    assert "the board has no link key" in err and "Key provisioning" in err
+    _, err = run(keyless_url, capsys, "set", "kp", "0.5", rc=1)
+    assert "no link key" in err
+    run(keyless_url, capsys, "disable", "--all")
+    run(keyless_url, capsys, "stop", "--all")

@@ -6,10 +6,12 @@ or the simulated board.  docs/host.md is the user's guide.
     torqueloop -u socket://127.0.0.1:2000 info
     torqueloop set kp 0.82 ; torqueloop step-test 6.28rad --out build/step
 
-The link URL comes from ``--url`` or ``$TORQUELOOP_URL``.  Every command can
-print ``--json`` for scripts.  Exit status: 0 done, 1 refused by the board (or
-a fault during the command), 2 bad input (refused before anything was sent,
-one line, never a traceback), 3 no answer.
+The link URL comes from ``--url`` or ``$TORQUELOOP_URL``; the link key from
+the file ``--key-file`` or ``$TORQUELOOP_KEY_FILE`` names (never the command
+line itself; docs/security.md).  Every command can print ``--json`` for
+scripts.  Exit status: 0 done, 1 refused by the board, a fault during the
+command, or a missing, unreadable or wrong key, 2 bad input (refused before
+anything was sent, one line, never a traceback), 3 no answer.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import time
 from pathlib import Path
 from typing import Any, Callable
 
+from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
 from torqueloop.host import analysis
 from torqueloop.spec import units
@@ -43,11 +46,25 @@ class Ctx:
         self.args = args
         self._client: Client | None = None
 
+    def key(self) -> tuple[bytes | None, str, str]:
+        """(key, where it came from, why there is none).  A missing or bad key
+        file is not an error yet: reading, stop and disable need no key."""
+        path = auth.key_file_path(self.args.key_file)
+        if path is None:
+            return None, "", "no key file named"
+        src = f"{path} ({'--key-file' if self.args.key_file else '$' + auth.KEY_FILE_ENV})"
+        try:
+            return auth.read_key_file(path), src, ""
+        except auth.KeyFileError as e:
+            return None, src, str(e)
+
     @property
     def client(self) -> Client:
         if self._client is None:
+            key, src, err = self.key()
             link, info = open_link(self.args.url, self.args.baud)
-            self._client = Client(link, info, timeout=self.args.timeout, retries=self.args.retries)
+            self._client = Client(link, info, timeout=self.args.timeout, retries=self.args.retries, key=key,
+                                  key_source=src, key_error=err)
             self._client.connect()
         return self._client
 
@@ -596,6 +613,28 @@ def cmd_upload(ctx: Ctx) -> int:
     return 0 if r.ok else 1
 
 
+def cmd_key(ctx: Ctx) -> int:
+    """Key files (docs/security.md): ``key new FILE`` writes a fresh random key
+    (mode 0600, never over an existing file); ``key id [FILE]`` names a key
+    without giving it away."""
+    a = ctx.args
+    if a.action == "new":
+        if not a.file:
+            raise auth.KeyFileError("key new needs the FILE to create")
+        key = auth.new_key()
+        auth.write_key_file(a.file, key)
+        ctx.out({"file": a.file, "key_id": auth.key_id(key)},
+                f"wrote a new link key to {a.file} (key id {auth.key_id(key)}); keep it off the network. "
+                "Next: build the board's boot ROM with it (docs/security.md, 'Key provisioning')")
+        return 0
+    path = auth.key_file_path(a.file or a.key_file)
+    if path is None:
+        raise auth.KeyFileError(f"no key file named: key id FILE, --key-file FILE or ${auth.KEY_FILE_ENV}")
+    key = auth.read_key_file(path)
+    ctx.out({"file": str(path), "key_id": auth.key_id(key)}, f"{path}: key id {auth.key_id(key)}")
+    return 0
+
+
 def cmd_sim(ctx: Ctx) -> int:
     try:
         from torqueloop.sim.server import BoardServer
@@ -614,8 +653,13 @@ def cmd_sim(ctx: Ctx) -> int:
         board: Any = RtlBoard(seed=a.seed, plant=a.plant)
         what = "RTL board image (Verilator) + plant model, far below real time"
     else:
-        board = SimBoard(build_id=a.build_id, seed=a.seed, plant=a.plant)
-        what = f"servo firmware + plant model, build id 0x{board.build_id:08x}"
+        key, src, err = ctx.key()
+        if err and src:
+            raise auth.KeyFileError(err)      # a key file named but unusable: say so, do not run keyless
+        board = SimBoard(build_id=a.build_id, seed=a.seed, plant=a.plant, key=key)
+        what = (f"servo firmware + plant model, build id 0x{board.build_id:08x}, "
+                + (f"key id {auth.key_id(key)} from {src}" if key else
+                   "NO KEY: it refuses motion, parameter changes and uploads (give it one with --key-file)"))
     srv = BoardServer(board, a.host, a.port, speed=a.speed, hello=a.hello)
     print(f"simulated board on socket://{a.host}:{srv.port} ({what}); Ctrl-C stops it", flush=True)
     try:
@@ -666,6 +710,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--timeout", type=_bounded(float, 0.001, 3600, "timeout"), default=0.5,
                    help="seconds to wait for each reply [0.5]")
     p.add_argument("--retries", type=_bounded(int, 0, 100, "retries"), default=3, help="resends before giving up [3]")
+    p.add_argument("-k", "--key-file", metavar="FILE", default=None,
+                   help=f"the link key (docs/security.md); never the key itself [${auth.KEY_FILE_ENV}]")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -772,7 +818,11 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("--window", type=_bounded(float, 0.1, 3600, "--window"), default=5.0,
                     help="seconds to wait for the bootloader [5]")
     sp.set_defaults(fn=cmd_upload)
-    sp = sub.add_parser("sim", help="run the simulated board on a local TCP port")
+    sp = sub.add_parser("key", help="key files: `key new FILE` writes a fresh key, `key id [FILE]` names one")
+    sp.add_argument("action", choices=["new", "id"])
+    sp.add_argument("file", nargs="?")
+    sp.set_defaults(fn=cmd_key)
+    sp = sub.add_parser("sim", help="run the simulated board on a local TCP port (with the --key-file key)")
     sp.add_argument("--host", default="127.0.0.1")
     sp.add_argument("--port", type=_bounded(int, 0, 65535, "--port"), default=2000,
                     help="TCP port (0 = any free one) [2000]")

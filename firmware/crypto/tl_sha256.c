@@ -54,10 +54,15 @@ static void compress(uint32_t h[8], const uint8_t *blk)
     h[7] += hh;
 }
 
-void tl_sha256_init(tl_sha256_t *c)
+static void h0(uint32_t h[8])
 {
     for (unsigned i = 0; i < 8u; i++)
-        c->h[i] = H0[i];
+        h[i] = H0[i];
+}
+
+void tl_sha256_init(tl_sha256_t *c)
+{
+    h0(c->h);
     c->fill = 0;
     c->blocks = 0;
 }
@@ -121,23 +126,20 @@ void tl_sha256(const uint8_t *p, size_t n, uint8_t out[TL_SHA256_BYTES])
 
 void tl_hmac_key(tl_hmac_key_t *k, const uint8_t *key, size_t len)
 {
-    uint8_t k0[TL_SHA256_BLOCK] = {0};
+    uint8_t pad[TL_SHA256_BLOCK] = {0};
     if (len > TL_SHA256_BLOCK) {
-        tl_sha256(key, len, k0);          /* RFC 2104: a long key is hashed first */
+        tl_sha256(key, len, pad);         /* RFC 2104: a long key is hashed first */
     } else {
         for (size_t i = 0; i < len; i++)
-            k0[i] = key[i];
+            pad[i] = key[i];
     }
-    uint8_t pad[TL_SHA256_BLOCK];
     for (unsigned i = 0; i < TL_SHA256_BLOCK; i++)
-        pad[i] = k0[i] ^ 0x36u;
-    for (unsigned i = 0; i < 8u; i++)
-        k->inner[i] = H0[i];
+        pad[i] ^= 0x36u;                  /* ipad */
+    h0(k->inner);
     compress(k->inner, pad);
     for (unsigned i = 0; i < TL_SHA256_BLOCK; i++)
-        pad[i] = k0[i] ^ 0x5Cu;
-    for (unsigned i = 0; i < 8u; i++)
-        k->outer[i] = H0[i];
+        pad[i] ^= 0x36u ^ 0x5Cu;          /* ipad -> opad */
+    h0(k->outer);
     compress(k->outer, pad);
 }
 

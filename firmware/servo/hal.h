@@ -44,6 +44,10 @@ uint32_t hal_safety(void);
 void hal_safety_ack(uint32_t bits);
 uint32_t hal_build_id(void);
 uint32_t hal_clk_hz(void);
+/* The boot ROM's key slot (TLP_AUTH_KEY_SLOT_BYTES, docs/security.md). */
+const uint8_t *hal_key_slot(void);
+/* A free-running cycle counter: entropy for the session challenge (tl_auth.h). */
+uint32_t hal_cycles(void);
 void hal_set_baud_div(uint32_t div);
 void hal_irq_off(void);
 void hal_irq_on(void);

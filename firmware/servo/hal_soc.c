@@ -2,6 +2,7 @@
 /* hal.h on the torqueloop SoC: every address from the generated register header. */
 #include "hal.h"
 
+#include "tl_protocol.h"
 #include "torqueloop_regs.h"
 
 /* Axis register of axis i: the AXIS0 offset moved to that axis's page. */
@@ -87,6 +88,24 @@ void hal_safety_ack(uint32_t bits)
 }
 
 uint32_t hal_build_id(void) { return TL_SYS_BUILD_ID; }
+
+const uint8_t *hal_key_slot(void)
+{
+    /* The last bytes of the boot ROM, copied a word at a time (the ROM is read as words). */
+    static uint32_t slot[TLP_AUTH_KEY_SLOT_BYTES / 4u];
+    const volatile uint32_t *rom =
+        (const volatile uint32_t *)(uintptr_t)(TL_BOOT_ROM_BASE + TL_BOOT_ROM_SIZE - TLP_AUTH_KEY_SLOT_BYTES);
+    for (uint32_t i = 0; i < TLP_AUTH_KEY_SLOT_BYTES / 4u; i++)
+        slot[i] = rom[i];
+    return (const uint8_t *)slot;
+}
+
+uint32_t hal_cycles(void)
+{
+    uint32_t v;
+    __asm__ volatile("csrr %0, mcycle" : "=r"(v));
+    return v;
+}
 uint32_t hal_clk_hz(void) { return TL_SYS_CLK_HZ; }
 void hal_set_baud_div(uint32_t div) { TL_UART_BAUD_DIV = div & TL_UART_BAUD_DIV_DIV_MSK; }
 void hal_irq_off(void) { __asm__ volatile("csrc mstatus, %0" : : "r"(1u << 3) : "memory"); }

@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 /* Servo application core (servo.h): parameters, safety and the command
- * handler.  The safety rules (docs/safety.md, docs/firmware.md "Safety"):
+ * handler.  A command that changes the machine runs only with a MAC of the
+ * open session (tl_auth.h, docs/security.md); reading, STOP and disabling
+ * need none.  The safety rules (docs/safety.md, docs/firmware.md "Safety"):
  *  - power-up: both axes disabled; the SoC's reset-time ESTOP latch bit is
  *    acknowledged only by an ENABLE command;
  *  - every fault (docs/protocol.md, "Fault flags") disables the axis in the
@@ -179,6 +181,7 @@ void tl_servo_init(tl_servo_t *s)
     s->g[tl_param_index(TLP_P_BAUD_DIV)] = TL_DEFAULT_BAUD_DIV;
 #endif
     tl_rx_init(&s->rx);
+    tl_auth_init(&s->auth, hal_key_slot());
     s->seq.any = false;
     s->seq.last = 0;
     s->cnt = (tl_counters_t){0};
@@ -722,7 +725,7 @@ static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
 {
     uint8_t rc = f->cmd | TLP_REPLY_FLAG;
     uint8_t rep[TLP_MAX_PAYLOAD];
-    uint8_t need;
+    uint8_t need, tag;
     switch (f->cmd) {
     case TLP_CMD_IDENTIFY: need = TLP_CMD_IDENTIFY_REQ_LEN; break;
     case TLP_CMD_GET_PARAM: need = TLP_CMD_GET_PARAM_REQ_LEN; break;
@@ -737,24 +740,39 @@ static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
     case TLP_CMD_COUNTERS: need = TLP_CMD_COUNTERS_REQ_LEN; break;
     case TLP_CMD_HEARTBEAT: need = TLP_CMD_HEARTBEAT_REQ_LEN; break;
     case TLP_CMD_HOME: need = TLP_CMD_HOME_REQ_LEN; break;
+    case TLP_CMD_SESSION: need = TLP_CMD_SESSION_REQ_LEN; break;
     default:
         sat_inc(&s->cnt.unknown);
         send_status(s, tx, f->seq, rc, TLP_ST_UNKNOWN_CMD);
         return;
     }
-    if (f->len != need) {
+    tag = (f->len == need + TLP_AUTH_TAG_BYTES) ? TLP_AUTH_TAG_BYTES : 0u;   /* a MAC follows the payload */
+    if (f->len != need + tag) {
         sat_inc(&s->cnt.length);
         send_status(s, tx, f->seq, rc, TLP_ST_LENGTH);
         return;
     }
-    if (f->cmd != TLP_CMD_IDENTIFY) {
-        if (!tl_seq_is_new(&s->seq, f->seq)) {
-            sat_inc(&s->cnt.replay);
-            send_status(s, tx, f->seq, rc, TLP_ST_REPLAY);
+    if (!tag && tlp_needs_key(f->cmd, f->payload)) {
+        sat_inc(&s->cnt.auth);
+        send_status(s, tx, f->seq, rc, tl_auth_missing(&s->auth));
+        return;
+    }
+    bool seq_checked = f->cmd != TLP_CMD_IDENTIFY && f->cmd != TLP_CMD_SESSION;
+    if (seq_checked && !tl_seq_is_new(&s->seq, f->seq)) {
+        sat_inc(&s->cnt.replay);
+        send_status(s, tx, f->seq, rc, TLP_ST_REPLAY);
+        return;
+    }
+    if (tag) {
+        uint8_t ast = tl_auth_verify(&s->auth, f);   /* outside the control interrupt: ~29 000 cycles */
+        if (ast != TLP_ST_OK) {
+            sat_inc(ast == TLP_ST_REPLAY ? &s->cnt.replay : &s->cnt.auth);
+            send_status(s, tx, f->seq, rc, ast);
             return;
         }
-        tl_seq_accept(&s->seq, f->seq);
     }
+    if (seq_checked)
+        tl_seq_accept(&s->seq, f->seq);
     sat_inc(&s->cnt.frames_ok);
     const uint8_t *q = f->payload;
     uint8_t st = TLP_ST_OK;
@@ -860,10 +878,15 @@ static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
         hal_irq_on();
         s->bootloader_req = true;
         break;
+    case TLP_CMD_SESSION:
+        st = tl_auth_session(&s->auth, &q[TLP_SESSION_REQ_HOST_NONCE], hal_cycles(), &rep[TLP_SESSION_REP_BOARD_NONCE],
+                             &rep[TLP_SESSION_REP_PROOF]);
+        n = TLP_CMD_SESSION_REP_LEN;
+        break;
     case TLP_CMD_COUNTERS: {
-        const uint16_t vals[9] = {s->cnt.frames_ok, s->cnt.crc, s->cnt.framing, s->cnt.length, s->cnt.oversize,
-                                  s->cnt.unknown, s->cnt.replay, s->cnt.rejected, s->cnt.tx_dropped};
-        for (uint32_t k = 0; k < 9u; k++)
+        const uint16_t vals[10] = {s->cnt.frames_ok, s->cnt.crc, s->cnt.framing, s->cnt.length, s->cnt.oversize,
+                                   s->cnt.unknown, s->cnt.replay, s->cnt.rejected, s->cnt.tx_dropped, s->cnt.auth};
+        for (uint32_t k = 0; k < 10u; k++)
             tl_put_u16(&rep[TLP_COUNTERS_REP_FRAMES_OK + 2u * k], vals[k]);
         n = TLP_CMD_COUNTERS_REP_LEN;
         break;
@@ -874,8 +897,12 @@ static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
     if (st != TLP_ST_OK) {
         sat_inc(&s->cnt.rejected);
         n = 1;
-    } else if (f->cmd < 32u && ((TLP_LINK_FEED_MASK >> f->cmd) & 1u)) {
-        s->link_idle_ticks = 0;   /* the host is in control (read-only commands never feed it) */
+    } else if (tag && f->cmd < 32u && ((TLP_LINK_FEED_MASK >> f->cmd) & 1u)) {
+        /* The host is in control: only a command that carried a verified MAC
+         * feeds the watchdog (read-only commands never do, nor a STOP sent
+         * without the key, which would otherwise keep an axis enabled for
+         * anyone on the network). */
+        s->link_idle_ticks = 0;
     }
     rep[0] = st;
     send(s, tx, f->seq, rc, rep, n);
@@ -885,6 +912,7 @@ void tl_servo_rx_byte(tl_servo_t *s, uint8_t byte, tl_tx_fn tx)
 {
     tl_frame_t f;
     uint8_t st = 0;
+    tl_auth_stir(&s->auth, hal_cycles());
     switch (tl_rx_byte(&s->rx, byte, &f, &st)) {
     case TL_RX_FRAME:
         handle(s, &f, tx);

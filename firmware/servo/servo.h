@@ -11,6 +11,7 @@
 #include <stdint.h>
 
 #include "control.h"
+#include "tl_auth.h"
 #include "tl_link.h"
 
 #define TL_AXES TLP_AXIS_COUNT   /* the protocol's axis count (torqueloop/spec/system.toml) */
@@ -41,7 +42,7 @@ typedef struct {
 } tl_axis_t;
 
 typedef struct {
-    uint16_t frames_ok, crc, framing, length, oversize, unknown, replay, rejected, tx_dropped;
+    uint16_t frames_ok, crc, framing, length, oversize, unknown, replay, rejected, tx_dropped, auth;
 } tl_counters_t;
 
 typedef struct {
@@ -49,6 +50,7 @@ typedef struct {
     int32_t g[TLP_PARAM_COUNT];   /* global parameters, same indexing */
     tl_rx_t rx;
     tl_seq_t seq;
+    tl_auth_t auth;               /* the key and the session (tl_auth.h) */
     tl_counters_t cnt;
     uint32_t ticks;               /* control periods since start */
     uint32_t link_idle_ticks;     /* control periods since the last valid command */

@@ -2,6 +2,9 @@
 /* hal.h on the host: registers are fields of hal_fake (hal_fake.h). */
 #include "hal_fake.h"
 
+#include "tl_keyslot.h"
+#include "tl_link.h"
+
 hal_fake_t hal_fake;
 
 void hal_fake_reset(void)
@@ -65,6 +68,22 @@ void hal_safety_ack(uint32_t bits)
 }
 uint32_t hal_build_id(void) { return 0x1234ABCDu; }
 uint32_t hal_clk_hz(void) { return 50000000u; }
+const uint8_t *hal_key_slot(void) { return hal_fake.key_slot; }
+uint32_t hal_cycles(void) { return hal_fake.cycles += 37u; }
+
+void hal_fake_set_key(const uint8_t key[TLP_AUTH_KEY_BYTES])
+{
+    uint8_t *s = hal_fake.key_slot, mac[TL_SHA256_BYTES];
+    tl_put_u32(s, TLP_AUTH_KEY_SLOT_MAGIC);
+    tl_put_u32(&s[4], TLP_AUTH_KEY_SLOT_ALGORITHM);
+    for (uint32_t i = 0; i < TLP_AUTH_KEY_BYTES; i++)
+        s[TL_KEYSLOT_KEY_OFS + i] = key[i];
+    tl_hmac_key_t k;
+    tl_hmac_key(&k, key, TLP_AUTH_KEY_BYTES);
+    tl_hmac(&k, (const uint8_t *)TLP_AUTH_LABEL_CHECK, TLP_AUTH_LABEL_BYTES, mac);
+    for (uint32_t i = 0; i < TL_KEYSLOT_CHECK_BYTES; i++)
+        s[TL_KEYSLOT_CHECK_OFS + i] = mac[i];
+}
 void hal_set_baud_div(uint32_t div) { hal_fake.baud_div = div; }
 void hal_irq_off(void) { hal_fake.irq_depth++; }
 void hal_irq_on(void) { hal_fake.irq_depth--; }

@@ -4,6 +4,7 @@
 #define TL_HAL_FAKE_H
 
 #include "hal.h"
+#include "tl_protocol.h"
 
 typedef struct {
     tl_enc_sample_t enc[2];
@@ -19,9 +20,13 @@ typedef struct {
     int32_t index_pos[2];
     uint32_t latch_after_read;   /* set these SYS latch bits right after the next hal_safety() read */
     int irq_depth;
+    uint8_t key_slot[TLP_AUTH_KEY_SLOT_BYTES];   /* blank after reset: a board without a key */
+    uint32_t cycles;
 } hal_fake_t;
 
 extern hal_fake_t hal_fake;
 void hal_fake_reset(void);
+/* Write key into the key slot as torqueloop.spec.auth.key_slot does (magic, algorithm, key, check). */
+void hal_fake_set_key(const uint8_t key[TLP_AUTH_KEY_BYTES]);
 
 #endif

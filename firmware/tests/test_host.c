@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* Host unit tests of the firmware's plain C: link layer, control law,
- * trapezoid profile and the servo core's safety and command handling (on the
- * fake HAL).  Run by tests/test_firmware_host.py.
+ * trapezoid profile, the servo core's safety and command handling and its
+ * authentication (on the fake HAL).  Run by tests/test_firmware_host.py.
  *
  *   host_tests unit [seed]   run every test; prints the seed and the counts
  *   host_tests ctl           line-driven control.c, compared with
@@ -130,6 +130,10 @@ static uint8_t last_reply[TLP_MAX_PACKET];
 static int last_reply_len;
 static uint16_t host_seq;
 static tl_rx_t reply_rx;
+static tl_auth_t host;        /* the host's half of the session: its key and the two nonces */
+static bool host_tags;        /* send_cmd appends a MAC to every command but the reads */
+static const uint8_t TEST_KEY[TLP_AUTH_KEY_BYTES] = {0x54, 0x4c, 0x6b, 0x65, 0x79, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11,
+                                                     12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27};
 
 static bool capture_tx(const uint8_t *wire, uint32_t len)
 {
@@ -153,11 +157,30 @@ static void feed(const uint8_t *wire, size_t len)
         tl_servo_rx_byte(&sv, wire[i], capture_tx);
 }
 
+static bool is_read(uint8_t cmd)
+{
+    return cmd == TLP_CMD_IDENTIFY || cmd == TLP_CMD_GET_PARAM || cmd == TLP_CMD_STATUS || cmd == TLP_CMD_COUNTERS ||
+           cmd == TLP_CMD_SESSION;
+}
+
+/* The wire bytes of a command, with its MAC in the host's session if tagged. */
+static size_t encode_cmd(uint16_t seq, uint8_t cmd, const uint8_t *payload, uint8_t len, bool tagged, uint8_t *wire)
+{
+    uint8_t p[TLP_MAX_PAYLOAD];
+    if (len)
+        memcpy(p, payload, len);   /* HEARTBEAT has none (payload may be NULL) */
+    if (tagged) {
+        tl_auth_tag(&host, seq, cmd, p, len, &p[len]);
+        len = (uint8_t)(len + TLP_AUTH_TAG_BYTES);
+    }
+    return tl_frame_encode(seq, cmd, p, len, wire, TLP_MAX_WIRE);
+}
+
 /* Send one command, return its status (reply payload byte 0). */
 static uint8_t send_cmd(uint8_t cmd, const uint8_t *payload, uint8_t len)
 {
     uint8_t wire[TLP_MAX_WIRE];
-    size_t wl = tl_frame_encode(++host_seq, cmd, payload, len, wire, sizeof wire);
+    size_t wl = encode_cmd(++host_seq, cmd, payload, len, host_tags && !is_read(cmd), wire);
     last_reply_len = -1;
     feed(wire, wl);
     CHECK(last_reply_len >= 1 && last_reply[0] == (cmd | TLP_REPLY_FLAG), "reply to 0x%02x", cmd);
@@ -188,13 +211,52 @@ static uint8_t move(uint8_t axis, uint8_t mode, int32_t target)
 
 static uint8_t clear(uint8_t mask) { return send_cmd(TLP_CMD_CLEAR_FAULT, &mask, 1); }
 
-static void fresh(void)
+/* SESSION: the board's nonce and proof; the host's half checks the proof and keeps the nonces. */
+static uint8_t open_session(void)
+{
+    uint8_t hn[TLP_AUTH_NONCE_BYTES];
+    for (uint32_t i = 0; i < sizeof hn; i++)
+        hn[i] = (uint8_t)rnd();
+    uint8_t st = send_cmd(TLP_CMD_SESSION, hn, sizeof hn);
+    if (st != TLP_ST_OK)
+        return st;
+    memcpy(host.host_nonce, hn, sizeof hn);
+    memcpy(host.board_nonce, &last_reply[1 + TLP_SESSION_REP_BOARD_NONCE], TLP_AUTH_NONCE_BYTES);
+    /* the proof, computed here from its definition: HMAC(key, "TLSP" | host nonce | board nonce)[:16] */
+    uint8_t m[4 + 2 * TLP_AUTH_NONCE_BYTES], mac[TL_SHA256_BYTES];
+    memcpy(m, TLP_AUTH_LABEL_PROOF, 4);
+    memcpy(&m[4], hn, sizeof hn);
+    memcpy(&m[4 + sizeof hn], host.board_nonce, TLP_AUTH_NONCE_BYTES);
+    tl_hmac(&host.key, m, sizeof m, mac);
+    CHECK(memcmp(mac, &last_reply[1 + TLP_SESSION_REP_PROOF], TLP_AUTH_TAG_BYTES) == 0, "session proof");
+    return st;
+}
+
+/* A board with the test key (key = false: built without one), the host holding that key, a session open. */
+static void fresh_keyed(bool key)
 {
     hal_fake_reset();
+    if (key)
+        hal_fake_set_key(TEST_KEY);
     tl_servo_init(&sv);
     tl_rx_init(&reply_rx);
     host_seq = (uint16_t)rnd();
+    uint8_t slot[TLP_AUTH_KEY_SLOT_BYTES];
+    memcpy(slot, hal_fake.key_slot, sizeof slot);
+    if (!key) {
+        hal_fake_t save = hal_fake;
+        hal_fake_set_key(TEST_KEY);
+        memcpy(slot, hal_fake.key_slot, sizeof slot);
+        hal_fake = save;
+    }
+    tl_auth_init(&host, slot);
+    host_tags = false;
+    if (key)
+        CHECK(open_session() == TLP_ST_OK, "session");
+    host_tags = key;
 }
+
+static void fresh(void) { fresh_keyed(true); }
 
 static void ticks(int n)
 {
@@ -225,7 +287,7 @@ static void test_servo_safety(void)
     uint8_t p[6] = {0, U};
     tl_put_u32(&p[2], 2000);
     uint8_t wire[TLP_MAX_WIRE];
-    size_t wl = tl_frame_encode(++host_seq, TLP_CMD_MOVE, p, 6, wire, sizeof wire);
+    size_t wl = encode_cmd(++host_seq, TLP_CMD_MOVE, p, 6, true, wire);
     feed(wire, wl);
     CHECK(last_reply[1] == TLP_ST_OK, "first copy executed");
     (void)move(0, U, 1334);
@@ -463,7 +525,7 @@ static void test_link_feed(void)
           sv.ax[0].faults);
     CHECK(clear(1) == TLP_ST_OK && enable(1, 1) == TLP_ST_OK, "recover");
     uint8_t wire[TLP_MAX_WIRE];
-    size_t wl = tl_frame_encode(++host_seq, TLP_CMD_HEARTBEAT, NULL, 0, wire, sizeof wire);
+    size_t wl = encode_cmd(++host_seq, TLP_CMD_HEARTBEAT, NULL, 0, true, wire);   /* with its MAC */
     for (int n = 0; n < 60; n++) {
         if (n % 10 == 0)
             CHECK(send_cmd(TLP_CMD_HEARTBEAT, NULL, 0) == TLP_ST_OK, "heartbeat");
@@ -477,6 +539,16 @@ static void test_link_feed(void)
         ticks(1);
     }
     CHECK(!sv.ax[0].enabled && (sv.ax[0].faults & TLP_FAULT_LINK), "a replayed heartbeat fed the watchdog");
+    /* anyone may STOP without the key, but that does not show the host in control */
+    CHECK(clear(1) == TLP_ST_OK && enable(1, 1) == TLP_ST_OK, "recover again");
+    host_tags = false;
+    uint8_t m = 1;
+    for (int n = 0; n < 30 && sv.ax[0].enabled; n++) {
+        CHECK(send_cmd(TLP_CMD_STOP, &m, 1) == TLP_ST_OK, "stop without a MAC");
+        ticks(1);
+    }
+    host_tags = true;
+    CHECK(!sv.ax[0].enabled && (sv.ax[0].faults & TLP_FAULT_LINK), "STOPs without a MAC fed the watchdog");
 }
 
 /* A soft-limit fault can be cleared while outside; the axis may then be enabled and
@@ -662,6 +734,110 @@ static void test_encoder_wrap(void)
           "offset arithmetic wraps: %" PRId32 ", faults 0x%x", sv.ax[0].pos, sv.ax[0].faults);
 }
 
+static uint32_t get_kp(void)
+{
+    uint8_t p[2] = {0, TLP_P_KP_Q16};
+    CHECK(send_cmd(TLP_CMD_GET_PARAM, p, 2) == TLP_ST_OK, "get");
+    return tl_get_u32(&last_reply[1 + TLP_GET_PARAM_REP_VALUE]);
+}
+
+/* Who may change the machine (docs/security.md). */
+static void test_servo_auth(void)
+{
+    /* a board built without a key: refuses what needs one and says why; reading and stopping work */
+    fresh_keyed(false);
+    CHECK(open_session() == TLP_ST_NO_KEY, "SESSION on a board without a key");
+    CHECK(enable(1, 1) == TLP_ST_NO_KEY && !hal_fake.pwm_on[0], "enable without a key on the board");
+    host_tags = true;
+    CHECK(enable(1, 1) == TLP_ST_NO_KEY && set_param(0, TLP_P_KP_Q16, 5) == TLP_ST_NO_KEY, "tagged, no key");
+    host_tags = false;
+    uint8_t m = 1;
+    CHECK(send_cmd(TLP_CMD_STOP, &m, 1) == TLP_ST_OK && enable(3, 0) == TLP_ST_OK, "stop and disable need no key");
+    CHECK(sv.cnt.auth == 3, "refusals counted: %u", sv.cnt.auth);
+
+    /* a keyed board: without a MAC nothing that changes the machine runs */
+    fresh();
+    host_tags = false;
+    hal_fake.enc[0].pos = 500;
+    uint32_t kp = get_kp();
+    CHECK(enable(1, 1) == TLP_ST_AUTH && !hal_fake.pwm_on[0] && !sv.ax[0].enabled, "enable without a MAC");
+    CHECK(set_param(0, TLP_P_KP_Q16, 5) == TLP_ST_AUTH && get_kp() == kp, "set without a MAC");
+    uint8_t magic[4];
+    tl_put_u32(magic, TLP_BOOTLOADER_MAGIC);
+    CHECK(send_cmd(TLP_CMD_BOOTLOADER, magic, 4) == TLP_ST_AUTH && !sv.bootloader_req, "bootloader without a MAC");
+    CHECK(clear(1) == TLP_ST_AUTH, "clear without a MAC");
+    host_tags = true;
+    CHECK(enable(1, 1) == TLP_ST_OK && hal_fake.pwm_on[0], "enable with the MAC");
+    CHECK(move(0, U, 700) == TLP_ST_OK && (sv.ax[0].c.target_q16 >> 16) == 700, "move with the MAC");
+    /* a MAC off by one bit, or for another command, or another session's: refused, nothing moves */
+    uint8_t p[6] = {0, U}, wire[TLP_MAX_WIRE];
+    tl_put_u32(&p[2], 900);
+    for (int bit = 0; bit < 8 * (int)TLP_AUTH_TAG_BYTES; bit += 5) {
+        uint8_t q[6 + TLP_AUTH_TAG_BYTES];
+        memcpy(q, p, 6);
+        tl_auth_tag(&host, (uint16_t)(host_seq + 1), TLP_CMD_MOVE, q, 6, &q[6]);
+        q[6 + bit / 8] ^= (uint8_t)(1u << (bit % 8));
+        feed(wire, tl_frame_encode(++host_seq, TLP_CMD_MOVE, q, sizeof q, wire, sizeof wire));
+        CHECK(last_reply[1] == TLP_ST_AUTH && (sv.ax[0].c.target_q16 >> 16) == 700, "tag bit %d flipped", bit);
+    }
+    /* replay: the same authenticated frame again is refused and not executed twice */
+    size_t wl = encode_cmd(++host_seq, TLP_CMD_MOVE, p, 6, true, wire);
+    feed(wire, wl);
+    CHECK(last_reply[1] == TLP_ST_OK && (sv.ax[0].c.target_q16 >> 16) == 900, "first copy");
+    CHECK(move(0, U, 800) == TLP_ST_OK, "move");
+    feed(wire, wl);
+    CHECK(last_reply[1] == TLP_ST_REPLAY && (sv.ax[0].c.target_q16 >> 16) == 800, "replayed MOVE refused");
+    /* ... also after someone without the key walked the link's seq all the way round: the
+     * session's own count refuses it (unauthenticated frames cannot move that one) */
+    uint16_t replay_seq = 0;
+    {
+        tl_frame_t f;
+        uint8_t st;
+        tl_rx_t r;
+        tl_rx_init(&r);
+        for (size_t i = 0; i < wl; i++)
+            if (tl_rx_byte(&r, wire[i], &f, &st) == TL_RX_FRAME)
+                replay_seq = f.seq;
+    }
+    host_tags = false;
+    for (int k = 0; k < 10 && !tl_seq_is_new(&sv.seq, replay_seq); k++) {
+        host_seq = (uint16_t)(host_seq + 0x7000u);
+        uint8_t ax = 0;
+        CHECK(send_cmd(TLP_CMD_STATUS, &ax, 1) == TLP_ST_OK, "status %d", k);
+    }
+    CHECK(tl_seq_is_new(&sv.seq, replay_seq), "the link's seq guard alone would take the old frame");
+    feed(wire, wl);
+    CHECK(last_reply[1] != TLP_ST_OK && (sv.ax[0].c.target_q16 >> 16) == 800, "old MOVE replayed after the seq wrapped");
+    /* the session's range: a host that left it opens a new one */
+    host_tags = true;
+    CHECK(open_session() == TLP_ST_OK && move(0, U, 810) == TLP_ST_OK, "new session");
+    /* tags of the old session do not verify in the new one */
+    tl_auth_t old = host;
+    CHECK(open_session() == TLP_ST_OK, "another session");
+    tl_auth_t cur = host;
+    host = old;
+    CHECK(move(0, U, 820) == TLP_ST_AUTH && (sv.ax[0].c.target_q16 >> 16) == 810, "stale session's MAC");
+    host = cur;
+    CHECK(memcmp(old.board_nonce, cur.board_nonce, TLP_AUTH_NONCE_BYTES) != 0, "fresh challenge");
+    /* a host with another key: the session proof tells, and its MACs are refused */
+    tl_auth_t wrong;
+    uint8_t other[TLP_AUTH_KEY_BYTES] = {9};
+    hal_fake_t save = hal_fake;
+    hal_fake_set_key(other);
+    tl_auth_init(&wrong, hal_fake.key_slot);
+    hal_fake = save;
+    memcpy(wrong.host_nonce, host.host_nonce, TLP_AUTH_NONCE_BYTES);
+    memcpy(wrong.board_nonce, host.board_nonce, TLP_AUTH_NONCE_BYTES);
+    host = wrong;
+    CHECK(move(0, U, 830) == TLP_ST_AUTH && (sv.ax[0].c.target_q16 >> 16) == 810, "wrong key");
+    /* stopping is always allowed: STOP and disable without any MAC */
+    host_tags = false;
+    m = 1;
+    CHECK(send_cmd(TLP_CMD_STOP, &m, 1) == TLP_ST_OK && (sv.ax[0].c.target_q16 >> 16) == 500, "stop without a MAC");
+    CHECK(enable(1, 0) == TLP_ST_OK && !hal_fake.pwm_on[0] && !sv.ax[0].enabled, "disable without a MAC");
+    CHECK(hal_fake.irq_depth == 0, "critical sections balanced");
+}
+
 /* Random and corrupted traffic: no parameter, enable or set-point changes. */
 static void test_servo_flood(void)
 {
@@ -802,6 +978,7 @@ int main(int argc, char **argv)
     test_homing();
     test_gain_readback();
     test_encoder_wrap();
+    test_servo_auth();
     test_servo_flood();
     test_profile();
     printf("%u checks, %u failures\n", checks, failures);

@@ -37,7 +37,7 @@ def main() -> int:
     fw = firmware.build("servo_boot_tb", {"TL_DEFAULT_BAUD_DIV": str(tbm.BAUD_DIV)})
     factory = bp.load_image(fw.elf)
     app = tbm.build_prog("app")
-    rom = build_boot.build_rom(factory, tbm.TB_CFG, name="servo_rom")
+    rom = build_boot.build_rom(factory, tbm.TB_CFG, name="servo_rom", key=tbm.KEY)
     with tempfile.TemporaryDirectory() as d:
         out = Path(d) / "times"
         t0 = time.monotonic()
@@ -46,13 +46,13 @@ def main() -> int:
             extra_env={"TB_APP_HEX": app.hex(), "TB_FACTORY_HEX": factory.hex(), "TB_SERVO": str(out)})
         t_f, t_id = map(int, out.read_text().split())
     # Same build, ROM without a factory image: the bootloader must wait for an upload.
-    rom.write_text(bp.hex_words(bp.rom_image(build_boot.build_boot(tbm.TB_CFG).bin.read_bytes(), None)))
+    rom.write_text(bp.hex_words(bp.rom_image(build_boot.build_boot(tbm.TB_CFG).bin.read_bytes(), None, tbm.KEY)))
     try:
         run("soc", "verilator", "test_bootloader", parameters={"ROM_INIT": f'"{rom}"'}, build_tag="bootloader",
             testcase="no_factory_waits_for_an_upload",
             extra_env={"TB_APP_HEX": app.hex(), "TB_FACTORY_HEX": factory.hex(), "TB_NO_FACTORY": "1"})
     finally:
-        build_boot.build_rom(factory, tbm.TB_CFG, name="servo_rom")
+        build_boot.build_rom(factory, tbm.TB_CFG, name="servo_rom", key=tbm.KEY)
     print("ROM without factory image: TLBN, window without timeout, upload loaded and run")
     copy = t_f - tbm.TB_CFG.window_cycles
     print(f"servo as factory (sim, {len(factory)} B): TLBF {t_f} cycles after the window opened "

@@ -10,10 +10,12 @@ an independent UART model (cocotbext-uart) drives RX and reads TX.
 Checked: no upload -> factory after the window; a good upload runs (LEDs,
 UART), hands back to the bootloader by the documented jump and loads again;
 bad image CRC, bad header, oversized length, truncated frame, bytes without a
-sync are each answered with their error reply and the factory firmware runs
-pristine (a half-written image never runs); RN-XV chatter in front of a frame
-does no harm; the window closes when configured.  The board's real window
-(500 ms = 25 000 000 cycles) is read from the board build's ELF.
+sync, an image signed with another key are each answered with their error
+reply and the factory firmware runs pristine (a half-written or unsigned
+image never runs); a ROM without a key refuses a correctly signed upload;
+RN-XV chatter in front of a frame does no harm; the window closes when
+configured.  The board's real window (500 ms = 25 000 000 cycles) is read
+from the board build's ELF.  The ROM holds auth.TEST_KEY (docs/security.md).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ import cocotb
 import pytest
 from cocotb.triggers import ClockCycles, FallingEdge, Timer, with_timeout
 
+from torqueloop.spec import auth
 from torqueloop.spec import bootproto as bp
 from torqueloop.flow.manifest import REPO_ROOT
 from torqueloop.flow.simrun import BUILD_ROOT, run
@@ -41,6 +44,11 @@ BAUD = 50_000_000 // (BAUD_DIV + 1)
 BYTE_CYCLES = 10 * (BAUD_DIV + 1)
 TB_CFG = build_boot.BootConfig(window_cycles=40_000, gap_cycles=20_000, baud_div=BAUD_DIV)
 FACTORY_LEDS, DIRTY_LEDS, APP_LEDS = 0x0F0, 0x3FF, 0x2A5
+KEY = auth.TEST_KEY
+
+
+def signed(image: bytes, key: bytes = KEY) -> bytes:
+    return bp.encode_frame(image, key)
 
 
 def build_prog(name: str) -> bytes:
@@ -80,7 +88,8 @@ class TB:
         await ClockCycles(self.dut.clk, 10)
         self.sink.clear()
         self.dut.rst.value = 0
-        await with_timeout(FallingEdge(self.dut.uart_tx), 20_000 * 20, "ns")
+        # the bootloader readies the key (~55 000 cycles) before it says TLBW
+        await with_timeout(FallingEdge(self.dut.uart_tx), 100_000 * CLK_NS, "ns")
         t_tx = self.cycle
         assert await self.line() == b"TLBW\n"
         return t_tx
@@ -130,13 +139,13 @@ async def good_upload_runs_and_hands_back(dut):
     tb = TB(dut)
     app, _ = _images()
     await tb.reset()
-    await tb.src.write(b"*OPEN*" + bp.encode_frame(_app_variant(app)))   # RN-XV chatter first: harmless
+    await tb.src.write(b"*OPEN*" + signed(_app_variant(app)))   # RN-XV chatter first: harmless
     await tb.expect(b"TLBK\n", b"APP\n")
     await tb.leds_settle(APP_LEDS)
     # The app jumps to the boot ROM (the entry convention); a second upload loads.
     await tb.src.write(b"B")
     await tb.expect(b"TLBW\n")
-    await tb.src.write(bp.encode_frame(_app_variant(app)))
+    await tb.src.write(signed(_app_variant(app)))
     await tb.expect(b"TLBK\n", b"APP\n")
     # After a reset without an upload the factory firmware runs, pristine.
     await tb.reset()
@@ -154,8 +163,8 @@ async def _rejected(dut, data: bytes, code: bytes) -> None:
 @cocotb.test()
 async def bad_crc_rejected(dut):
     app, _ = _images()
-    frame = bytearray(bp.encode_frame(_app_variant(app)))
-    bit = random.randrange(bp.FRAME_OVERHEAD * 8, len(frame) * 8)
+    frame = bytearray(signed(_app_variant(app)))
+    bit = random.randrange(bp.FRAME_OVERHEAD * 8, (len(frame) - bp.TAG_BYTES) * 8)
     frame[bit // 8] ^= 1 << (bit % 8)
     await _rejected(dut, bytes(frame), b"C")
 
@@ -163,7 +172,7 @@ async def bad_crc_rejected(dut):
 @cocotb.test()
 async def bad_header_rejected(dut):
     app, _ = _images()
-    frame = bytearray(bp.encode_frame(app))
+    frame = bytearray(signed(app))
     bit = random.randrange(len(bp.SYNC) * 8, bp.FRAME_OVERHEAD * 8)
     frame[bit // 8] ^= 1 << (bit % 8)
     await _rejected(dut, bytes(frame), b"H")
@@ -180,9 +189,17 @@ async def oversized_rejected(dut):
 @cocotb.test()
 async def truncated_rejected_and_half_image_never_runs(dut):
     app, _ = _images()
-    frame = bp.encode_frame(_app_variant(app))
-    cut = random.randrange(bp.FRAME_OVERHEAD + 16, len(frame) - 1)   # part of the app is already in RAM
+    frame = signed(_app_variant(app))
+    cut = random.randrange(bp.FRAME_OVERHEAD + 16, len(frame) - 1)   # part of the app (or all) is already in RAM
     await _rejected(dut, frame[:cut], b"T")
+
+
+@cocotb.test()
+async def image_signed_with_another_key_never_runs(dut):
+    """The CRC is right, the MAC is not this board's: A, then the factory
+    firmware, pristine, although the whole image sat in RAM."""
+    app, _ = _images()
+    await _rejected(dut, signed(_app_variant(app), key=bytes(range(32))), b"A")
 
 
 @cocotb.test()
@@ -201,7 +218,7 @@ async def window_closes_when_configured(dut):
     for offset, accepted in ((-margin, True), (+margin, False)):
         t0 = await tb.reset()
         await Timer((t0 + TB_CFG.window_cycles + offset - BYTE_CYCLES - tb.cycle) * CLK_NS, unit="ns")
-        await tb.src.write(bp.encode_frame(app))
+        await tb.src.write(signed(app))
         if accepted:
             await tb.expect(b"TLBK\n", b"APP\n")
         else:
@@ -231,8 +248,8 @@ async def servo_factory_answers_and_hands_over(dut):
     await Timer(2_000, unit="us")
     dec = P.FrameDecoder()
 
-    async def transact(name: str, seq: int, **fields: int) -> dict[str, int]:
-        await tb.src.write(P.request(name, seq, **fields))
+    async def transact(name: str, seq: int, wire: bytes | None = None, **fields) -> dict:
+        await tb.src.write(wire or P.request(name, seq, **fields))
         for _ in range(2000):
             for f in dec.feed(await with_timeout(tb.sink.read(1), 4_000_000 * CLK_NS, "ns")):
                 if isinstance(f, P.Frame) and f.cmd == P.COMMANDS[name].cmd | 0x80:
@@ -243,9 +260,14 @@ async def servo_factory_answers_and_hands_over(dut):
     assert ident["status"] == 0 and ident["clk_hz"] == 50_000_000, ident
     t_id = tb.cycle
     rep = await transact("BOOTLOADER", ident["last_seq"] + 1, magic=P.BOOTLOADER_MAGIC)
+    assert rep["status"] == P.STATUS["AUTH"], f"BOOTLOADER without the key: {rep}"
+    hn = auth.new_host_nonce()
+    sess = auth.open_session(KEY, hn, await transact("SESSION", 0, host_nonce=hn))
+    seq = ident["last_seq"] + 1
+    rep = await transact("BOOTLOADER", seq, sess.request("BOOTLOADER", seq, magic=P.BOOTLOADER_MAGIC))
     assert rep["status"] == 0, rep
     await tb.expect(b"TLBW\n")
-    await tb.src.write(bp.encode_frame(app))
+    await tb.src.write(signed(app))
     await tb.expect(b"TLBK\n", b"APP\n")
     cocotb.log.info(f"servo factory: TLBF {t_f - t0} cycles after TLBW, IDENTIFY answered at {t_id - t0}")
     Path(os.environ["TB_SERVO"]).write_text(f"{t_f - t0} {t_id - t0}\n")
@@ -261,9 +283,18 @@ async def no_factory_waits_for_an_upload(dut):
     await tb.expect(b"TLBN\n", b"TLBW\n")
     await Timer(3 * TB_CFG.window_cycles * CLK_NS, unit="ns")
     assert tb.sink.count() == 0, "the second window must not time out"
-    await tb.src.write(b"*OPEN*" + bp.encode_frame(_app_variant(app)))
+    await tb.src.write(b"*OPEN*" + signed(_app_variant(app)))
     await tb.expect(b"TLBK\n", b"APP\n")
     await tb.leds_settle(APP_LEDS)
+
+
+@cocotb.test(skip="TB_NO_KEY" not in os.environ)
+async def no_key_refuses_every_upload(dut):
+    """A ROM built without a key (test_bootloader runs this on the same
+    model with the ROM file rewritten): a correctly signed image is refused
+    with X before any of it reaches RAM, and the factory firmware runs."""
+    app, _ = _images()
+    await _rejected(dut, signed(_app_variant(app)), b"X")
 
 
 def test_board_window_is_500ms():
@@ -277,6 +308,13 @@ def test_board_window_is_500ms():
 @pytest.mark.parametrize("sim", ["verilator"])
 def test_bootloader(sim):
     app, factory = build_prog("app"), build_prog("factory")
-    rom = build_boot.build_rom(factory, TB_CFG, name="tb_rom")
-    run("soc", sim, "test_bootloader", parameters={"ROM_INIT": f'"{rom}"'}, build_tag="bootloader",
-        extra_env={"TB_APP_HEX": app.hex(), "TB_FACTORY_HEX": factory.hex()})
+    rom = build_boot.build_rom(factory, TB_CFG, name="tb_rom", key=KEY)
+    env = {"TB_APP_HEX": app.hex(), "TB_FACTORY_HEX": factory.hex()}
+    run("soc", sim, "test_bootloader", parameters={"ROM_INIT": f'"{rom}"'}, build_tag="bootloader", extra_env=env)
+    # the same model, its ROM file rewritten without the key
+    build_boot.build_rom(factory, TB_CFG, name="tb_rom", key=None)
+    try:
+        run("soc", sim, "test_bootloader", parameters={"ROM_INIT": f'"{rom}"'}, build_tag="bootloader",
+            testcase="no_key_refuses_every_upload", extra_env=env | {"TB_NO_KEY": "1"})
+    finally:
+        build_boot.build_rom(factory, TB_CFG, name="tb_rom", key=KEY)

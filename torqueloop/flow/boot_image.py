@@ -26,7 +26,9 @@ from torqueloop.spec.repo import REPO_ROOT as REPO
 HERE = REPO / "firmware" / "boot"
 
 CC = "riscv64-unknown-elf-gcc"
-SOURCES = [HERE / "start.S", HERE / "boot.c", HERE / "boot_crc.c"]
+CRYPTO = REPO / "firmware" / "crypto"
+SOURCES = [HERE / "start.S", HERE / "boot.c", HERE / "boot_crc.c", CRYPTO / "tl_sha256.c", CRYPTO / "tl_keyslot.c",
+           REPO / "firmware" / "common" / "mem.c"]
 CFLAGS = ["-march=rv32im_zicsr", "-mabi=ilp32", "-Os", "-ffreestanding", "-nostdlib", "-static", "-std=c11",
           "-Wall", "-Wextra", "-Werror", "-msmall-data-limit=0", "-ffunction-sections", "-fdata-sections"]
 
@@ -70,6 +72,7 @@ SECTIONS
     ASSERT(SIZEOF(.data) == 0 && SIZEOF(.bss) == 0, "bootloader: no .data/.bss, it runs from ROM")
     __boot_stack_top = 0x{ram:08X};
     boot_factory = 0x{rom + bootproto.FACTORY_OFS:08X};
+    boot_key_slot = 0x{rom + bootproto.KEY_SLOT_OFS:08X};
 }}
 """
 
@@ -90,7 +93,8 @@ def build_boot(cfg: BootConfig = BootConfig(), out: Path | None = None) -> BootB
     _write_if_changed(out / "boot_proto.h", bootproto.c_header(cfg.window_cycles, cfg.gap_cycles, cfg.baud_div,
                                                                    cfg.wdog_cycles))
     tmp_elf = out / f"boot.{os.getpid()}.elf"
-    cmd = [CC, *CFLAGS, f"-I{out}", f"-I{HERE}", f"-I{REPO / 'firmware' / 'include'}", "-T", str(out / "boot.ld"),
+    cmd = [CC, *CFLAGS, f"-I{out}", f"-I{HERE}", f"-I{REPO / 'firmware' / 'include'}", f"-I{CRYPTO}",
+           f"-I{REPO / 'firmware' / 'protocol'}", "-T", str(out / "boot.ld"),
            "-Wl,--gc-sections", "-Wl,--no-warn-rwx-segments", "-o", str(tmp_elf), *map(str, SOURCES)]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode:
@@ -114,10 +118,11 @@ def symbol_word(elf: Path, name: str) -> int:
 
 
 def build_rom(factory: bytes | None, cfg: BootConfig = BootConfig(), out: Path | None = None,
-              name: str = "boot_rom") -> Path:
-    """Bootloader + factory image -> <out>/<name>.hex (one word per line)."""
+              name: str = "boot_rom", key: bytes | None = None) -> Path:
+    """Bootloader + factory image + key slot (``key`` None: a board without
+    a key) -> <out>/<name>.hex (one word per line)."""
     b = build_boot(cfg, out)
-    rom = bootproto.rom_image(b.bin.read_bytes(), factory)
+    rom = bootproto.rom_image(b.bin.read_bytes(), factory, key)
     path = b.elf.parent / f"{name}.hex"
     _write_if_changed(path, bootproto.hex_words(rom))
     return path

@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
+import struct
 import subprocess
 import sys
 from dataclasses import dataclass
@@ -26,10 +27,12 @@ from torqueloop.spec import regs
 from torqueloop.spec.repo import REPO_ROOT as REPO
 
 FW = REPO / "firmware"
-SOURCES = [FW / "common" / "crt0.S", FW / "common" / "mem.c", FW / "protocol" / "tl_link.c",
+#: the authentication code the servo firmware, the host builds and the fuzzer share (docs/security.md)
+AUTH_SOURCES = [FW / "crypto" / "tl_sha256.c", FW / "crypto" / "tl_keyslot.c", FW / "protocol" / "tl_auth.c"]
+SOURCES = [FW / "common" / "crt0.S", FW / "common" / "mem.c", FW / "protocol" / "tl_link.c", *AUTH_SOURCES,
            FW / "servo" / "control.c", FW / "servo" / "servo.c", FW / "servo" / "hal_soc.c",
            FW / "servo" / "main.c"]
-INCLUDES = [FW / "include", FW / "protocol", FW / "servo"]
+INCLUDES = [FW / "include", FW / "protocol", FW / "crypto", FW / "servo"]
 CFLAGS = ["-march=rv32im_zicsr", "-mabi=ilp32", "-O2", "-ffreestanding", "-nostdlib", "-static",
           "-std=c11", "-Wall", "-Wextra", "-Werror", "-ffunction-sections", "-fdata-sections"]
 CC = "riscv64-unknown-elf-gcc"
@@ -124,9 +127,9 @@ def build(name: str = "servo", defines: dict[str, str] | None = None, out: Path 
 # --- the link parser under libFuzzer (host build, clang + sanitizers) ------------
 
 #: the firmware C that runs on the host (tests, fuzzing) with the fake HAL
-HOST_SOURCES = [FW / "tests" / "hal_fake.c", FW / "protocol" / "tl_link.c", FW / "servo" / "control.c",
+HOST_SOURCES = [FW / "tests" / "hal_fake.c", FW / "protocol" / "tl_link.c", *AUTH_SOURCES, FW / "servo" / "control.c",
                 FW / "servo" / "servo.c"]
-HOST_INCLUDES = [f"-I{FW / d}" for d in ("protocol", "servo", "tests")]
+HOST_INCLUDES = [f"-I{FW / d}" for d in ("protocol", "crypto", "servo", "tests")]
 
 
 class FuzzerMissing(RuntimeError):
@@ -153,12 +156,24 @@ def fuzz_binary() -> Path:
 
 
 def fuzz_seed_corpus(d: Path) -> None:
-    """Valid frames of every command (and noise) as a starting corpus."""
+    """A starting corpus for both speakers of firmware/tests/fuzz_link.c: the
+    attacker (first byte even) with valid untagged frames of every command and
+    noise, the key holder (first byte odd) with every command as a frame spec
+    [flags seq cmd len payload], tagged, and a session reopened and a replay."""
     d.mkdir(parents=True, exist_ok=True)
     for c in P.COMMANDS.values():
-        fields = {n: 0 for n, _ in c.req}
-        (d / f"{c.name}").write_bytes(P.request(c.name, 1, **fields))
-    (d / "hello").write_bytes(b"*HELLO*\x00")
+        fields = {n: (bytes(16) if t == "b16" else 0) for n, t in c.req}
+        (d / f"{c.name}").write_bytes(b"\x00" + P.request(c.name, 1, **fields))
+        payload = struct.pack(c.req_fmt, *fields.values())
+        specs = b"".join(bytes([flags]) + struct.pack("<HBB", seq, c.cmd, len(payload)) + payload
+                         for flags, seq in ((1, 2), (5, 3), (9, 4), (3, 5)))
+        (d / f"{c.name}_auth").write_bytes(b"\x01" + specs)
+    # a tagged MOVE, then frames without the key walking the link's seq round, then the MOVE again
+    mv = struct.pack("<BHBB", 1, 2, P.COMMANDS["MOVE"].cmd, 6) + bytes(6)
+    walk = b"".join(struct.pack("<BHBB", 0, seq, P.COMMANDS["STATUS"].cmd, 1) + b"\x00"
+                    for seq in (0x7002, 0xE002, 0x5002, 0xC002))
+    (d / "replay_after_seq_walk").write_bytes(b"\x01" + mv + walk + mv)
+    (d / "hello").write_bytes(b"\x00*HELLO*\x00")
 
 
 def run_fuzz(seconds: int) -> tuple[int, str]:

@@ -18,6 +18,13 @@ this module adds what a host needs on a real link:
   never a frame (baud rate, RN-XV text such as ``CMD`` or ``*HELLO*``);
   damaged chunks, CRC errors and bridge text are counted in :class:`LinkStats`.
 - telemetry frames arriving between replies are queued, not lost.
+- **authentication** (docs/security.md): with a key, every command that is
+  not a read goes out with its MAC in a session the client opens (SESSION)
+  and re-opens when the board has restarted or another host took over; the
+  board's proof tells a wrong key at once (:class:`AuthFailed`).  Without a
+  key, a command that needs one is not sent (:class:`KeyMissing`); STOP and
+  disabling go out without a MAC when the tagged copy is refused, since
+  stopping is always allowed.
 """
 
 from __future__ import annotations
@@ -27,6 +34,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Callable, Iterator
 
+from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
 
 from .transport import Link, LinkInfo
@@ -34,6 +42,9 @@ from .transport import Link, LinkInfo
 READ_ONLY = frozenset({"IDENTIFY", "GET_PARAM", "STATUS", "COUNTERS"})
 #: a lost reply to these is harmless to repeat with a fresh seq
 REPEATABLE = READ_ONLY | {"HEARTBEAT"}
+AUTH_STATUSES = frozenset({P.STATUS["AUTH"], P.STATUS["NO_SESSION"], P.STATUS["NO_KEY"]})
+#: sent without a MAC even with a key: reads (a MAC costs the board ~0.6 ms) and SESSION itself
+UNTAGGED = READ_ONLY | {"SESSION"}
 FAULT_DESC: dict[str, str] = {f["name"]: f["desc"] for f in P.SPEC["fault"]}
 STATUS_DESC: dict[int, str] = {s["code"]: s["desc"] for s in P.SPEC["status"]}
 
@@ -53,6 +64,18 @@ class LinkClosed(ProtocolError):
 
 class ReplyLost(ProtocolError):
     pass
+
+
+class KeyMissing(ProtocolError):
+    """A command that needs the key, and the tool has none (or a bad key file)."""
+
+
+class AuthFailed(ProtocolError):
+    """The board does not accept our key: it holds another one."""
+
+
+class BoardHasNoKey(ProtocolError):
+    """The board was built without a key: it refuses every command that needs one."""
 
 
 class CommandRejected(ProtocolError):
@@ -103,8 +126,14 @@ class Client:
     """Protocol client.  ``clock`` and the link are injectable for tests."""
 
     def __init__(self, link: Link, info: LinkInfo | None = None, *, timeout: float = 0.5,
-                 retries: int = 3, clock: Callable[[], float] = time.monotonic) -> None:
+                 retries: int = 3, clock: Callable[[], float] = time.monotonic, key: bytes | None = None,
+                 key_source: str = "", key_error: str = "") -> None:
+        """``key``: the link key (None: commands that need one are refused
+        here); ``key_source`` names where it came from and ``key_error`` why
+        there is none, for the messages."""
         self.link, self.info = link, info
+        self.key, self.key_source, self.key_error = key, key_source, key_error
+        self.session: auth.Session | None = None
         self.timeout, self.retries = timeout, retries
         self.clock = clock
         self.stats = LinkStats()
@@ -181,10 +210,11 @@ class Client:
         self._seq = (self._seq + 1) & 0xFFFF
         return self._seq
 
-    def _exchange(self, name: str, seq: int, fields: dict[str, int]) -> tuple[dict[str, int], int]:
-        """Send with retries; returns (decoded reply, attempt that got it)."""
+    def _exchange(self, name: str, seq: int, fields: dict, session: auth.Session | None = None
+                  ) -> tuple[dict, int]:
+        """Send with retries (with its MAC in ``session``); returns (decoded reply, attempt that got it)."""
         c = P.COMMANDS[name]
-        wire = P.request(name, seq, **fields)
+        wire = session.request(name, seq, **fields) if session else P.request(name, seq, **fields)
         want = c.cmd | P.REPLY_FLAG
         for attempt in range(self.retries + 1):
             if attempt:
@@ -232,12 +262,78 @@ class Client:
                 f"mismatch (this end: {self.info.baud if self.info else '?'} baud; firmware default 115200) "
                 "or an RN-XV that inserts text (`set comm remote 0`, `set comm open 0`, `set comm close 0`).")
 
+    # ---- authentication ------------------------------------------------------
+    def _key_missing(self, name: str) -> KeyMissing:
+        why = f" ({self.key_error})" if self.key_error else ""
+        return KeyMissing(f"{name} changes the machine and needs the link key{why}: name the key file with "
+                          f"--key-file FILE or ${auth.KEY_FILE_ENV} (docs/security.md)")
+
+    def _board_has_no_key(self, name: str) -> BoardHasNoKey:
+        return BoardHasNoKey(f"{name} refused: the board has no link key, so it refuses every command that "
+                             "changes the machine and every upload; reading, stop and disable still work. "
+                             "Provision the key into its boot ROM: docs/security.md, 'Key provisioning'")
+
+    def _auth_failed(self) -> AuthFailed:
+        src = f" from {self.key_source}" if self.key_source else ""
+        return AuthFailed(f"authentication failed: the board does not accept the key{src} (key id "
+                          f"{auth.key_id(self.key or b'')}): it was provisioned with another key")
+
+    def open_session(self) -> auth.Session:
+        """SESSION: a fresh challenge from the board, whose proof shows it holds our key."""
+        if self.key is None:
+            raise self._key_missing("SESSION")
+        if not self._synced:
+            self.connect()
+        hn = auth.new_host_nonce()
+        rep, _ = self._exchange("SESSION", self._next_seq(), {"host_nonce": hn})
+        if rep["status"] == P.STATUS["NO_KEY"]:
+            raise self._board_has_no_key("SESSION")
+        if rep["status"] != P.STATUS["OK"]:
+            raise CommandRejected("SESSION", rep["status"])
+        try:
+            self.session = auth.open_session(self.key, hn, rep)
+        except auth.AuthError:
+            self.session = None
+            raise self._auth_failed() from None
+        return self.session
+
     def transact(self, name: str, **fields: int) -> dict[str, int]:
         """Run one command; returns the reply fields (status OK) or raises."""
         if not self._synced and name != "IDENTIFY":
             self.connect()
+        needs = auth.needs_key(name, fields)
+        if self.key is None or name in UNTAGGED:
+            if needs:
+                raise self._key_missing(name)
+            return self._transact(name, fields, None)
+        try:
+            return self._authenticated(name, fields)
+        except (AuthFailed, BoardHasNoKey, CommandRejected) as e:
+            if needs or (isinstance(e, CommandRejected) and e.status not in AUTH_STATUSES):
+                raise
+            return self._transact(name, fields, None)    # stopping is always allowed: without a MAC
+
+    def _authenticated(self, name: str, fields: dict) -> dict[str, int]:
+        """The command with its MAC.  The session is opened again once if the
+        board asks (it restarted, another host opened one, this one is used
+        up); the new session's proof tells a wrong key from a stale session."""
+        for attempt in range(2):
+            if self.session is None or attempt:
+                self.open_session()
+            try:
+                return self._transact(name, fields, self.session)
+            except CommandRejected as e:
+                if e.status == P.STATUS["NO_KEY"]:
+                    raise self._board_has_no_key(name) from None
+                if e.status not in (P.STATUS["NO_SESSION"], P.STATUS["AUTH"]) or attempt:
+                    if e.status == P.STATUS["AUTH"]:
+                        raise self._auth_failed() from None
+                    raise
+        raise AssertionError("unreachable")
+
+    def _transact(self, name: str, fields: dict, session: auth.Session | None) -> dict[str, int]:
         seq = self._next_seq()
-        rep, attempt = self._exchange(name, seq, fields)
+        rep, attempt = self._exchange(name, seq, fields, session)
         st = rep["status"]
         if st == P.STATUS["REPLAY"]:
             if attempt == 0:
@@ -245,7 +341,7 @@ class Client:
                 self.stats.resyncs += 1
                 self.connect()
                 seq = self._next_seq()
-                rep, attempt = self._exchange(name, seq, fields)
+                rep, attempt = self._exchange(name, seq, fields, session)
                 st = rep["status"]
             if st == P.STATUS["REPLAY"]:
                 # The first copy was accepted and executed; its reply was lost.

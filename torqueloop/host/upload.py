@@ -9,11 +9,13 @@ and chains the steps over the one open link (the RN-XV takes one TCP client, so
 the upload must use the connection the BOOTLOADER command went over):
 
 1. IDENTIFY: the running firmware's build id;
-2. BOOTLOADER (magic from the protocol definition): drives off, the firmware
-   jumps to the boot ROM, which answers ``TLBW`` and listens;
-3. the upload frame, paced to the baud rate, with progress;
-4. ``TLBK`` -> the image runs; anything else -> the bootloader names the
-   error and starts the factory firmware;
+2. BOOTLOADER (magic from the protocol definition, authenticated: it needs
+   the key): drives off, the firmware jumps to the boot ROM, which answers
+   ``TLBW`` and listens;
+3. the upload frame, signed with the key (docs/security.md), paced to the
+   baud rate, with progress;
+4. ``TLBK`` -> the image runs; anything else (``TLBA``: the MAC does not
+   verify) -> the bootloader names the error and starts the factory firmware;
 5. reconnect (seq starts again) and IDENTIFY: which firmware answers now.
 """
 
@@ -27,10 +29,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
+from torqueloop.spec import auth
 from torqueloop.spec import bootproto as bp
 from torqueloop.spec import protocol as P
 
-from .client import Client, ProtocolError
+from .client import Client, KeyMissing, ProtocolError
 
 
 @dataclass(frozen=True)
@@ -55,7 +58,7 @@ def load_image(path: str | Path, raw_ok: bool = False) -> bytes:
     a binary carrying the firmware image header)."""
     try:
         image = bp.load_image(path, raw_ok=raw_ok)
-        bp.encode_frame(image)           # size limits, before anything is sent
+        bp.encode_frame(image, bytes(auth.KEY_BYTES))    # size limits, before anything is sent
     except (bp.ImageError, bp.FrameError) as e:
         raise ImageRefused(f"{path}: refused: {e}") from None
     except OSError as e:
@@ -70,6 +73,10 @@ def run_upload(client: Client, image: bytes, progress: Callable[[int, int], None
     """Steps 1-5 above over ``client``'s link (``port`` overrides the link
     the frame goes over, e.g. a test's corrupting wrapper)."""
     t0 = time.monotonic()
+    if client.key is None:
+        raise KeyMissing("an upload is signed with the link key and BOOTLOADER needs it: name the key file "
+                         f"with --key-file FILE or ${auth.KEY_FILE_ENV} (docs/security.md)"
+                         + (f" ({client.key_error})" if client.key_error else ""))
     old = client.connect()["build_id"]
     # Wait for the window here, reading through the client: TLBW may come in
     # the same read as the BOOTLOADER reply, or split across reads.
@@ -85,7 +92,7 @@ def run_upload(client: Client, image: bytes, progress: Callable[[int, int], None
     if bp.Reply.WINDOW not in early:
         raise ProtocolError(f"the board acknowledged BOOTLOADER but no boot ROM window (TLBW) came within "
                             f"{window_s:g} s: the bootloader is not in this FPGA image")
-    res = upload("", image, wait_window_s=0, progress=progress, port=port or client.link)
+    res = upload("", image, key=client.key, wait_window_s=0, progress=progress, port=port or client.link)
     res.replies[:0] = early
     replies = [r.value for r in res.replies]
     # Whatever runs now (the upload or the factory firmware) starts its seq afresh.
@@ -120,10 +127,10 @@ class UploadResult:
 Progress = Callable[[int, int], None]
 
 
-def upload(url: str, image: bytes, *, baud: int = bp.BAUD, wait_window_s: float = 30.0,
+def upload(url: str, image: bytes, *, key: bytes, baud: int = bp.BAUD, wait_window_s: float = 30.0,
            enter: bytes = b"", reply_timeout_s: float = 3.0, chunk: int = 256,
            progress: Progress | None = None, port=None) -> UploadResult:
-    """Send ``image`` to the bootloader at ``url`` and report what it said.
+    """Send ``image``, signed with ``key``, to the bootloader at ``url`` and report what it said.
 
     ``enter`` is sent first (e.g. the servo firmware's BOOTLOADER command);
     then the window-open reply ``TLBW`` is awaited for ``wait_window_s``
@@ -132,7 +139,7 @@ def upload(url: str, image: bytes, *, baud: int = bp.BAUD, wait_window_s: float 
     replies are read until the bootloader accepts or rejects it.  ``port``
     may be an already open pyserial object (tests); otherwise the URL is opened.
     """
-    frame = bp.encode_frame(image)
+    frame = bp.encode_frame(image, key)
     owned = port is None
     try:
         if port is None:
@@ -203,18 +210,29 @@ def _send(port, frame: bytes, image: bytes, baud: int, wait_window_s: float, ent
 
 # --- the standalone uploader (scripts/upload.py): no running firmware needed ------
 
-def servo_enter(port, timeout_s: float = 2.0) -> bytes:
-    """The BOOTLOADER request for the running servo firmware, with a seq it
-    will accept (one past the last seq its IDENTIFY reply reports)."""
-    port.write(P.request("IDENTIFY", 0))
+def servo_enter(port, key: bytes, timeout_s: float = 2.0) -> bytes:
+    """The BOOTLOADER request for the running servo firmware: IDENTIFY for a
+    seq it will accept (one past the last one it reports), SESSION for a
+    challenge, then the request with its MAC (BOOTLOADER needs the key)."""
     dec = P.FrameDecoder()
-    end = time.monotonic() + timeout_s
-    while time.monotonic() < end:
-        for f in dec.feed(port.read(max(1, port.in_waiting or 1))):
-            if isinstance(f, P.Frame) and f.cmd == (P.COMMANDS["IDENTIFY"].cmd | 0x80):
-                last = P.decode_reply(f).get("last_seq", 0)
-                return P.request("BOOTLOADER", (last + 1) & 0xFFFF, magic=P.BOOTLOADER_MAGIC)
-    raise TimeoutError("the servo firmware did not answer IDENTIFY (is it running, is the baud rate right?)")
+
+    def ask(name: str, wire: bytes) -> dict:
+        port.write(wire)
+        end = time.monotonic() + timeout_s
+        while time.monotonic() < end:
+            for f in dec.feed(port.read(max(1, port.in_waiting or 1))):
+                if isinstance(f, P.Frame) and f.cmd == (P.COMMANDS[name].cmd | P.REPLY_FLAG):
+                    return P.decode_reply(f)
+        raise TimeoutError(f"the servo firmware did not answer {name} (is it running, is the baud rate right?)")
+
+    last = ask("IDENTIFY", P.request("IDENTIFY", 0)).get("last_seq", 0)
+    hn = auth.new_host_nonce()
+    rep = ask("SESSION", P.request("SESSION", 0, host_nonce=hn))
+    if rep["status"] == P.STATUS["NO_KEY"]:
+        raise auth.AuthError("the board has no link key: it refuses BOOTLOADER and every upload (docs/security.md)")
+    if rep["status"] != P.STATUS["OK"]:
+        raise auth.AuthError(f"SESSION refused: {P.STATUS_NAME.get(rep['status'], rep['status'])}")
+    return auth.open_session(key, hn, rep).request("BOOTLOADER", (last + 1) & 0xFFFF, magic=P.BOOTLOADER_MAGIC)
 
 
 def progress_bar(sent: int, total: int) -> None:
@@ -236,6 +254,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--enter", action="store_true", help="send the servo firmware's BOOTLOADER command first")
     ap.add_argument("--wait", type=float, default=30.0, help="seconds to wait for the window (TLBW)")
     ap.add_argument("--raw", action="store_true", help="the file is a flat binary with the firmware image header")
+    ap.add_argument("-k", "--key-file", help=f"the link key (docs/security.md) [${auth.KEY_FILE_ENV}]")
     args = ap.parse_args(argv)
 
     try:
@@ -243,8 +262,18 @@ def main(argv: list[str] | None = None) -> int:
     except ImageRefused as e:
         print(f"upload: {e}", file=sys.stderr)
         return 2
+    path = auth.key_file_path(args.key_file)
+    if path is None:
+        print(f"upload: an upload is signed with the link key: name its file with --key-file or "
+              f"${auth.KEY_FILE_ENV} (docs/security.md)", file=sys.stderr)
+        return 1
+    try:
+        key = auth.read_key_file(path)
+    except auth.KeyFileError as e:
+        print(f"upload: {e}", file=sys.stderr)
+        return 1
     print(f"{args.image}: {len(image)} bytes, CRC-32 0x{bp.crc32(image):08x}, "
-          f"{len(image) + bp.FRAME_OVERHEAD} bytes on the wire (~{(len(image) + bp.FRAME_OVERHEAD) * 10 / args.baud:.1f} s)")
+          f"{bp.frame_bytes(len(image))} bytes on the wire (~{bp.frame_bytes(len(image)) * 10 / args.baud:.1f} s)")
 
     import serial
 
@@ -257,13 +286,13 @@ def main(argv: list[str] | None = None) -> int:
         enter = b""
         if args.enter:
             try:
-                enter = servo_enter(port)
-            except TimeoutError as e:
+                enter = servo_enter(port, key)
+            except (TimeoutError, auth.AuthError) as e:
                 print(f"upload: {e}", file=sys.stderr)
                 return 1
         else:
             print(f"waiting up to {args.wait:g} s for the bootloader: reset the board now", file=sys.stderr)
-        res = upload(args.port, image, baud=args.baud, wait_window_s=args.wait, enter=enter,
+        res = upload(args.port, image, key=key, baud=args.baud, wait_window_s=args.wait, enter=enter,
                         progress=progress_bar, port=port)
     finally:
         port.close()

@@ -36,16 +36,19 @@ import subprocess
 from pathlib import Path
 from typing import Protocol
 
+from torqueloop.flow.firmware import AUTH_SOURCES
 from torqueloop.models.pwm_schedule import PwmChannel, PwmSetting, run_until
+from torqueloop.spec import auth
 from torqueloop.spec.bridge import BRAKE, COAST
 from torqueloop.spec.system import SYSTEM
 
 REPO = Path(__file__).resolve().parents[2]
 FW = REPO / "firmware"
 SOURCES = [Path(__file__).with_name("simboard_hal.c"), FW / "servo" / "servo.c",
-           FW / "servo" / "control.c", FW / "protocol" / "tl_link.c"]
+           FW / "servo" / "control.c", FW / "protocol" / "tl_link.c", *AUTH_SOURCES]
 HEADERS = [FW / "servo" / "servo.h", FW / "servo" / "control.h", FW / "servo" / "hal.h",
-           FW / "protocol" / "tl_link.h", FW / "protocol" / "tl_protocol.h"]
+           FW / "protocol" / "tl_link.h", FW / "protocol" / "tl_protocol.h", FW / "protocol" / "tl_auth.h",
+           FW / "crypto" / "tl_sha256.h", FW / "crypto" / "tl_keyslot.h"]
 BUILD = REPO / "build" / "host"
 CLK_HZ = SYSTEM.clk_hz
 DEFAULT_BUILD_ID = 0x51B0_0001
@@ -84,7 +87,8 @@ def build_library() -> Path:
         has_interval = "interval;" in (FW / "servo" / "hal.h").read_text()
         subprocess.run(["gcc", "-std=c11", *(["-DSB_HAL_HAS_INTERVAL"] if has_interval else []),
                         "-O2", "-shared", "-fPIC", "-Wall", "-Wextra", "-Werror",
-                        f"-I{FW / 'servo'}", f"-I{FW / 'protocol'}", *map(str, SOURCES), "-o", str(tmp)],
+                        f"-I{FW / 'servo'}", f"-I{FW / 'protocol'}", f"-I{FW / 'crypto'}", *map(str, SOURCES),
+                        "-o", str(tmp)],
                        check=True)
         tmp.replace(lib)
     return lib
@@ -92,9 +96,12 @@ def build_library() -> Path:
 
 class SimBoard:
     """Firmware + PWM + decoder + plant.  One instance per process (the
-    firmware's state is the library's statics)."""
+    firmware's state is the library's statics).  ``key``: the link key in
+    its boot ROM's key slot (None: a board built without a key, which
+    refuses motion, parameter changes and uploads; docs/security.md)."""
 
-    def __init__(self, build_id: int = DEFAULT_BUILD_ID, seed: int = 0, plant: str = "paper") -> None:
+    def __init__(self, build_id: int = DEFAULT_BUILD_ID, seed: int = 0, plant: str = "paper",
+                 key: bytes | None = None) -> None:
         from sim_models.stepper import TwoAxisPlant
         from sim_models.variants import load_variant, parse_plant
 
@@ -121,10 +128,12 @@ class SimBoard:
         self._gray = [self._gray_index(a) for a in range(2)]
         self.build_id = build_id
         self.factory_build_id = build_id
+        self.key = key
+        self._slot = ctypes.create_string_buffer(auth.key_slot(key), auth.KEY_SLOT_BYTES)
         self.boot: SimBootRom | None = None
         self._boot_out = b""
         self._sync_encoders()
-        self._lib.sb_reset(ctypes.c_uint32(build_id))
+        self._lib.sb_reset(ctypes.c_uint32(build_id), self._slot)
         self._load_drives()
         self._next_tick_at = self._period_ticks()
 
@@ -155,7 +164,7 @@ class SimBoard:
         if self.boot is None and self._lib.sb_bootloader_requested():
             # main.c's jump_to_bootloader: the reply is out, the firmware stops
             try:
-                self.boot = SimBootRom(self.tick)
+                self.boot = SimBootRom(self.tick, self.key)
             except ImportError:      # no torqueloop.spec.bootproto: a boot stub that restarts the firmware
                 self.restart(self.factory_build_id)
         if self.boot is not None:
@@ -179,9 +188,14 @@ class SimBoard:
         """A firmware start (reset or the boot ROM's jump): fresh firmware state."""
         self.build_id = build_id
         self._sync_encoders()
-        self._lib.sb_reset(ctypes.c_uint32(build_id))
+        self._lib.sb_reset(ctypes.c_uint32(build_id), self._slot)
         self._load_drives()
         self._next_tick_at = self.tick + self._period_ticks()
+
+    def reset(self) -> None:
+        """The reset button: drives off, the boot ROM's window (then the factory firmware, or an upload)."""
+        self.restart(self.factory_build_id)
+        self.boot = SimBootRom(self.tick, self.key)
 
     # ---- test handles -------------------------------------------------------------
     def set_estop(self, pressed: bool) -> None:
@@ -270,14 +284,17 @@ class SimBootRom:
     The simulated board cannot execute RV32 code: an accepted image
     restarts the same host-compiled servo firmware, reporting the image's
     CRC-32 as its build id, so a host sees which image "runs"; a rejected
-    one restarts the factory firmware with the factory build id.
+    one restarts the factory firmware with the factory build id.  As the
+    boot ROM, it checks the image's MAC under the board's ``key`` (None: the
+    board has no key and refuses every upload).
     ``poll`` returns None while listening, then "factory" or the new build id.
     """
 
-    def __init__(self, now: int) -> None:
+    def __init__(self, now: int, key: bytes | None) -> None:
         from torqueloop.spec import bootproto as bp
 
         self.bp = bp
+        self.key = key
         self._tx = bytearray(b"TLBW\n")
         self._buf = bytearray()
         self._window_end = now + bp.ms_to_cycles(bp.WINDOW_MS, CLK_HZ)
@@ -313,11 +330,16 @@ class SimBootRom:
             return self._fail("H", now)
         if not 1 <= length <= bp.MAX_IMAGE_BYTES:
             return self._fail("L", now)
-        if len(self._buf) < bp.FRAME_OVERHEAD + length:
+        if self.key is None:
+            return self._fail("X", now)
+        if len(self._buf) < bp.frame_bytes(length):
             return
-        image = bytes(self._buf[bp.FRAME_OVERHEAD:bp.FRAME_OVERHEAD + length])
+        frame = bytes(self._buf[:bp.frame_bytes(length)])
+        image = frame[bp.FRAME_OVERHEAD:bp.FRAME_OVERHEAD + length]
         if bp.crc32(image) != icrc:
             return self._fail("C", now)
+        if not bp.frame_tag_ok(frame, self.key):
+            return self._fail("A", now)
         self._tx += b"TLBK\n"
         self.result = bp.crc32(image)
 

@@ -21,6 +21,8 @@ static uint32_t pwm_fdiv[2], pwm_pw0[2], pwm_pwmax[2];
 static uint32_t safety;
 static uint32_t baud_div;
 static uint32_t build_id;
+static uint8_t key_slot[TLP_AUTH_KEY_SLOT_BYTES];   /* the boot ROM's last bytes (sb_reset) */
+static uint32_t cycles;                             /* the simulated clock at the last encoder update */
 static uint8_t tx_buf[16384];
 static uint32_t tx_len;
 
@@ -66,6 +68,8 @@ void hal_safety_ack(uint32_t bits)
 }
 uint32_t hal_build_id(void) { return build_id; }
 uint32_t hal_clk_hz(void) { return 50000000u; }
+const uint8_t *hal_key_slot(void) { return key_slot; }
+uint32_t hal_cycles(void) { return cycles++; }
 void hal_set_baud_div(uint32_t div) { baud_div = div; }
 void hal_irq_off(void) {}
 void hal_irq_on(void) {}
@@ -80,9 +84,11 @@ static bool tx(const uint8_t *wire, uint32_t len)
 }
 
 /* ---- the simulator's side -------------------------------------------------- */
-/* Power-up with the encoders as sb_set_encoder left them (the plant's rest position). */
-void sb_reset(uint32_t id)
+/* Power-up with the encoders as sb_set_encoder left them (the plant's rest
+ * position) and a boot ROM whose key slot holds these bytes. */
+void sb_reset(uint32_t id, const uint8_t *slot)
 {
+    memcpy(key_slot, slot, sizeof key_slot);
     memset(pwm_cmd, 0, sizeof pwm_cmd);
     memset(pwm_on, 0, sizeof pwm_on);
     memset(pwm_brake, 0, sizeof pwm_brake);
@@ -144,6 +150,7 @@ void sb_set_encoder(uint32_t axis, int32_t pos, uint32_t edge_time, uint32_t int
     (void)interval;
 #endif
     enc[axis].now = now;
+    cycles = now;
     enc[axis].illegal = illegal;
     enc[axis].bridge_fault = bridge_fault != 0;
     if (bridge_fault)   /* soc_sys latches the bridge fault input and forces the drives safe */

@@ -212,6 +212,10 @@ def read_key_file(path: str | Path, check_mode: bool = True) -> bytes:
         st = path.stat()
         text = path.read_text(encoding="ascii", errors="replace")
     except FileNotFoundError:
+        if _HEX.match(path.name):
+            raise KeyFileError("that looks like a key, not a key file: a key given on the command line ends up in "
+                               "the shell history and the process list; put it in a file (mode 600) and name "
+                               "the file") from None
         raise KeyFileError(f"no key file at {path} (create one with `torqueloop key new {path}`)") from None
     except IsADirectoryError:
         raise KeyFileError(f"{path} is a directory, not a key file") from None

@@ -16,17 +16,18 @@ import struct
 import zlib
 from pathlib import Path
 
-from torqueloop.spec import regs
+from torqueloop.spec import auth, regs
 
 # --- protocol constants (docs/bootloader.md) -----------------------------------
 
 SYNC = bytes([0xA5, 0x5A, 0xB0, 0x07])   # non-ASCII, no 0x00: neither RN-XV text nor a COBS delimiter
-VERSION = 1
+VERSION = 2                              # 2: the image is followed by its MAC (docs/security.md)
 HEADER_FMT = "<BBHIII"                   # version, 0, 0, load address, length, image CRC-32
 HEADER_BYTES = struct.calcsize(HEADER_FMT)        # 16; the header's own CRC-32 follows
 FRAME_OVERHEAD = len(SYNC) + HEADER_BYTES + 4     # 24 bytes before the image
+TAG_BYTES = auth.UPLOAD_TAG_BYTES        # after the image: HMAC-SHA-256(key, "TLUP" | header | image)
 LOAD_ADDR = regs.RAM_BASE                # images are RAM-linked; entry = load address
-BOOT_STACK_BYTES = 256                   # the bootloader's stack at the top of RAM, never uploaded over
+BOOT_STACK_BYTES = 1024                  # the bootloader's stack at the top of RAM (HMAC-SHA-256 needs ~500 B)
 MAX_IMAGE_BYTES = regs.RAM_SIZE - BOOT_STACK_BYTES
 WINDOW_MS = 500                          # listen after reset
 GAP_MS = 500                             # longest silence inside a frame
@@ -39,13 +40,15 @@ BAUD = 115_200                           # the UART core's default (BAUD_DIV = 0
 # firmware can keep driving.
 WDOG_MS = 100
 
-# ROM layout: bootloader code, then the factory descriptor and image.
-BOOT_CODE_BYTES = 0x800
+# ROM layout: bootloader code, then the factory descriptor and image; the key
+# slot takes the last auth.KEY_SLOT_BYTES of the ROM.
+BOOT_CODE_BYTES = 0x1000
 FACTORY_MAGIC = 0x57464C54               # 'TLFW' little-endian
 FACTORY_DESC_FMT = "<IIII"               # magic, length, CRC-32, load address
 FACTORY_OFS = BOOT_CODE_BYTES
 FACTORY_IMAGE_OFS = FACTORY_OFS + struct.calcsize(FACTORY_DESC_FMT)
-FACTORY_MAX_BYTES = min(regs.BOOT_ROM_SIZE - FACTORY_IMAGE_OFS, MAX_IMAGE_BYTES)
+KEY_SLOT_OFS = regs.BOOT_ROM_SIZE - auth.KEY_SLOT_BYTES
+FACTORY_MAX_BYTES = min(KEY_SLOT_OFS - FACTORY_IMAGE_OFS, MAX_IMAGE_BYTES)
 
 # Firmware image header: every image built with firmware/common/crt0.S starts
 # with a jump over two words - this magic and the register-map version it was
@@ -79,6 +82,8 @@ class Reply(enum.Enum):
     TIMEOUT = "T"       # frame interrupted (gap longer than GAP_MS)
     BAD_CRC = "C"       # image CRC-32 mismatch
     GARBAGE = "G"       # bytes in the window but no sync
+    AUTH = "A"          # image MAC does not verify under the board's key
+    NO_KEY = "X"        # the board has no key: every upload is refused
     FACTORY = "F"       # factory firmware copied to RAM and starting
     NO_FACTORY = "N"    # no valid factory image in ROM: listening without timeout
 
@@ -87,7 +92,8 @@ class Reply(enum.Enum):
         return self in ERRORS
 
 
-ERRORS = frozenset({Reply.BAD_HEADER, Reply.BAD_LENGTH, Reply.TIMEOUT, Reply.BAD_CRC, Reply.GARBAGE})
+ERRORS = frozenset({Reply.BAD_HEADER, Reply.BAD_LENGTH, Reply.TIMEOUT, Reply.BAD_CRC, Reply.GARBAGE, Reply.AUTH,
+                    Reply.NO_KEY})
 REPLY_TEXT = {
     Reply.WINDOW: "bootloader listening",
     Reply.OK: "image accepted and started",
@@ -96,6 +102,9 @@ REPLY_TEXT = {
     Reply.TIMEOUT: f"frame interrupted (no byte for {GAP_MS} ms)",
     Reply.BAD_CRC: "image CRC-32 mismatch",
     Reply.GARBAGE: "bytes but no sync in the window",
+    Reply.AUTH: "authentication failed: the image's MAC does not verify under the board's key "
+                "(signed with another key, or not at all)",
+    Reply.NO_KEY: "the board has no key provisioned, so it refuses every upload (docs/security.md)",
     Reply.FACTORY: "factory firmware started",
     Reply.NO_FACTORY: "no factory firmware in ROM, waiting for an upload",
 }
@@ -118,13 +127,27 @@ def encode_header(length: int, image_crc: int, load_addr: int = LOAD_ADDR, versi
     return SYNC + hdr + struct.pack("<I", crc32(hdr))
 
 
-def encode_frame(image: bytes) -> bytes:
-    """The upload frame for a flat RAM image (docs/bootloader.md, 'Upload frame')."""
+def encode_frame(image: bytes, key: bytes) -> bytes:
+    """The upload frame for a flat RAM image, signed with ``key`` (docs/bootloader.md, 'Upload frame')."""
     if not image:
         raise FrameError("empty image")
     if len(image) > MAX_IMAGE_BYTES:
         raise FrameError(f"image is {len(image)} bytes, the bootloader takes at most {MAX_IMAGE_BYTES}")
-    return encode_header(len(image), crc32(image)) + image
+    head = encode_header(len(image), crc32(image))
+    return head + image + auth.upload_tag(key, head[len(SYNC):len(SYNC) + HEADER_BYTES], image)
+
+
+def frame_bytes(image_bytes: int) -> int:
+    """Bytes on the wire for an image of this size: header, image, MAC."""
+    return FRAME_OVERHEAD + image_bytes + TAG_BYTES
+
+
+def frame_tag_ok(frame: bytes, key: bytes) -> bool:
+    """Does the MAC after the image verify under ``key`` (the bootloader's last check)?"""
+    _, _, length, _ = decode_header(frame)
+    image = frame[FRAME_OVERHEAD:FRAME_OVERHEAD + length]
+    tag = frame[FRAME_OVERHEAD + length:FRAME_OVERHEAD + length + TAG_BYTES]
+    return auth.upload_tag(key, frame[len(SYNC):len(SYNC) + HEADER_BYTES], image) == tag
 
 
 def decode_header(frame: bytes) -> tuple[int, int, int, int]:
@@ -259,10 +282,13 @@ def load_image(path: str | Path, raw_ok: bool = False) -> bytes:
 
 # --- boot ROM contents ------------------------------------------------------------
 
-def rom_image(boot_code: bytes, factory: bytes | None, rom_bytes: int = regs.BOOT_ROM_SIZE) -> bytes:
+def rom_image(boot_code: bytes, factory: bytes | None, key: bytes | None = None,
+              rom_bytes: int = regs.BOOT_ROM_SIZE) -> bytes:
     """Boot ROM bytes: bootloader code at 0, the factory descriptor at
-    FACTORY_OFS and the factory image after it (docs/bootloader.md, 'ROM layout').
-    Without a factory image the descriptor is zero (the bootloader then says N)."""
+    FACTORY_OFS and the factory image after it (docs/bootloader.md, 'ROM layout'),
+    the key slot at the end (docs/security.md).  Without a factory image the
+    descriptor is zero (the bootloader then says N); without a key the slot is
+    zero (the board refuses uploads and motion commands)."""
     if len(boot_code) > BOOT_CODE_BYTES:
         raise ImageError(f"bootloader is {len(boot_code)} bytes, its ROM slot {BOOT_CODE_BYTES}")
     rom = bytearray(boot_code) + bytes(BOOT_CODE_BYTES - len(boot_code))
@@ -270,7 +296,7 @@ def rom_image(boot_code: bytes, factory: bytes | None, rom_bytes: int = regs.BOO
         if not factory or len(factory) > FACTORY_MAX_BYTES:
             raise ImageError(f"factory image is {len(factory)} bytes, the ROM has room for {FACTORY_MAX_BYTES}")
         rom += struct.pack(FACTORY_DESC_FMT, FACTORY_MAGIC, len(factory), crc32(factory), LOAD_ADDR) + factory
-    return bytes(rom) + bytes(rom_bytes - len(rom))
+    return bytes(rom) + bytes(rom_bytes - auth.KEY_SLOT_BYTES - len(rom)) + auth.key_slot(key)
 
 
 def hex_words(data: bytes) -> str:
@@ -296,6 +322,8 @@ def c_header(window_cycles: int | None = None, gap_cycles: int | None = None, ba
 #define BOOT_LOAD_ADDR 0x{LOAD_ADDR:08X}u
 #define BOOT_MAX_IMAGE_BYTES {MAX_IMAGE_BYTES}u
 #define BOOT_STACK_BYTES {BOOT_STACK_BYTES}u
+#define BOOT_TAG_BYTES {TAG_BYTES}u
+#define BOOT_LABEL_UPLOAD "{auth.LABEL_UPLOAD.decode()}"
 #define BOOT_WINDOW_CYCLES {w}u
 #define BOOT_GAP_CYCLES {g}u
 #define BOOT_BAUD_DIV {baud_div}u
