@@ -105,7 +105,7 @@ def test_without_the_key_the_issues_attack_changes_nothing(board: SimBoard) -> N
                eve("SET_PARAM", axis=P.GLOBAL_AXIS, param=param("LINK_TIMEOUT_MS"), value=60_000),
                eve("SET_PARAM", axis=0, param=param("CMD_LIMIT"), value=1023),
                eve("ENABLE", mask=1, enable=1),
-               eve("MOVE", axis=0, mode=0, target=x0 + 10 * TURN),
+               eve("MOVE", axis=0, mode=P.MOVE_UNHOMED, target=x0 + 10 * TURN),
                eve("CLEAR_FAULT", mask=3),
                eve("BOOTLOADER", magic=P.BOOTLOADER_MAGIC)]
     assert refused == [P.STATUS["AUTH"]] * len(refused)
@@ -139,12 +139,12 @@ def test_with_the_key_the_same_commands_work_and_a_replay_is_refused(board: SimB
     x0 = board.plant.count(0)
     assert alice("SET_PARAM", axis=P.GLOBAL_AXIS, param=param("LINK_TIMEOUT_MS"), value=5000) == P.STATUS["OK"]
     assert alice("ENABLE", mask=1, enable=1) == P.STATUS["OK"]
-    assert alice("MOVE", axis=0, mode=0, target=x0 + 2000) == P.STATUS["OK"]
+    assert alice("MOVE", axis=0, mode=P.MOVE_UNHOMED, target=x0 + 2000) == P.STATUS["OK"]
     move = alice.sent[-1]
     run(board, 1.5)
     x1 = board.plant.count(0)
     assert x1 - x0 > 1500, "the key holder's move ran (P law: it settles a little short)"
-    assert alice("MOVE", axis=0, mode=0, target=x0) == P.STATUS["OK"]
+    assert alice("MOVE", axis=0, mode=P.MOVE_UNHOMED, target=x0) == P.STATUS["OK"]
     run(board, 1.5)
     back = board.plant.count(0)
     assert abs(back - x0) < 300
@@ -172,7 +172,7 @@ def test_stop_and_disable_need_no_key(board: SimBoard) -> None:
     x0 = board.plant.count(0)
     alice("SET_PARAM", axis=P.GLOBAL_AXIS, param=param("LINK_TIMEOUT_MS"), value=5000)
     alice("ENABLE", mask=1, enable=1)
-    alice("MOVE", axis=0, mode=1, target=x0 + 4 * TURN)     # a slow trapezoid: 4 turns at 1 turn/s
+    alice("MOVE", axis=0, mode=P.MOVE_TRAPEZOID | P.MOVE_UNHOMED, target=x0 + 4 * TURN)     # a slow trapezoid: 4 turns at 1 turn/s
     run(board, 0.5)
     bob.seq = alice.seq
     assert bob("STOP", mask=1) == P.STATUS["OK"]
@@ -205,7 +205,7 @@ def test_a_board_without_a_key_refuses_motion_and_says_why() -> None:
     assert alice.open()["status"] == P.STATUS["NO_KEY"]
     x0 = board.plant.count(0)
     assert alice("ENABLE", mask=1, enable=1) == P.STATUS["NO_KEY"]
-    assert alice("MOVE", axis=0, mode=0, target=x0 + TURN) == P.STATUS["NO_KEY"]
+    assert alice("MOVE", axis=0, mode=P.MOVE_UNHOMED, target=x0 + TURN) == P.STATUS["NO_KEY"]
     assert alice("STOP", mask=1) == P.STATUS["OK"] and alice("ENABLE", mask=1, enable=0) == P.STATUS["OK"]
     run(board, 0.5)
     assert abs(board.plant.count(0) - x0) <= 2 and not board.drive(0)["on"]

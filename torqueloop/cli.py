@@ -647,19 +647,20 @@ def cmd_sim(ctx: Ctx) -> int:
     parse_plant(ctx.args.plant)      # an unknown variant: one line (PlantParamError is a ValueError)
 
     a = ctx.args
+    # The simulated board is provisioned with the tool's own key (the file it names)
+    key, src, err = ctx.key()
+    if err and src:
+        raise auth.KeyFileError(err)      # a key file named but unusable: say so, do not run keyless
+    keyed = (f"key id {auth.key_id(key)} from {src}" if key else
+             "NO KEY: it refuses motion, parameter changes and uploads (give it one with --key-file)")
     if a.rtl:
         from torqueloop.sim.rtlboard import RtlBoard
 
-        board: Any = RtlBoard(seed=a.seed, plant=a.plant)
-        what = "RTL board image (Verilator) + plant model, far below real time"
+        board: Any = RtlBoard(seed=a.seed, plant=a.plant, key=key)
+        what = f"RTL board image (Verilator) + plant model, far below real time, {keyed}"
     else:
-        key, src, err = ctx.key()
-        if err and src:
-            raise auth.KeyFileError(err)      # a key file named but unusable: say so, do not run keyless
         board = SimBoard(build_id=a.build_id, seed=a.seed, plant=a.plant, key=key)
-        what = (f"servo firmware + plant model, build id 0x{board.build_id:08x}, "
-                + (f"key id {auth.key_id(key)} from {src}" if key else
-                   "NO KEY: it refuses motion, parameter changes and uploads (give it one with --key-file)"))
+        what = f"servo firmware + plant model, build id 0x{board.build_id:08x}, {keyed}"
     srv = BoardServer(board, a.host, a.port, speed=a.speed, hello=a.hello)
     print(f"simulated board on socket://{a.host}:{srv.port} ({what}); Ctrl-C stops it", flush=True)
     try:

@@ -28,7 +28,7 @@ BUDGET_CYCLES = 1250
 def _measure(period_us: int, move_mode: int = 1) -> dict:
     from bench import tb_module
     T = tb_module("firmware", "test_firmware")
-    img = build("servo_tb", {k: str(v) for k, v in T.DEFINES.items()})
+    img = build("servo_tb", {k: str(v) for k, v in T.DEFINES.items()}, key=T.KEY)
     out = REPO / "build" / "firmware" / f"measure_{period_us}_{move_mode}.json"
     run("soc", "verilator", "test_firmware",
         parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'},

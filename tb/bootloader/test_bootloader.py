@@ -297,6 +297,30 @@ async def no_key_refuses_every_upload(dut):
     await _rejected(dut, signed(_app_variant(app)), b"X")
 
 
+@cocotb.test(skip="TB_MEASURE" not in os.environ)
+async def measure_upload_mac(dut):
+    """Benchmark (scripts/benches/bench_auth.py): the bootloader checks the
+    MAC after the last byte, over the image in RAM.  Cycles from the frame's
+    last stop bit to the end of TLBK for two image sizes: their difference
+    per KiB is the MAC's cost of an uploaded kilobyte (the CRC-32 runs while
+    the bytes arrive)."""
+    tb = TB(dut)
+    app, _ = _images()
+    out = {}
+    for kib in (1, 9):
+        image = app + bytes(kib * 1024 - len(app))
+        await tb.reset()
+        await tb.src.write(signed(image))
+        await tb.src.wait()
+        t0 = tb.cycle
+        await tb.expect(b"TLBK\n", limit_cycles=4_000_000)
+        out[kib] = tb.cycle - t0
+        await tb.expect(b"APP\n")
+    per_kib = (out[9] - out[1]) / 8
+    cocotb.log.info(f"upload MAC: {out} cycles after the last byte; {per_kib:.0f} cycles per KiB")
+    Path(os.environ["TB_MEASURE"]).write_text(f"{out[1]} {out[9]} {per_kib}\n")
+
+
 def test_board_window_is_500ms():
     """The board build (defaults) keeps 500 ms at 50 MHz in its ROM image."""
     b = build_boot.build_boot()

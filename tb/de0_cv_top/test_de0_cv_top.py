@@ -64,9 +64,10 @@ WDOG_CYCLES = 3000
 #: The servo firmware's simulation build: 50 clocks per bit.
 SERVO_BAUD_DIV = 49
 SERVO_BAUD = 50_000_000 // (SERVO_BAUD_DIV + 1)
-#: The firmware sets that divisor at the end of its start-up, measured at
+#: The firmware sets that divisor near the end of its start-up, measured at
 #: 11,900 clocks (when this bench was written); bytes sent earlier are garbled.
-SERVO_STARTUP_CLOCKS = 20_000
+#: Then it readies the link key (~55 000 clocks) before it reads the UART.
+SERVO_STARTUP_CLOCKS = 80_000
 
 
 class PlantOnPins:
@@ -346,9 +347,15 @@ async def servo_firmware_answers_the_protocol_on_the_header(dut):
     assert fields["proto_version"] == protocol.PROTO_VERSION
     assert fields["axis_count"] == 2 and fields["clk_hz"] == 50_000_000, fields
 
+    # ENABLE needs the key (docs/security.md): a session first, its MAC on the ENABLE
+    from torqueloop.spec import auth
+
+    hn = auth.new_host_nonce()
+    reply = await _exchange(dut, source, sink, decoder, protocol.request("SESSION", 2, host_nonce=hn), 150_000)
+    sess = auth.open_session(auth.TEST_KEY, hn, protocol.decode_reply(reply))
     dut.key.value = 0xE                       # e-stop pressed and held
     await ClockCycles(dut.clk, 200)
-    reply = await _exchange(dut, source, sink, decoder, protocol.request("ENABLE", 2, mask=3, enable=1), 60_000)
+    reply = await _exchange(dut, source, sink, decoder, sess.request("ENABLE", 3, mask=3, enable=1), 100_000)
     assert protocol.decode_reply(reply)["status"] == protocol.STATUS["STATE"], "ENABLE accepted during e-stop"
     await _expect_all_low(dut, 2000, "e-stop held after ENABLE")
 
@@ -366,11 +373,16 @@ def _publish(src: Path, dst: Path) -> Path:
 def build_servo_images() -> tuple[Path, Path]:
     """The servo firmware built by torqueloop.flow.firmware for simulation
     (1 Mbaud link, 1 ms control period): (boot-ROM stub, RAM image)."""
+    from torqueloop.spec import auth
+
     out = BUILD_ROOT / "de0_cv_top" / "servo"
     tmp = out / f"tmp{os.getpid()}"
+    tmp.mkdir(parents=True, exist_ok=True)
+    auth.write_key_file(tmp / "test.key", auth.TEST_KEY)      # the stub ROM's key slot: the public test key
     subprocess.run([sys.executable, "-m", "torqueloop.flow.firmware", "--name", "servo_sim",
                     "-D", f"TL_DEFAULT_BAUD_DIV={SERVO_BAUD_DIV}", "-D", "TL_DEFAULT_PERIOD_US=1000",
-                    "--out", str(tmp)], check=True, capture_output=True, text=True)
+                    "--out", str(tmp), "--key-file", str(tmp / "test.key")], check=True, capture_output=True,
+                   text=True)
     images = tuple(_publish(tmp / f"servo_sim_{m}.hex", out / f"servo_sim_{m}.hex") for m in ("rom", "ram"))
     for f in tmp.iterdir():
         f.unlink()

@@ -10,6 +10,12 @@ quadrature on enc_a/enc_b, e-stop and bridge-fault inputs, and it watches the
 bridge pins rpwm/lpwm/r_en/l_en.  Expected PWM commands come from
 torqueloop/models/servo.py (the control law in Python integers).
 
+The stub ROM's key slot holds auth.TEST_KEY; the bench opens a session after
+boot and sends every command but the reads with its MAC, as the host tool
+does (docs/security.md).  ``authentication_at_the_pins`` checks who may
+drive the pins; ``no_key_board_refuses_motion`` runs on the same model with
+the ROM rewritten without a key.
+
 Verilator only: the firmware needs a few hundred thousand clocks per test,
 which Icarus runs ~30x slower (minutes per test).
 """
@@ -27,6 +33,7 @@ from cocotb.queue import Queue
 from cocotb.triggers import ClockCycles, Edge, First, Timer, with_timeout
 from cocotb.utils import get_sim_time
 
+from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
 from torqueloop.models import servo as ref
 
@@ -42,6 +49,8 @@ QUAD = [(0, 0), (1, 0), (1, 1), (0, 1)]   # A leads B: counts up
 FAST_FDIV = 2                      # 24.4 kHz: the fastest carrier under the IBT-2's 25 kHz rating (PWM_MAX_HZ)
 PWM_PERIOD_US = FAST_FDIV * 1023 * CLK_NS / 1000
 U = P.MOVE_UNHOMED                 # positions relative to power-up: these tests do not home
+KEY = auth.TEST_KEY
+READS = {"IDENTIFY", "GET_PARAM", "STATUS", "COUNTERS", "SESSION", "TELEMETRY"}   # sent without a MAC
 
 
 def now_ns() -> float:
@@ -56,18 +65,30 @@ class TB:
         self.telemetry: list[tuple[int, dict]] = []
         self.errors: list[P.Frame] = []
         self.enc = [0, 0]
-        self.reply_timeout_us = 2000
+        self.reply_timeout_us = 5000      # a SESSION takes ~1.5 ms (docs/security.md)
         tbutil.start_clock(dut, CLK_NS)
         tbutil.idle_soc_pins(dut)
         self.src, self.sink = tbutil.uart_models(dut.uart_rx, dut.uart_tx, BAUD, quiet=True)
         self.dec = P.FrameDecoder()
+        self.sess: auth.Session | None = None
+        self.sent: list[bytes] = []
+        self.reply_ns = 0.0
 
-    async def start(self) -> None:
+    async def start(self, session: bool = True) -> None:
         self.dut.rst.value = 1
         await ClockCycles(self.dut.clk, 5)
         self.dut.rst.value = 0
         cocotb.start_soon(self._reader())
-        await Timer(2 * PERIOD_US, unit="us")   # boot, first control periods
+        await Timer(2 * PERIOD_US + 1500, unit="us")   # boot (the key's setup ~1.1 ms), first control periods
+        if session:
+            await self.open_session()
+
+    async def open_session(self, expect: int = P.STATUS["OK"]) -> dict:
+        hn = auth.new_host_nonce()
+        r = await self.cmd("SESSION", expect, host_nonce=hn)
+        if r["status"] == P.STATUS["OK"]:
+            self.sess = auth.open_session(KEY, hn, r)
+        return r
 
     async def _reader(self) -> None:
         while True:
@@ -80,15 +101,21 @@ class TB:
                 elif f.cmd == P.ERROR_CMD:
                     self.errors.append(f)
                 else:
+                    self.reply_ns = now_ns()
                     await self.replies.put(f)
 
     async def send_raw(self, data: bytes) -> None:
         await self.src.write(data)
         await self.src.wait()
 
-    async def cmd(self, name: str, expect: int | None = P.STATUS["OK"], **fields: int) -> dict:
+    async def cmd(self, name: str, expect: int | None = P.STATUS["OK"], tagged: bool | None = None,
+                  **fields) -> dict:
+        """One command and its reply; with the session's MAC unless it is a read (tagged overrides)."""
         self.seq = (self.seq + 1) & 0xFFFF
-        await self.send_raw(P.request(name, self.seq, **fields))
+        tag = (self.sess is not None and name not in READS) if tagged is None else tagged
+        wire = self.sess.request(name, self.seq, **fields) if tag else P.request(name, self.seq, **fields)
+        self.sent.append(wire)
+        await self.send_raw(wire)
         try:
             f = await with_timeout(self.replies.get(), self.reply_timeout_us, "us")
         except Exception:
@@ -476,8 +503,7 @@ async def corrupted_random_and_replayed_frames_change_nothing(dut):
     await tb.fast_pwm()
     await _enable(tb, 1)                      # axis 0 holds at 0, axis 1 disabled
     await tb.set(0, "KP_Q16", 70000)
-    old_seq = tb.seq
-    old_frame = P.request("SET_PARAM", old_seq, axis=0, param=P.PARAMS["KP_Q16"].id, value=70000)
+    old_frame = tb.sent[-1]                   # a recorded authenticated SET_PARAM
     await tb.set(0, "KP_Q16", 80000)
     names = [(ax, p.name) for p in P.PARAMS.values() for ax in ([P.GLOBAL_AXIS] if p.scope == "global" else [0, 1])]
     before = {k: await tb.get(*k) for k in names}
@@ -544,8 +570,10 @@ async def telemetry_trapezoid_and_bootloader_jump(dut):
     await tb.set(0, "AMAX", 20_000_000)
     await tb.set(0, "FOLLOW_LIMIT", 1_000_000)
     await _enable(tb, 1)
-    await tb.cmd("TELEMETRY", every=2)
+    # the MOVE first: its MAC check (~0.6 ms of the main loop) while records fall due every 1 ms
+    # could send one a period late (docs/security.md, 'Costs'); TELEMETRY itself needs no MAC
     await tb.cmd("MOVE", axis=0, mode=U | P.MOVE_TRAPEZOID, target=400)
+    await tb.cmd("TELEMETRY", every=2)
     await Timer(14_000, unit="us")
     await tb.cmd("TELEMETRY", every=0)
     await Timer(2 * PERIOD_US, unit="us")
@@ -553,7 +581,7 @@ async def telemetry_trapezoid_and_bootloader_jump(dut):
     await Timer(4 * PERIOD_US, unit="us")
     assert len(tb.telemetry) == n, "telemetry must stop"
     t = [r["time_us"] for _, r in tb.telemetry]
-    assert all(b - a == 2 * PERIOD_US for a, b in zip(t, t[1:])), f"telemetry times {t[:8]}"
+    assert all(b - a == 2 * PERIOD_US for a, b in zip(t, t[1:])), f"telemetry times {t}"
     sp = [r["axes"][0]["setpoint"] for _, r in tb.telemetry]
     dsp = [b - a for a, b in zip(sp, sp[1:])]
     vmax_per_2T = 40_000 * 2 * PERIOD_US / 1e6
@@ -561,12 +589,94 @@ async def telemetry_trapezoid_and_bootloader_jump(dut):
     assert max(dsp) >= vmax_per_2T - 1, "the profile reaches its top speed"
     # bootloader hook: refused with a bad magic, then drives off, reply, restart from the boot ROM
     await tb.cmd("BOOTLOADER", magic=P.BOOTLOADER_MAGIC)
-    await Timer(2 * PERIOD_US, unit="us")
+    await Timer(2 * PERIOD_US + 1500, unit="us")     # restart: the key's setup, then the first periods
     r = await tb.cmd("IDENTIFY")
     assert r["last_seq"] == 0, "the image restarted through the boot ROM (fresh sequence state)"
     st = await tb.status(0)
     assert not st["enabled"] and st["loop_cycles_max"] > 0
     await tb.assert_quiet(100, "after the bootloader jump")
+
+
+@cocotb.test()
+async def authentication_at_the_pins(dut):
+    """Who may drive the pins (docs/security.md): without the key nothing that
+    changes the machine runs and the pins stay quiet; with it the same
+    commands drive them; a recorded authenticated frame replayed - also after
+    the link's seq was walked round by frames without the key - is refused;
+    STOP and disable need no key."""
+    tb = TB(dut)
+    await tb.start()
+    await tb.fast_pwm()
+    kp = await tb.get(0, "KP_Q16")
+    for name, fields in (("SET_PARAM", dict(axis=0, param=P.PARAMS["KP_Q16"].id, value=5)),
+                         ("SET_PARAM", dict(axis=P.GLOBAL_AXIS, param=P.PARAMS["LINK_TIMEOUT_MS"].id, value=60_000)),
+                         ("ENABLE", dict(mask=3, enable=1)), ("MOVE", dict(axis=0, mode=U, target=500)),
+                         ("CLEAR_FAULT", dict(mask=3)), ("BOOTLOADER", dict(magic=P.BOOTLOADER_MAGIC))):
+        await tb.cmd(name, P.STATUS["AUTH"], tagged=False, **fields)
+    # a MAC of another key
+    wrong = auth.Session(bytes(32), tb.sess.host_nonce, tb.sess.board_nonce)
+    tb.seq += 1
+    await tb.send_raw(wrong.request("ENABLE", tb.seq, mask=1, enable=1))
+    f = await with_timeout(tb.replies.get(), 2000, "us")
+    assert P.decode_reply(f)["status"] == P.STATUS["AUTH"]
+    await tb.assert_quiet(3 * PERIOD_US, "commands without the key")
+    assert await tb.get(0, "KP_Q16") == kp
+    assert not (await tb.status(0))["enabled"] and not (await tb.status(1))["enabled"]
+    assert (await tb.cmd("COUNTERS"))["auth"] == 7
+    # with the key: the same commands drive the pins
+    await _enable(tb, 1)
+    await tb.cmd("MOVE", axis=0, mode=U, target=300)
+    move = tb.sent[-1]
+    await Timer(2 * PERIOD_US, unit="us")
+    assert await tb.duty(0, "rpwm", 41) > 0.03
+    await tb.cmd("MOVE", axis=0, mode=U, target=0)
+    await Timer(2 * PERIOD_US, unit="us")
+    assert (await tb.status(0))["pwm_cmd"] == 0
+    # the recorded MOVE again: refused ...
+    await tb.send_raw(move)
+    f = await with_timeout(tb.replies.get(), 2000, "us")
+    assert P.decode_reply(f)["status"] == P.STATUS["REPLAY"]
+    # ... also once frames without the key have walked the link's seq round
+    old = P.parse_packet(move.strip(b"\0")).seq
+    for k in (1, 2, 3):
+        tb.seq = (old + k * 0x4000) & 0xFFFF
+        await tb.send_raw(P.request("STATUS", tb.seq, axis=0))
+        await with_timeout(tb.replies.get(), 2000, "us")
+    await tb.send_raw(move)
+    f = await with_timeout(tb.replies.get(), 2000, "us")
+    assert P.decode_reply(f)["status"] == P.STATUS["REPLAY"]
+    await tb.cmd("MOVE", P.STATUS["NO_SESSION"], axis=0, mode=U, target=300)   # seq outside the session now
+    await tb.open_session()                                                    # what the host tool does then
+    await Timer(2 * PERIOD_US, unit="us")
+    st = await tb.status(0)
+    assert st["setpoint"] == 0 and st["pwm_cmd"] == 0, f"a replayed MOVE ran: {st}"
+    # stopping needs no key
+    await tb.cmd("MOVE", axis=0, mode=U, target=300)
+    await Timer(2 * PERIOD_US, unit="us")
+    assert await tb.duty(0, "rpwm", 41) > 0.03
+    await tb.cmd("STOP", tagged=False, mask=1)
+    await Timer(2 * PERIOD_US, unit="us")
+    assert (await tb.status(0))["setpoint"] == 0
+    await tb.cmd("MOVE", axis=0, mode=U, target=300)
+    await tb.cmd("ENABLE", tagged=False, mask=3, enable=0)
+    await tb.assert_quiet(3 * PERIOD_US, "disabled without the key")
+
+
+@cocotb.test(skip="TB_NO_KEY" not in os.environ)
+async def no_key_board_refuses_motion(dut):
+    """The same image with a stub ROM whose key slot is blank: a board
+    without a key says NO_KEY to a session and to motion, even with a MAC,
+    and its pins stay quiet; reading and disabling work."""
+    tb = TB(dut)
+    await tb.start(session=False)
+    await tb.open_session(P.STATUS["NO_KEY"])
+    await tb.cmd("ENABLE", P.STATUS["NO_KEY"], tagged=False, mask=1, enable=1)
+    tb.sess = auth.Session(KEY, bytes(16), bytes(16))
+    await tb.cmd("ENABLE", P.STATUS["NO_KEY"], mask=1, enable=1)
+    await tb.cmd("MOVE", P.STATUS["NO_KEY"], axis=0, mode=U, target=500)
+    await tb.cmd("ENABLE", tagged=False, mask=3, enable=0)
+    await tb.assert_quiet(3 * PERIOD_US, "a board without a key")
+    assert not (await tb.status(0))["enabled"]
 
 
 @pytest.mark.parametrize("sim", ["verilator"])
@@ -575,9 +685,17 @@ def test_firmware(sim):
     from torqueloop.flow.simrun import run, sims_for
     if sim not in sims_for("soc"):
         pytest.skip(f"{sim} not selected")
-    img = build("servo_tb", {k: str(v) for k, v in DEFINES.items()})
-    run("soc", sim, "test_firmware",
-        parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'})
+    defines = {k: str(v) for k, v in DEFINES.items()}
+    img = build("servo_tb", defines, key=KEY)
+    params = {"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'}
+    run("soc", sim, "test_firmware", parameters=params)
+    # the same model, its stub ROM rewritten with a blank key slot
+    build("servo_tb", defines, key=None)
+    try:
+        run("soc", sim, "test_firmware", parameters=params, testcase="no_key_board_refuses_motion",
+            extra_env={"TB_NO_KEY": "1"})
+    finally:
+        build("servo_tb", defines, key=KEY)
 
 
 @cocotb.test(skip=os.environ.get("TL_FW_MEASURE") != "1")
@@ -621,3 +739,42 @@ async def measure_control_iteration(dut):
     cocotb.log.info(f"measurement: {out}")
     Path(os.environ.get("TL_FW_MEASURE_OUT", "fw_measure.json")).write_text(json.dumps(out))
     assert out["faults"] == [0, 0] and out["loop_cycles_max"] < period * 50
+
+
+@cocotb.test(skip=os.environ.get("TL_AUTH_MEASURE") != "1")
+async def measure_authentication(dut):
+    """Benchmark (scripts/benches/bench_auth.py): what a MAC costs the running
+    firmware.  The same STOP with and without its MAC, and a SESSION: time
+    from the request's last stop bit to the reply's last byte, the fastest of
+    REPEAT (a control iteration or telemetry may delay any one of them); the
+    difference of the two STOPs is the check of one authenticated frame
+    (its 16 more bytes are already received when the clock starts).  Axis 0
+    runs P control on a held position meanwhile; writes JSON."""
+    tb = TB(dut)
+    await tb.start()
+    await _enable(tb, 1)
+    repeat = int(os.environ.get("TL_AUTH_REPEAT", "12"))
+
+    async def timed(name: str, tagged: bool, **fields) -> float:
+        best = float("inf")
+        for _ in range(repeat):
+            tb.seq = (tb.seq + 1) & 0xFFFF
+            wire = tb.sess.request(name, tb.seq, **fields) if tagged else P.request(name, tb.seq, **fields)
+            await tb.send_raw(wire)
+            t0 = now_ns()
+            f = await with_timeout(tb.replies.get(), 20_000, "us")
+            assert P.decode_reply(f)["status"] == P.STATUS["OK"], P.decode_reply(f)
+            best = min(best, tb.reply_ns - t0)
+            await Timer(random.randrange(50, 300), unit="us")
+        return best / CLK_NS
+
+    plain = await timed("STOP", False, mask=1)
+    tagged = await timed("STOP", True, mask=1)
+    session = await timed("SESSION", False, host_nonce=bytes(16))
+    st = await tb.status(0)
+    out = {"stop_cycles": plain, "stop_authenticated_cycles": tagged, "session_cycles": session,
+           "frame_auth_cycles": tagged - plain, "loop_cycles_max": st["loop_cycles_max"],
+           "jitter_cycles_max": st["jitter_cycles_max"], "period_us": PERIOD_US, "faults": st["faults"]}
+    cocotb.log.info(f"authentication: {out}")
+    Path(os.environ.get("TL_AUTH_MEASURE_OUT", "auth_measure.json")).write_text(json.dumps(out))
+    assert st["faults"] == 0 and tagged > plain

@@ -1,11 +1,16 @@
 # SPDX-License-Identifier: MIT
-"""Build the boot ROM: the bootloader (firmware/boot/) + a factory firmware image,
-as the $readmemh file soc_rom's ROM_INIT loads (docs/bootloader.md, 'ROM layout').
+"""Build the boot ROM: the bootloader (firmware/boot/) + a factory firmware image
++ the link key, as the $readmemh file soc_rom's ROM_INIT loads (docs/bootloader.md,
+'ROM layout'; docs/security.md, 'Key provisioning').
 
     python -m torqueloop.flow.boot_image [--factory IMAGE.elf|.bin] [--window-ms MS] [--out DIR]
+                                         [--key-file FILE]
 
 Without --factory the servo firmware is built (torqueloop.flow.firmware) and
-used.  Outputs in build/firmware/boot/: boot.elf, boot.bin, boot_rom.hex.
+used.  The key comes from --key-file or $TORQUELOOP_KEY_FILE; without one the
+ROM's key slot stays blank and the board refuses motion, parameter changes and
+uploads (said in a warning).  Outputs in build/firmware/boot/: boot.elf,
+boot.bin, boot_rom.hex (which holds the key: keep build/ off the network).
 The linker script and boot_proto.h are generated into the output folder from
 the memory map (torqueloop.spec.regs) and the protocol (torqueloop.spec.bootproto).
 """
@@ -20,7 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from torqueloop.flow import firmware
-from torqueloop.spec import bootproto, regs
+from torqueloop.spec import auth, bootproto, regs
 from torqueloop.spec.repo import REPO_ROOT as REPO
 
 HERE = REPO / "firmware" / "boot"
@@ -138,14 +143,24 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-factory", action="store_true", help="ROM without a factory image (waits for an upload)")
     ap.add_argument("--window-ms", type=int, default=bootproto.WINDOW_MS)
     ap.add_argument("--out", type=Path, default=REPO / "build" / "firmware" / "boot")
+    ap.add_argument("--key-file", help=f"the link key for the ROM's key slot [${auth.KEY_FILE_ENV}]")
     args = ap.parse_args(argv)
+    path = auth.key_file_path(args.key_file)
+    try:
+        key = auth.read_key_file(path) if path else None
+    except auth.KeyFileError as e:
+        raise SystemExit(f"boot_image: {e}") from None
     factory = None if args.no_factory else (bootproto.load_image(args.factory, raw_ok=True) if args.factory else _servo_image())
     cfg = BootConfig(window_cycles=bootproto.ms_to_cycles(args.window_ms))
-    path = build_rom(factory, cfg, args.out)
+    rom = build_rom(factory, cfg, args.out, key=key)
     code = (args.out / "boot.bin").stat().st_size
-    print(path)
+    print(rom)
     print(f"bootloader {code} of {bootproto.BOOT_CODE_BYTES} B; factory "
-          f"{len(factory) if factory else 0} of {bootproto.FACTORY_MAX_BYTES} B; window {args.window_ms} ms")
+          f"{len(factory) if factory else 0} of {bootproto.FACTORY_MAX_BYTES} B; window {args.window_ms} ms; "
+          + (f"key id {auth.key_id(key)} from {path}" if key else "NO KEY"))
+    if key is None:
+        print(f"WARNING: no key file named (--key-file or ${auth.KEY_FILE_ENV}): a board with this ROM refuses "
+              "motion, parameter changes and uploads (docs/security.md, 'Key provisioning')", file=sys.stderr)
     return 0
 
 

@@ -1,10 +1,12 @@
 # SPDX-License-Identifier: MIT
 """Build the servo firmware: ELF, raw binary, RAM initialisation file for
-$readmemh (one 32-bit word per line, word 0 = RAM base) and a boot-ROM stub
-for simulations that preload the RAM: it arms the hardware watchdog as the
-real boot ROM (firmware/boot) does, then jumps to the RAM base.
+$readmemh (one 32-bit word per line, word 0 = RAM base) and a boot-ROM image
+for simulations that preload the RAM: its stub arms the hardware watchdog as
+the real boot ROM (firmware/boot) does, then jumps to the RAM base, and its
+key slot holds the link key (the board's boot ROM is
+torqueloop.flow.boot_image's).
 
-    python -m torqueloop.flow.firmware [--name servo] [-D NAME=VALUE ...] [--out DIR]
+    python -m torqueloop.flow.firmware [--name servo] [-D NAME=VALUE ...] [--out DIR] [--key-file FILE]
 
 Outputs go to build/firmware/<name>/.  -D sets build-time defaults, e.g. the
 test image: -D TL_DEFAULT_PERIOD_US=1000 -D TL_DEFAULT_BAUD_DIV=49.
@@ -22,6 +24,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
 from torqueloop.spec import regs
 from torqueloop.spec.repo import REPO_ROOT as REPO
@@ -94,7 +97,8 @@ def boot_stub_words(entry: int, wdog_cycles: int | None = None) -> list[int]:
 
 
 def build(name: str = "servo", defines: dict[str, str] | None = None, out: Path | None = None,
-          ram_bytes: int = regs.RAM_SIZE) -> Image:
+          ram_bytes: int = regs.RAM_SIZE, key: bytes | None = None) -> Image:
+    """``key``: the link key the stub ROM's key slot holds (None: a board without a key)."""
     out = out or REPO / "build" / "firmware" / name
     out.mkdir(parents=True, exist_ok=True)
     elf, binf = out / f"{name}.elf", out / f"{name}.bin"
@@ -118,7 +122,9 @@ def build(name: str = "servo", defines: dict[str, str] | None = None, out: Path 
     words = [int.from_bytes(data[i:i + 4], "little") for i in range(0, len(data), 4)]
     ram_hex.write_text("".join(f"{w:08x}\n" for w in words))
     rom = boot_stub_words(regs.RAM_BASE)
-    rom += [0] * (regs.BOOT_ROM_SIZE // 4 - len(rom))
+    slot = auth.key_slot(key)
+    rom += [0] * ((regs.BOOT_ROM_SIZE - len(slot)) // 4 - len(rom))
+    rom += [int.from_bytes(slot[i:i + 4], "little") for i in range(0, len(slot), 4)]
     rom_hex.write_text("".join(f"{w:08x}\n" for w in rom))
     return Image(elf, binf, ram_hex, rom_hex, sec.get(".text", 0) + sec.get(".rodata", 0),
                  sec.get(".data", 0) + sec.get(".sdata", 0), bss)
@@ -197,9 +203,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--name", default="servo")
     ap.add_argument("-D", dest="defines", action="append", default=[], metavar="NAME=VALUE")
     ap.add_argument("--out", type=Path)
+    ap.add_argument("--key-file", help=f"the link key for the stub ROM's key slot [${auth.KEY_FILE_ENV}; none]")
     args = ap.parse_args(argv)
     defines = dict(d.split("=", 1) if "=" in d else (d, "1") for d in args.defines)
-    img = build(args.name, defines, args.out)
+    path = auth.key_file_path(args.key_file)
+    img = build(args.name, defines, args.out, key=auth.read_key_file(path) if path else None)
     for p in (img.elf, img.bin, img.ram_hex, img.rom_hex):
         print(p.relative_to(REPO) if p.is_relative_to(REPO) else p)
     print(f"text+rodata {img.text_bytes} B, data {img.data_bytes} B, bss {img.bss_bytes} B")

@@ -43,8 +43,9 @@ READ_ONLY = frozenset({"IDENTIFY", "GET_PARAM", "STATUS", "COUNTERS"})
 #: a lost reply to these is harmless to repeat with a fresh seq
 REPEATABLE = READ_ONLY | {"HEARTBEAT"}
 AUTH_STATUSES = frozenset({P.STATUS["AUTH"], P.STATUS["NO_SESSION"], P.STATUS["NO_KEY"]})
-#: sent without a MAC even with a key: reads (a MAC costs the board ~0.6 ms) and SESSION itself
-UNTAGGED = READ_ONLY | {"SESSION"}
+#: sent without a MAC even with a key: reads and the telemetry rate (a MAC costs the board's
+#: main loop ~0.6 ms, which can delay a telemetry record at short control periods) and SESSION itself
+UNTAGGED = READ_ONLY | {"SESSION", "TELEMETRY"}
 FAULT_DESC: dict[str, str] = {f["name"]: f["desc"] for f in P.SPEC["fault"]}
 STATUS_DESC: dict[int, str] = {s["code"]: s["desc"] for s in P.SPEC["status"]}
 

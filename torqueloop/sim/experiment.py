@@ -41,6 +41,7 @@ from torqueloop.host import config as hconfig
 from torqueloop.sim.link import Link
 from torqueloop.sim.model_loop import TABLE1, LoopConfig, run_averaged
 from torqueloop.sim.pins import PlantOnPins
+from torqueloop.spec import auth
 from torqueloop.spec import protocol as tp
 from torqueloop.spec.pwm import carrier_hz, divider_for
 from torqueloop.spec.system import SYSTEM
@@ -145,9 +146,11 @@ class RtlRun:
     resistance_ohm: tuple = () # winding resistance per axis (copper loss)
 
 
-def firmware_image() -> firmware.Image:
-    """The real servo firmware, as make firmware builds it."""
-    return firmware.build("servo", out=REPO_ROOT / "build" / "rtl_loop" / "firmware")
+def firmware_image(key: bytes | None = auth.TEST_KEY) -> firmware.Image:
+    """The real servo firmware, as make firmware builds it, behind a boot-ROM
+    stub whose key slot holds ``key`` (the public test key by default: the
+    experiment configures the board over its link, which needs one)."""
+    return firmware.build("servo", out=REPO_ROOT / "build" / "rtl_loop" / "firmware", key=key)
 
 
 def configure(link: Link, cfg: ExperimentConfig) -> list[dict[str, int]]:
@@ -202,6 +205,7 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
         link = Link(board.uart_send, board.uart_recv, lambda n: bridge.run_to(board.cycle + n),
                     lambda: board.cycle)
         ident = link.call("IDENTIFY")
+        link.open_session(auth.TEST_KEY)
         if cfg.baud_div is not None:
             link.set_param(tp.GLOBAL_AXIS, "BAUD_DIV", cfg.baud_div)   # replied at the old rate
             board.set_uart_div(cfg.baud_div + 1)

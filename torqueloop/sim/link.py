@@ -1,13 +1,17 @@
 # SPDX-License-Identifier: MIT
 """Host side of the servo link over a simulated UART: the frames of
 torqueloop.spec.protocol (the same code the host tool uses), with the board and
-the plant advancing while the host waits for a reply."""
+the plant advancing while the host waits for a reply.  After
+:meth:`Link.open_session` every command but the reads carries the session's
+MAC, as the host tool sends it (docs/security.md)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Callable
 
+from torqueloop.host.client import UNTAGGED
+from torqueloop.spec import auth
 from torqueloop.spec import protocol as tp
 
 
@@ -38,6 +42,12 @@ class Link:
     _dec: tp.FrameDecoder = field(default_factory=tp.FrameDecoder)
     _replies: dict[int, tp.Frame] = field(default_factory=dict)
     _chunk_cycle: int = -1
+    session: auth.Session | None = None
+
+    def open_session(self, key: bytes) -> None:
+        """SESSION, and the board's proof checked: later commands carry their MAC."""
+        hn = auth.new_host_nonce()
+        self.session = auth.open_session(key, hn, self.call("SESSION", host_nonce=hn))
 
     def poll(self) -> None:
         data, cycles = self.recv()
@@ -59,7 +69,8 @@ class Link:
         """Send a request without waiting; returns its seq."""
         seq = self.seq
         self.seq = (self.seq + 1) & 0xFFFF or 1
-        self.send(tp.request(name, seq, **fields))
+        tagged = self.session is not None and name not in UNTAGGED
+        self.send(self.session.request(name, seq, **fields) if tagged else tp.request(name, seq, **fields))
         return seq
 
     def wait(self, seq: int, timeout_cycles: int = 5_000_000, step: int = 20_000) -> dict[str, int]:

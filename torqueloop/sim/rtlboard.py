@@ -20,14 +20,15 @@ CLK_HZ = SYSTEM.clk_hz
 
 
 class RtlBoard:
-    def __init__(self, seed: int = 0, plant: str = "paper") -> None:
+    def __init__(self, seed: int = 0, plant: str = "paper", key: bytes | None = None) -> None:
+        """``key``: the link key in the image's boot-ROM key slot (None: a board without one)."""
         from sim_models.stepper import TwoAxisPlant
         from sim_models.variants import load_variant, parse_plant
         from torqueloop.sim.experiment import firmware_image
         from torqueloop.sim.native import NativeBoard
         from torqueloop.sim.pins import PlantOnPins
 
-        img = firmware_image()
+        img = firmware_image(key)
         self.board = NativeBoard.create(img.rom_hex, img.ram_hex)
         self.bridge = PlantOnPins(TwoAxisPlant(load_variant(*parse_plant(plant)), seed=seed), self.board)
         # the cosim's power-up: reset with the arm switch down, release, arm (SW[0] rising edge)
