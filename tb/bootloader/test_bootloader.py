@@ -71,10 +71,10 @@ def build_prog(name: str) -> bytes:
 
 
 class TB:
-    def __init__(self, dut) -> None:
+    def __init__(self, dut, quiet: bool = False) -> None:
         self.dut = dut
         tbutil.idle_soc_pins(dut)
-        self.src, self.sink = tbutil.uart_models(dut.uart_rx, dut.uart_tx, BAUD)
+        self.src, self.sink = tbutil.uart_models(dut.uart_rx, dut.uart_tx, BAUD, quiet=quiet)
         tbutil.start_clock(dut, CLK_NS)
 
     @property
@@ -304,7 +304,7 @@ async def measure_upload_mac(dut):
     last stop bit to the end of TLBK for two image sizes: their difference
     per KiB is the MAC's cost of an uploaded kilobyte (the CRC-32 runs while
     the bytes arrive)."""
-    tb = TB(dut)
+    tb = TB(dut, quiet=True)
     app, _ = _images()
     out = {}
     for kib in (1, 9):
