@@ -52,7 +52,12 @@ def test_the_host_install_has_no_simulation_stack(host_env: Path) -> None:
 
 
 def test_the_host_only_client_drives_a_simulated_board(host_env: Path) -> None:
-    board = subprocess.Popen([sys.executable, "-m", "torqueloop.cli", "sim", "--port", "0"],
+    from torqueloop.spec import auth
+
+    key = host_env / "link.key"       # one key file for the board and the client (docs/security.md)
+    if not key.exists():
+        auth.write_key_file(key, auth.new_key())
+    board = subprocess.Popen([sys.executable, "-m", "torqueloop.cli", "-k", str(key), "sim", "--port", "0"],
                              stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
         line = board.stdout.readline()
@@ -60,7 +65,7 @@ def test_the_host_only_client_drives_a_simulated_board(host_env: Path) -> None:
         tl = str(host_env / "bin" / "torqueloop")
 
         def call(*a: str) -> dict:
-            r = _run(host_env, tl, "-u", url, "--json", *a)
+            r = _run(host_env, tl, "-u", url, "-k", str(key), "--json", *a)
             assert r.returncode == 0, (a, r.stdout, r.stderr)
             return json.loads(r.stdout.strip().splitlines()[-1])
 

@@ -262,6 +262,7 @@ def main(argv: list[str] | None = None) -> int:
     except ImageRefused as e:
         print(f"upload: {e}", file=sys.stderr)
         return 2
+
     path = auth.key_file_path(args.key_file)
     if path is None:
         print(f"upload: an upload is signed with the link key: name its file with --key-file or "
