@@ -377,3 +377,29 @@ def test_upload_script_enter_asks_the_servo_firmware():
     assert [f.cmd for f in sent] == [ident.cmd, sess.cmd]
     with pytest.raises(auth.AuthError, match="authentication failed"):
         upload.servo_enter(Port(), bytes(32))            # a board holding another key
+
+
+def test_key_provisioning_puts_the_key_file_into_the_boot_rom(tmp_path, capsys, monkeypatch):
+    """docs/security.md, 'Key provisioning': the ROM image the FPGA loads holds
+    the named key file's key in its key slot; without one the slot is blank
+    and the build says what that board will refuse."""
+    from torqueloop.flow import boot_image
+
+    key = auth.new_key()
+    kf = tmp_path / "board.key"
+    auth.write_key_file(kf, key)
+    monkeypatch.delenv(auth.KEY_FILE_ENV, raising=False)
+
+    def slot(out: Path) -> bytes:
+        words = (out / "boot_rom.hex").read_text().split()
+        return b"".join(int(w, 16).to_bytes(4, "little") for w in words)[bp.KEY_SLOT_OFS:]
+
+    assert boot_image.main(["--no-factory", "--out", str(tmp_path / "a"), "--key-file", str(kf)]) == 0
+    assert auth.parse_key_slot(slot(tmp_path / "a")) == key
+    assert f"key id {auth.key_id(key)}" in capsys.readouterr().out
+    assert boot_image.main(["--no-factory", "--out", str(tmp_path / "c")]) == 0
+    assert slot(tmp_path / "c") == bytes(auth.KEY_SLOT_BYTES)
+    assert "refuses motion" in capsys.readouterr().err
+    kf.chmod(0o644)
+    with pytest.raises(SystemExit, match="chmod 600"):       # refused before anything is built
+        boot_image.main(["--no-factory", "--out", str(tmp_path / "d"), "--key-file", str(kf)])
