@@ -19,25 +19,35 @@ from __future__ import annotations
 import pytest
 
 from torqueloop.sim.model_loop import TABLE1
+from torqueloop.host.client import UNTAGGED
 from torqueloop.sim.simboard import LIM_POS, SimBoard
+from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
 
 PERIOD_S = 0.025           # the paper's, the firmware's default
 
 
 class Host:
-    """Commands straight into the simulated board's UART, replies decoded."""
+    """Commands straight into the simulated board's UART in an authenticated
+    session (the test key; docs/security.md), replies decoded."""
 
     def __init__(self, board: SimBoard) -> None:
         self.b, self.seq, self.dec = board, 0, P.FrameDecoder()
+        hn = auth.new_host_nonce()
+        self.b.write(P.request("SESSION", 0, host_nonce=hn))
+        self.sess = auth.open_session(auth.TEST_KEY, hn, self._reply("SESSION"))
 
-    def cmd(self, name: str, **fields: int) -> dict[str, int]:
-        self.seq += 1
-        self.b.write(P.request(name, self.seq, **fields))
+    def _reply(self, name: str) -> dict[str, int]:
         for f in self.dec.feed(self.b.read()):
             if isinstance(f, P.Frame) and f.cmd == P.COMMANDS[name].cmd | P.REPLY_FLAG:
                 return P.decode_reply(f)
         raise AssertionError(f"no reply to {name}")
+
+    def cmd(self, name: str, **fields: int) -> dict[str, int]:
+        self.seq += 1
+        tagged = name not in UNTAGGED       # as the host tool: everything but the reads carries a MAC
+        self.b.write(self.sess.request(name, self.seq, **fields) if tagged else P.request(name, self.seq, **fields))
+        return self._reply(name)
 
     def ok(self, name: str, **fields: int) -> dict[str, int]:
         r = self.cmd(name, **fields)
@@ -64,7 +74,7 @@ class Host:
 
 @pytest.fixture()
 def host() -> Host:
-    h = Host(SimBoard())
+    h = Host(SimBoard(key=auth.TEST_KEY))
     for ax in (0, 1):
         h.set(ax, "KP_UNM_RAD", round(TABLE1["P"][ax].kp * 1e6))
     return h
