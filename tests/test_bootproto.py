@@ -121,7 +121,7 @@ def test_rom_image_layout():
     factory = random.Random(1001).randbytes(1001)   # fixed data: no seed to report
     rom = bp.rom_image(boot, factory, KEY)
     code = bp.BOOT_CODE_BYTES
-    assert len(rom) == regs.BOOT_ROM_SIZE and code == 0x1000
+    assert len(rom) == regs.BOOT_ROM_SIZE and code == 0x1400
     assert rom[:200] == boot and rom[200:code] == bytes(code - 200)
     magic, length, crc, load = struct.unpack_from("<IIII", rom, code)
     assert (magic, length, crc, load) == (0x57464C54, 1001, zlib.crc32(factory), regs.RAM_BASE)

@@ -476,7 +476,7 @@ def keyless_url(url):
 
 
 def test_a_board_without_a_key_says_so(keyless_url, capsys) -> None:
-    _, err = run(keyless_url, capsys, "move", "10", "--enable", rc=1)
+    _, err = run(keyless_url, capsys, "move", "10", "--enable", "--unhomed", rc=1)
     assert "the board has no link key" in err and "Key provisioning" in err
     _, err = run(keyless_url, capsys, "set", "kp", "0.5", rc=1)
     assert "no link key" in err

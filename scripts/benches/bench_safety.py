@@ -30,7 +30,7 @@ import numpy as np
 from torqueloop.flow.firmware import CC, CFLAGS, boot_stub_words, build
 from torqueloop.sim import native
 from torqueloop.sim.link import Link
-from torqueloop.spec import bootproto, regs
+from torqueloop.spec import auth, bootproto, regs
 from torqueloop.spec import protocol as P
 from torqueloop.spec.repo import REPO_ROOT as REPO
 
@@ -47,7 +47,7 @@ STEP = 400                            # clocks per encoder count: above the deco
 
 def _servo_images() -> tuple[Path, Path]:
     img = build("servo_safety_bench", {"TL_DEFAULT_PERIOD_US": str(PERIOD_US), "TL_DEFAULT_BAUD_DIV": str(BAUD_DIV)},
-                out=REPO / "build" / "bench_safety" / "servo")
+                out=REPO / "build" / "bench_safety" / "servo", key=auth.TEST_KEY)
     return img.rom_hex, img.ram_hex
 
 
@@ -86,6 +86,7 @@ class Bench:
         if link:
             self.link = Link(self.b.uart_send, self.b.uart_recv, lambda n: self.run(n), lambda: self.b.cycle)
             self.link.call("IDENTIFY")
+            self.link.open_session(auth.TEST_KEY)
 
     def run(self, n: int) -> None:
         self.b.run(self.b.cycle + n, False)

@@ -436,6 +436,7 @@ def run_fast_loop(period_us: int = 50, seconds: float = 0.5, law: str = "PID", b
         link = Link(board.uart_send, board.uart_recv, lambda n: bridge.run_to(board.cycle + n),
                     lambda: board.cycle)
         link.call("IDENTIFY")
+        link.open_session(auth.TEST_KEY)
         link.set_param(tp.GLOBAL_AXIS, "BAUD_DIV", baud_div)
         board.set_uart_div(baud_div + 1)
         link.set_param(tp.GLOBAL_AXIS, "PERIOD_US", period_us)

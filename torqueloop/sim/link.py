@@ -44,9 +44,11 @@ class Link:
     _chunk_cycle: int = -1
     session: auth.Session | None = None
 
-    def open_session(self, key: bytes) -> None:
-        """SESSION, and the board's proof checked: later commands carry their MAC."""
-        hn = auth.new_host_nonce()
+    def open_session(self, key: bytes, host_nonce: bytes | None = None) -> None:
+        """SESSION, and the board's proof checked: later commands carry their MAC.
+        ``host_nonce``: a fixed one for runs that must repeat byte for byte
+        (a fresh random one otherwise, as a real host must)."""
+        hn = auth.new_host_nonce() if host_nonce is None else host_nonce
         self.session = auth.open_session(key, hn, self.call("SESSION", host_nonce=hn))
 
     def poll(self) -> None:
