@@ -6,21 +6,16 @@ Exit status 1 if anything fails; every problem is listed."""
 
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 
 from torqueloop.flow import eda
-from torqueloop.flow.manifest import load_manifest
+from torqueloop.flow.manifest import core_command_line
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("cores", nargs="*", help="only these cores (default: all)")
-    ap.add_argument("-j", "--jobs", type=int, default=2)
-    args = ap.parse_args()
-    cores = load_manifest()
+    args, cores = core_command_line(__doc__, "all")
     names = args.cores or list(cores)
     jobs = []
     for n in names:

@@ -6,20 +6,15 @@ the table."""
 
 from __future__ import annotations
 
-import argparse
 import sys
 from concurrent.futures import ThreadPoolExecutor
 
 from torqueloop.flow import eda
-from torqueloop.flow.manifest import load_manifest
+from torqueloop.flow.manifest import core_command_line
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("cores", nargs="*", help="only these cores (default: all with synth = true)")
-    ap.add_argument("-j", "--jobs", type=int, default=2)
-    args = ap.parse_args()
-    cores = load_manifest()
+    args, cores = core_command_line(__doc__, "all with synth = true")
     chosen = [cores[n] for n in args.cores] if args.cores else [c for c in cores.values() if c.synth]
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
         rows = list(pool.map(eda.synth_cyclonev, chosen))

@@ -28,13 +28,11 @@ from __future__ import annotations
 
 import json
 import os
-import signal
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
+from simproc import sim_board
 from torqueloop import cli
 from torqueloop.spec import auth
 
@@ -58,19 +56,8 @@ def keyfile(tmp_path_factory):
 
 def _sim(keyless: bool = False):
     env = {k: v for k, v in os.environ.items() if not (keyless and k == auth.KEY_FILE_ENV)}
-    p = subprocess.Popen([sys.executable, "-m", "torqueloop.cli", "sim", "--port", "0", "--hello",
-                          "--build-id", hex(BUILD_ID)], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                         text=True, env=env)
-    try:
-        line = p.stdout.readline()
-        assert "socket://" in line, line
-        yield line.split()[line.split().index("on") + 1]
-    finally:
-        p.send_signal(signal.SIGINT)
-        try:
-            p.wait(5)
-        except subprocess.TimeoutExpired:
-            p.kill()
+    with sim_board("sim", "--port", "0", "--hello", "--build-id", hex(BUILD_ID), env=env) as url:
+        yield url
 
 
 @pytest.fixture(scope="module")

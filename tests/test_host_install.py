@@ -9,14 +9,13 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import signal
 import subprocess
-import sys
 import venv
 from pathlib import Path
 
 import pytest
 
+from simproc import sim_board
 from torqueloop.spec.repo import REPO_ROOT
 
 
@@ -57,11 +56,7 @@ def test_the_host_only_client_drives_a_simulated_board(host_env: Path) -> None:
     key = host_env / "link.key"       # one key file for the board and the client (docs/security.md)
     if not key.exists():
         auth.write_key_file(key, auth.new_key())
-    board = subprocess.Popen([sys.executable, "-m", "torqueloop.cli", "-k", str(key), "sim", "--port", "0"],
-                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-    try:
-        line = board.stdout.readline()
-        url = line.split()[line.split().index("on") + 1]
+    with sim_board("-k", str(key), "sim", "--port", "0") as url:
         tl = str(host_env / "bin" / "torqueloop")
 
         def call(*a: str) -> dict:
@@ -81,12 +76,6 @@ def test_the_host_only_client_drives_a_simulated_board(host_env: Path) -> None:
         st = call("status", "--axis", "0")
         assert "0" in st
         call("disable", "--all")
-    finally:
-        board.send_signal(signal.SIGINT)
-        try:
-            board.wait(5)
-        except subprocess.TimeoutExpired:
-            board.kill()
 
 
 def test_host_only_sim_says_what_is_missing(host_env: Path) -> None:

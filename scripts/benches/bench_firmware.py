@@ -38,14 +38,6 @@ def _measure(period_us: int, move_mode: int = 1) -> dict:
     return json.loads(out.read_text())
 
 
-def _quick() -> bool:
-    try:
-        from bench import QUICK
-    except ImportError:
-        return False
-    return QUICK
-
-
 def main() -> int:
     img = build("servo")
     print(f"image: text+rodata {img.text_bytes} B, data {img.data_bytes} B, bss {img.bss_bytes} B "
@@ -68,7 +60,7 @@ def main() -> int:
         print(f"  {m['commands_answered']} commands answered in 3 ms, telemetry {m['telemetry_frames']} frames sent / "
               f"{m['telemetry_dropped']} dropped (1 Mbaud), faults {m['faults']}")
     from torqueloop.sim.experiment import run_fast_loop
-    quick = _quick()
+    from bench import QUICK as quick   # scripts/bench.py's flag (make bench QUICK=1)
     r = run_fast_loop(seconds=0.05 if quick else 0.5)
     print(f"board image at 20 kHz for {r.seconds:g} s, both axes PID moving ({r.moved_counts} counts), plant on "
           f"the pins, link {r.baud:.0f} baud, telemetry every {r.telemetry_every} periods: worst iteration "

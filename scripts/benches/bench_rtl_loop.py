@@ -49,14 +49,6 @@ LADDER = [
 ]
 
 
-def _quick() -> bool:
-    try:
-        from bench import QUICK
-    except ImportError:
-        return False
-    return QUICK
-
-
 def _driver() -> Path:
     if not DRIVER.exists() or DRIVER.stat().st_mtime < DRIVER_SRC.stat().st_mtime:
         DRIVER.parent.mkdir(parents=True, exist_ok=True)
@@ -113,7 +105,7 @@ def _same_telemetry(a: experiment.RtlRun, b: experiment.RtlRun) -> bool:
 
 
 def main() -> int:
-    quick = _quick()
+    from bench import QUICK as quick   # scripts/bench.py's flag (make bench QUICK=1)
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs")
     img = experiment.firmware_image()
     native.install_images(img.rom_hex, img.ram_hex)

@@ -143,7 +143,6 @@ class _Recorder:
 def _pin_trace(variant) -> _Recorder:
     from sim_models.stepper import TwoAxisPlant
     from torqueloop.sim import native
-    from torqueloop.sim.link import Link
     from torqueloop.spec import auth
     from torqueloop.spec import protocol as tp
     from torqueloop.sim.pins import PlantOnPins
@@ -151,14 +150,7 @@ def _pin_trace(variant) -> _Recorder:
     board = _Recorder(native.NativeBoard.create(img.rom_hex, img.ram_hex, variant=variant))
     try:
         bridge = PlantOnPins(TwoAxisPlant(seed=0), board)
-        board.set_board(0, 1, 0)
-        bridge.run_to(20)
-        board.set_board(1, 1, 0)
-        bridge.run_to(40_000)
-        board.set_board(1, 1, 1)
-        link = Link(board.uart_send, board.uart_recv, lambda n: bridge.run_to(board.cycle + n), lambda: board.cycle)
-        link.call("IDENTIFY")
-        link.open_session(auth.TEST_KEY, host_nonce=bytes(auth.NONCE_BYTES))   # the same bytes in both builds
+        link, _ = experiment.power_up(board, bridge, host_nonce=bytes(auth.NONCE_BYTES))   # the same bytes in both builds
         link.set_param(0xFF, "BAUD_DIV", 15)             # 3.1 Mbaud: many input changes
         board.set_uart_div(16)
         link.set_param(0xFF, "PERIOD_US", 500)

@@ -333,14 +333,20 @@ async def _pwm_running(tb: TB, axis_base: int) -> None:
     await tb.dbus.write(axis_base + regs.AXIS_PWM_CTRL_OFS, regs.AXIS_PWM_CTRL_ENABLE_MSK)
 
 
-async def _rpwm_toggles(dut, axis: int, cycles: int = 2200) -> bool:
-    seen = set()
+async def _levels(dut, pin: str, axis: int, cycles: int = 2200, stop_at_toggle: bool = False) -> set[int]:
+    """The levels axis ``axis``'s bit of ``pin`` takes over ``cycles`` clocks
+    (from the present one; with ``stop_at_toggle`` until both were seen)."""
+    seen = {int(getattr(dut, pin).value) >> axis & 1}
     for _ in range(cycles):
         await FallingEdge(dut.clk)
-        seen.add(int(dut.rpwm.value) >> axis & 1)
-        if len(seen) == 2:
-            return True
-    return False
+        seen.add(int(getattr(dut, pin).value) >> axis & 1)
+        if stop_at_toggle and len(seen) == 2:
+            break
+    return seen
+
+
+async def _rpwm_toggles(dut, axis: int, cycles: int = 2200) -> bool:
+    return len(await _levels(dut, "rpwm", axis, cycles, stop_at_toggle=True)) == 2
 
 
 @cocotb.test()
@@ -485,25 +491,13 @@ async def a_tripped_limit_switch_blocks_only_its_direction(dut):
     assert st & regs.AXIS_PWM_STATUS_LIM_POS_MSK and not st & regs.AXIS_PWM_STATUS_LIM_NEG_MSK
     assert not await _rpwm_toggles(dut, 0, 2200), "forward PWM toward an open positive switch"
     await tb.dbus.write(base + regs.AXIS_PWM_CMD_OFS, -512 & 0x7FF)   # away from it: runs
-    lp = set()
-    for _ in range(2200):
-        await FallingEdge(dut.clk)
-        lp.add(int(dut.lpwm.value) & 1)
-    assert lp == {0, 1}, "reverse PWM blocked by the positive switch"
+    assert await _levels(dut, "lpwm", 0) == {0, 1}, "reverse PWM blocked by the positive switch"
     dut.lim_pos.value = 0
     dut.lim_neg.value = 0b01
     await ClockCycles(dut.clk, deb + 4)
-    lp = {int(dut.lpwm.value) & 1}
-    for _ in range(2200):
-        await FallingEdge(dut.clk)
-        lp.add(int(dut.lpwm.value) & 1)
-    assert lp == {0}, "reverse PWM toward an open negative switch"
+    assert await _levels(dut, "lpwm", 0) == {0}, "reverse PWM toward an open negative switch"
     await tb.dbus.write(base + regs.AXIS_PWM_CTRL_OFS, regs.AXIS_PWM_CTRL_ENABLE_MSK)    # LIMIT_EN = 0
-    lp = set()
-    for _ in range(2200):
-        await FallingEdge(dut.clk)
-        lp.add(int(dut.lpwm.value) & 1)
-    assert lp == {0, 1}, "LIMIT_EN = 0 still blocks"
+    assert await _levels(dut, "lpwm", 0) == {0, 1}, "LIMIT_EN = 0 still blocks"
     dut.lim_neg.value = 0
 
 

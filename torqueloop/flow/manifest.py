@@ -7,6 +7,7 @@ list from here, so adding a core is one edit.
 
 from __future__ import annotations
 
+import argparse
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -117,3 +118,19 @@ def core(name: str) -> Core:
     if name not in cores:
         raise KeyError(f"core '{name}' is not in rtl/manifest.toml (have: {', '.join(sorted(cores))})")
     return cores[name]
+
+
+def core_command_line(description: str, default: str, argv: list[str] | None = None
+                      ) -> tuple[argparse.Namespace, dict[str, Core]]:
+    """The command line of make lint and make synth: core names (checked
+    against the manifest: an unknown one is a usage error, one line) and
+    ``-j``.  Returns the arguments and the manifest."""
+    ap = argparse.ArgumentParser(description=description)
+    ap.add_argument("cores", nargs="*", help=f"only these cores (default: {default})")
+    ap.add_argument("-j", "--jobs", type=int, default=2)
+    args = ap.parse_args(argv)
+    cores = load_manifest()
+    unknown = [n for n in args.cores if n not in cores]
+    if unknown:
+        ap.error(f"no core {', '.join(unknown)} in rtl/manifest.toml (it has: {', '.join(cores)})")
+    return args, cores

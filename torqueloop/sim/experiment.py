@@ -185,6 +185,23 @@ def configure(link: Link, cfg: ExperimentConfig) -> list[dict[str, int]]:
     return [{k: link.get_param(ax, k) for k in BOARD_KEYS} for ax in (0, 1)]
 
 
+def power_up(board, bridge: PlantOnPins, host_nonce: bytes | None = None) -> tuple[Link, dict[str, int]]:
+    """The board image from reset to a link in an authenticated session:
+    reset with the arm switch down, release, then arm (SW[0] rising edge),
+    IDENTIFY, SESSION under the public test key the stub ROM holds.  Returns
+    the link and IDENTIFY's reply.  ``host_nonce``: fixed, for runs that must
+    repeat byte for byte."""
+    board.set_board(0, 1, 0)
+    bridge.run_to(20)
+    board.set_board(1, 1, 0)
+    bridge.run_to(40_000)
+    board.set_board(1, 1, 1)
+    link = Link(board.uart_send, board.uart_recv, lambda n: bridge.run_to(board.cycle + n), lambda: board.cycle)
+    ident = link.call("IDENTIFY")
+    link.open_session(auth.TEST_KEY, host_nonce)
+    return link, ident
+
+
 def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
     """Run the experiment on the board image; ``board_factory(rom, ram)``
     gives a :class:`~torqueloop.sim.pins.BoardPort` (default: native Verilator)."""
@@ -196,16 +213,7 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
     bridge = PlantOnPins(plant, board)
     w0, c0 = time.monotonic(), time.process_time()
     try:
-        # reset with the arm switch down, release, then arm (SW[0] rising edge)
-        board.set_board(0, 1, 0)
-        bridge.run_to(20)
-        board.set_board(1, 1, 0)
-        bridge.run_to(40_000)
-        board.set_board(1, 1, 1)
-        link = Link(board.uart_send, board.uart_recv, lambda n: bridge.run_to(board.cycle + n),
-                    lambda: board.cycle)
-        ident = link.call("IDENTIFY")
-        link.open_session(auth.TEST_KEY)
+        link, ident = power_up(board, bridge)
         if cfg.baud_div is not None:
             link.set_param(tp.GLOBAL_AXIS, "BAUD_DIV", cfg.baud_div)   # replied at the old rate
             board.set_uart_div(cfg.baud_div + 1)
@@ -428,15 +436,7 @@ def run_fast_loop(period_us: int = 50, seconds: float = 0.5, law: str = "PID", b
     bridge = PlantOnPins(plant, board)
     c0 = time.process_time()
     try:
-        board.set_board(0, 1, 0)
-        bridge.run_to(20)
-        board.set_board(1, 1, 0)
-        bridge.run_to(40_000)
-        board.set_board(1, 1, 1)
-        link = Link(board.uart_send, board.uart_recv, lambda n: bridge.run_to(board.cycle + n),
-                    lambda: board.cycle)
-        link.call("IDENTIFY")
-        link.open_session(auth.TEST_KEY)
+        link, _ = power_up(board, bridge)
         link.set_param(tp.GLOBAL_AXIS, "BAUD_DIV", baud_div)
         board.set_uart_div(baud_div + 1)
         link.set_param(tp.GLOBAL_AXIS, "PERIOD_US", period_us)
