@@ -103,16 +103,20 @@ def build(name: str = "servo", defines: dict[str, str] | None = None, out: Path 
     out.mkdir(parents=True, exist_ok=True)
     elf, binf = out / f"{name}.elf", out / f"{name}.bin"
     ram_hex, rom_hex = out / f"{name}_ram.hex", out / f"{name}_rom.hex"
+    # Built under names of this process's own and renamed into place at the end:
+    # the processes of make run (and pytest-xdist workers) build the same image
+    # at once, and none may read a file another is half way through writing.
+    tmp = {f: f.with_name(f"{f.name}.{os.getpid()}.tmp") for f in (elf, binf, ram_hex, rom_hex)}
     dflags = [f"-D{k}={v}" for k, v in (defines or {}).items()]
     cmd = [CC, *CFLAGS, *dflags, *(f"-I{i}" for i in INCLUDES), "-T", str(FW / "common" / "link.ld"),
-           "-Wl,--gc-sections", "-Wl,--no-warn-rwx-segments", "-o", str(elf), *map(str, SOURCES), libgcc()]
+           "-Wl,--gc-sections", "-Wl,--no-warn-rwx-segments", "-o", str(tmp[elf]), *map(str, SOURCES), libgcc()]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode:
         raise RuntimeError(f"firmware build failed:\n{' '.join(cmd)}\n{r.stderr}")
-    subprocess.run(["riscv64-unknown-elf-objcopy", "-O", "binary", "--remove-section=.bss", str(elf), str(binf)],
-                   check=True)
-    data = binf.read_bytes()
-    size = subprocess.run(["riscv64-unknown-elf-size", "-A", str(elf)], capture_output=True, text=True,
+    subprocess.run(["riscv64-unknown-elf-objcopy", "-O", "binary", "--remove-section=.bss", str(tmp[elf]),
+                    str(tmp[binf])], check=True)
+    data = tmp[binf].read_bytes()
+    size = subprocess.run(["riscv64-unknown-elf-size", "-A", str(tmp[elf])], capture_output=True, text=True,
                           check=True).stdout
     sec = {ln.split()[0]: int(ln.split()[1]) for ln in size.splitlines() if ln.startswith(".")}
     bss = sec.get(".bss", 0)
@@ -120,12 +124,14 @@ def build(name: str = "servo", defines: dict[str, str] | None = None, out: Path 
         raise RuntimeError(f"{name}: {len(data)} + {bss} bytes (+ stack) do not fit {ram_bytes} bytes of RAM")
     data += bytes(ram_bytes - len(data))
     words = [int.from_bytes(data[i:i + 4], "little") for i in range(0, len(data), 4)]
-    ram_hex.write_text("".join(f"{w:08x}\n" for w in words))
+    tmp[ram_hex].write_text("".join(f"{w:08x}\n" for w in words))
     rom = boot_stub_words(regs.RAM_BASE)
     slot = auth.key_slot(key)
     rom += [0] * ((regs.BOOT_ROM_SIZE - len(slot)) // 4 - len(rom))
     rom += [int.from_bytes(slot[i:i + 4], "little") for i in range(0, len(slot), 4)]
-    rom_hex.write_text("".join(f"{w:08x}\n" for w in rom))
+    tmp[rom_hex].write_text("".join(f"{w:08x}\n" for w in rom))
+    for final, t in tmp.items():
+        os.replace(t, final)
     return Image(elf, binf, ram_hex, rom_hex, sec.get(".text", 0) + sec.get(".rodata", 0),
                  sec.get(".data", 0) + sec.get(".sdata", 0), bss)
 
