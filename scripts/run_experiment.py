@@ -78,13 +78,20 @@ def _job(job: tuple) -> tuple:
     from torqueloop.sim import experiment
 
     t0 = time.monotonic()
-    if kind == "rtl":
-        run = experiment.run_rtl(cfg, log=lambda m, **k: print(f"  {m.strip()}", flush=True))
-    elif kind == "model":
-        run = experiment.run_paper_model(cfg)
-    else:
-        run = experiment.run_fast(cfg)
+    try:
+        if kind == "rtl":
+            run = experiment.run_rtl(cfg, log=lambda m, **k: print(f"  {m.strip()}", flush=True))
+        elif kind == "model":
+            run = experiment.run_paper_model(cfg)
+        else:
+            run = experiment.run_fast(cfg)
+    except Exception as e:   # noqa: BLE001 - reported by name, the other runs go on
+        run = RunFailed(f"{type(e).__name__}: {e}")
     return kind, key, run, time.monotonic() - t0
+
+
+class RunFailed(str):
+    """A run that raised: its one-line reason (the pool goes on with the rest)."""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -144,12 +151,17 @@ def main(argv: list[str] | None = None) -> int:
     st = report.Study(t_end_s=t_end, target_rad=base.target_counts * 2 * math.pi / experiment.COUNTS_PER_REV,
                       laws=list(a.laws), sweep_t_end_s=t_sweep,
                       variant_labels={k: v[0] for k, v in VARIANTS.items()})
-    done = 0
+    done, failed = 0, []
     ctx = mp.get_context("fork")
     with ctx.Pool(max(1, a.jobs)) as pool:
         for kind, key, run, dt in pool.imap_unordered(_job, jobs, chunksize=1):
             done += 1
-            _say(f"{done}/{len(jobs)} {kind} {' '.join(map(str, key))} ({dt:.0f} s; {time.monotonic() - t0:.0f} s so far)")
+            what = f"{kind} {' '.join(map(str, key))}"
+            if isinstance(run, RunFailed):
+                failed.append(f"{what}: {run}")
+                _say(f"{done}/{len(jobs)} {what} FAILED after {dt:.0f} s: {run}")
+                continue
+            _say(f"{done}/{len(jobs)} {what} ({dt:.0f} s; {time.monotonic() - t0:.0f} s so far)")
             if kind == "rtl":
                 st.experiment_arm[key[0]] = run
             elif kind == "model":
@@ -160,6 +172,11 @@ def main(argv: list[str] | None = None) -> int:
                 st.variants.setdefault(key[1], {})[key[2]] = run
             else:
                 st.sweep.append((key[1], key[2], key[3], run))
+    if failed:
+        for f in failed:
+            print(f"run_experiment: {f}", file=sys.stderr)
+        print(f"run_experiment: {len(failed)} of {len(jobs)} runs failed; no report written", file=sys.stderr)
+        return 1
     st.sweep.sort(key=lambda r: (r[0], not r[1], r[2]))
     cfgdoc = json.loads(char.read_text())
     st.characterization = {

@@ -272,6 +272,14 @@ def rotor_hold_torque(c: AxisConsts, x: np.ndarray, mode: Mode, direction: int) 
 ROTOR_BREAKAWAY_MARGIN = 1e-9
 
 
+#: a sliding table sticks when the force on it is within its Coulomb force plus
+#: this (N): when the force beyond the friction is zero to rounding, the table
+#: would slide on with no acceleration and its velocity guard fire again at
+#: once, without end (Zeno; met on axis z under PD at a 50 Hz carrier, the
+#: force 5e-14 N beyond 0.17 N).  1e-9 N is 6e-9 of axis z's friction force.
+TABLE_BREAKAWAY_MARGIN = 1e-9
+
+
 def rotor_stick_or_slide(c: AxisConsts, x: np.ndarray, mode: Mode) -> int:
     """sm for a rotor at rest: +1 / -1 if the net torque towards that side
     breaks away, else 0 (stuck).  At most one side can break away.  Without
@@ -356,8 +364,9 @@ def guards(c: AxisConsts, mode: Mode, e_pos: float, e_neg: float) -> list[Guard]
         out.append(Guard("table", 0, _linear_row(lambda z: -z[V_L], c), 1e-9))
     else:
         hold = lambda z: table_hold_force(c, z, mode)  # noqa: E731
-        out.append(Guard("table", 0, _linear_row(lambda z: c.fc - hold(z), c), 1e-6))
-        out.append(Guard("table", 1, _linear_row(lambda z: c.fc + hold(z), c), 1e-6))
+        limit = c.fc + TABLE_BREAKAWAY_MARGIN
+        out.append(Guard("table", 0, _linear_row(lambda z: limit - hold(z), c), 1e-6))
+        out.append(Guard("table", 1, _linear_row(lambda z: limit + hold(z), c), 1e-6))
     if c.rotor_modes:
         if mode.sm > 0:
             out.append(Guard("rotor", 0, _linear_row(lambda z: z[W_M], c), 1e-9))
@@ -407,7 +416,7 @@ def initial_mode(c: AxisConsts, x: np.ndarray, e_pos: float, e_neg: float) -> Mo
     if x[V_L] != 0.0:
         return m._replace(sl=_sign(x[V_L]))
     h = table_hold_force(c, x, m)
-    return m._replace(sl=0 if abs(h) <= c.fc else _sign(h))
+    return m._replace(sl=0 if abs(h) <= c.fc + TABLE_BREAKAWAY_MARGIN else _sign(h))
 
 
 def _mesh_sign(c: AxisConsts, x: np.ndarray, mode: Mode) -> int:
@@ -443,7 +452,7 @@ def next_mode(c: AxisConsts, x: np.ndarray, mode: Mode, g: Guard,
     # table
     x[V_L] = 0.0
     h = table_hold_force(c, x, mode)
-    if mode.sl != 0 and abs(h) <= c.fc:
+    if mode.sl != 0 and abs(h) <= c.fc + TABLE_BREAKAWAY_MARGIN:
         return mode._replace(sl=0)   # velocity reached zero and friction can hold it
     if mode.sl == 0:                 # guard 0: hold > fc, guard 1: hold < -fc
         return mode._replace(sl=1 if g.index == 0 else -1)

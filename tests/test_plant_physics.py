@@ -132,3 +132,35 @@ def test_gravity_pulls_the_unpowered_vertical_axis_down():
     fa.set_pins(BRAKE)
     fa.advance(0.5, [])
     assert fa.x[ax.CHI_L] < 0 and fa.x[ax.V_L] <= 0
+
+
+@pytest.mark.parametrize("beyond, sticks", [(5e-14, True), (1e-6, False)])
+def test_a_table_at_the_edge_of_its_friction_sticks_instead_of_chattering(beyond, sticks):
+    """A sliding table whose velocity reaches zero while the force on it is
+    its Coulomb force plus rounding (5e-14 N, met on axis z under PD at
+    50 Hz) sticks, and the stuck mode's guards hold at that state; it used to
+    slide on with no acceleration and re-fire the same guard without end
+    (the stepper's "Zeno?" error stopped make run).  Clearly beyond the
+    friction (1e-6 N) it slides on."""
+    from sim_models.variants import load_variant
+
+    p = load_variant("lab")
+    c = ax.AxisConsts.build(p.axes[1], p.bridge)
+    mode = ax.Mode(se=0, cg=1, cn=1, sl=-1, sm=0, gd=1)
+    x = np.zeros(ax.N_STATE)
+    # the table hold force is affine in the table position: place it at -(fc + beyond)
+    h0 = ax.table_hold_force(c, x, mode)
+    x1 = x.copy()
+    x1[ax.CHI_L] = 1e-6
+    slope = (ax.table_hold_force(c, x1, mode) - h0) / 1e-6
+    x[ax.CHI_L] = (-(c.fc + beyond) - h0) / slope
+    assert ax.table_hold_force(c, x, mode) == pytest.approx(-(c.fc + beyond), abs=1e-12)
+    guard = next(g for g in ax.guards(c, mode, 0.0, 0.0) if g.part == "table")
+    new = ax.next_mode(c, x, mode, guard, 0.0, 0.0)
+    if sticks:
+        assert new.sl == 0
+        for g in ax.guards(c, new, 0.0, 0.0):
+            if g.part == "table":
+                assert float(g.row[:ax.N_STATE] @ x + g.row[ax.N_STATE]) >= 0.0, "the stuck mode breaks away at once"
+    else:
+        assert new.sl == -1
