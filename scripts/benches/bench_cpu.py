@@ -14,11 +14,6 @@ from pathlib import Path
 from torqueloop.flow import eda
 from torqueloop.flow.manifest import REPO_ROOT, core
 
-from bench import tb_module  # noqa: E402
-
-cpu_progs = tb_module("cpu", "cpu_progs")
-PROGS, build = cpu_progs.PROGS, cpu_progs.build
-
 REPS = 64
 #: instruction class -> one instance (repeated REPS times between two mcycle reads)
 CLASSES = {
@@ -79,6 +74,10 @@ def logic_depth(netlist: Path, skip_prefix: str | None = None) -> int:
 
 
 def main() -> int:
+    from bench import tb_module   # scripts/bench.py, which runs this (importing needs no simulator)
+
+    cpu_progs = tb_module("cpu", "cpu_progs")
+    PROGS, build = cpu_progs.PROGS, cpu_progs.build
     elf = build("bench", [PROGS / "bench.c"], tag="bench", opt="-O2")
     out = run_elf(elf)
     m = re.search(r"cycles=(\d+) instructions=(\d+) cpi=([\d.]+)", out)
