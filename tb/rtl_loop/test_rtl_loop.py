@@ -159,6 +159,17 @@ def _pin_trace(variant) -> _Recorder:
             link.set_param(ax, "FDIV", 3)                # 16 kHz carrier: many pin changes
         link.call("TELEMETRY", every=1)
         link.call("ENABLE", mask=3, enable=1)
+        # axis 0's positive switch opens while nothing else changes on the pins (no
+        # encoder edges, no host bytes): the firmware must see it within its debounce
+        # and a period (faults in the STATUS bytes compared below); then it closes again
+        board.set_limits(0, 0b01)
+        link.advance(150_000)
+        link.call("STATUS", axis=0)
+        board.set_limits(0, 0)
+        link.advance(150_000)
+        link.call("ENABLE", mask=1, enable=0)
+        link.call("CLEAR_FAULT", mask=1)                 # the switch closed again: the fault clears
+        link.call("ENABLE", mask=1, enable=1)
         for ax in (0, 1):
             link.call("MOVE", axis=ax, mode=tp.MOVE_UNHOMED, target=300 * (1 - 2 * ax))
         link.advance(1_500_000)                          # 30 ms of both axes moving

@@ -248,6 +248,7 @@ void tl_set_limits(void *p, int neg, int pos)
     Harness *h = static_cast<Harness *>(p);
     h->top->lim_neg = neg & 3;
     h->top->lim_pos = pos & 3;
+    h->inputs_changed = true;
 }
 
 void tl_set_uart_div(void *p, uint32_t clocks_per_bit) { static_cast<Harness *>(p)->div = clocks_per_bit; }
