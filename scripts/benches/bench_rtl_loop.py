@@ -172,12 +172,12 @@ def main() -> int:
     ref = experiment.run_rtl(short)
     _line("native, short PD", ref)
     # Icarus: the board's power-up, session and configuration alone are about 5.5 M clocks
-    # (the native run above counts them), which Icarus simulates at 1-10 k clocks per second:
+    # (the native run above counts them), which Icarus simulates at about 1 k clocks per second (measured):
     # more than an hour, so only on request.
     icarus = os.environ.get("TL_BENCH_ICARUS") == "1" and not quick
     sims = ("verilator", "icarus") if icarus else ("verilator",)
     if not icarus:
-        print(f"  cocotb icarus: not run ({ref.cycles / 1e6:.1f} M clocks at 1-10 k clocks/s would take over an hour; "
+        print(f"  cocotb icarus: not run ({ref.cycles / 1e6:.1f} M clocks at about 1 k clocks/s would take over an hour; "
               f"TL_BENCH_ICARUS=1 runs it)")
     for sim in sims:
         run_cfg = short if sim == "verilator" else dataclasses.replace(short, t_end_s=0.002)
