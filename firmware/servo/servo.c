@@ -272,40 +272,60 @@ static uint8_t home_switch(const tl_axis_t *a)
     return a->home_dir < 0 ? TLP_LIMIT_NEG : TLP_LIMIT_POS;
 }
 
-/* Every check of one axis for this period; returns the faults that tripped. */
-static uint16_t axis_checks(tl_servo_t *s, uint32_t i, const tl_enc_sample_t *e, uint32_t safety)
+/* What the SoC safety word means this period, worked out once for both axes. */
+typedef struct {
+    uint32_t safety;
+    uint16_t all;        /* faults of every axis: the e-stop input */
+    uint16_t enabled;    /* faults of an enabled axis: the latched e-stop and watchdog bits */
+    bool link;           /* the link watchdog expired (enabled axes) */
+} tick_faults_t;
+
+/* Every check of one axis for this period; returns the faults that tripped.
+ * *out: the soft-limit sides the position is beyond (enabled axes only). */
+static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, uint32_t i,
+                                                                  const tl_enc_sample_t *e,
+                                                                  const tick_faults_t *t, uint8_t *out)
 {
-    tl_axis_t *a = &s->ax[i];
-    uint16_t f = latch_faults(a, i, safety);
-    if (safety & TL_HAL_SAFE_ESTOP_IN)
-        f |= TLP_FAULT_ESTOP;
-    if (e->bridge_fault)
+    /* latch_faults, the e-stop input and the bridge input */
+    uint16_t f = t->all;
+    if ((t->safety & (i == 0u ? TL_HAL_SAFE_FAULT0 : TL_HAL_SAFE_FAULT1)) || e->bridge_fault)
         f |= TLP_FAULT_BRIDGE;
     if (e->illegal != a->illegal_seen) {
         f |= TLP_FAULT_ENCODER;
         a->illegal_seen = e->illegal;
     }
-    a->limits = pv(a, TLP_P_LIMIT_SW) ? (uint8_t)(e->limits & (TLP_LIMIT_NEG | TLP_LIMIT_POS)) : 0u;
-    uint8_t lim = a->limits & (uint8_t)~home_switch(a);
-    if (lim & TLP_LIMIT_NEG)
-        f |= TLP_FAULT_LIMIT_NEG;
-    if (lim & TLP_LIMIT_POS)
-        f |= TLP_FAULT_LIMIT_POS;
+    uint8_t lim = pv(a, TLP_P_LIMIT_SW) ? (uint8_t)(e->limits & (TLP_LIMIT_NEG | TLP_LIMIT_POS)) : 0u;
+    a->limits = lim;
+    if (lim) {
+        lim &= (uint8_t)~home_switch(a);
+        if (lim & TLP_LIMIT_NEG)
+            f |= TLP_FAULT_LIMIT_NEG;
+        if (lim & TLP_LIMIT_POS)
+            f |= TLP_FAULT_LIMIT_POS;
+    }
     if (!a->enabled)
         return f;
-    if ((safety & TL_HAL_SAFE_FORCED) && f == 0u)
+    f |= t->enabled;
+    if ((t->safety & TL_HAL_SAFE_FORCED) && f == 0u)
         f |= TLP_FAULT_HW_SAFE;   /* forced off by a cause not seen above */
-    if (s->link_idle_ticks > s->link_timeout_ticks)
+    if (t->link)
         f |= TLP_FAULT_LINK;
-    int64_t ferr = (a->c.sp_q16 >> 16) - (int64_t)a->pos;
-    if (ferr > pv(a, TLP_P_FOLLOW_LIMIT) || -ferr > pv(a, TLP_P_FOLLOW_LIMIT))
+    /* following error |sp - pos| > FOLLOW_LIMIT, sp in counts (int32 range: it lies between
+     * positions and targets), the difference in 33 bits */
+    int32_t sp = (int32_t)(a->c.sp_q16 >> 16);
+    uint32_t fl = (uint32_t)pv(a, TLP_P_FOLLOW_LIMIT);
+    uint32_t ad = sp >= a->pos ? (uint32_t)sp - (uint32_t)a->pos : (uint32_t)a->pos - (uint32_t)sp;
+    if (ad > fl)
         f |= TLP_FAULT_FOLLOWING;
     /* Outside the soft limits: a fault unless the axis was enabled out there
      * (it may then only come back in); back inside, that allowance ends. */
-    uint8_t out = a->pos < pv(a, TLP_P_SOFT_MIN) ? TLP_LIMIT_NEG : (a->pos > pv(a, TLP_P_SOFT_MAX) ? TLP_LIMIT_POS : 0u);
-    a->recover &= out;
-    if (out & (uint8_t)~a->recover)
-        f |= TLP_FAULT_SOFT_LIMIT;
+    uint8_t o = a->pos < pv(a, TLP_P_SOFT_MIN) ? TLP_LIMIT_NEG : (a->pos > pv(a, TLP_P_SOFT_MAX) ? TLP_LIMIT_POS : 0u);
+    *out = o;
+    if (a->recover | o) {
+        a->recover &= o;
+        if (o & (uint8_t)~a->recover)
+            f |= TLP_FAULT_SOFT_LIMIT;
+    }
     return f | stall_check(a);
 }
 
@@ -377,34 +397,58 @@ static void home_tick(tl_axis_t *a, uint32_t i, uint32_t now)
     tl_ctl_move(&a->c, (int32_t)(a->home_sp_q16 >> 16), false);
 }
 
-void tl_servo_tick(tl_servo_t *s)
+/* One axis of the control iteration (inlined with a constant i). */
+static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint32_t i, const tick_faults_t *t)
 {
-    uint32_t safety = hal_safety();
-    s->ticks++;
-    if (s->link_idle_ticks != 0xFFFFFFFFu)
-        s->link_idle_ticks++;
-    for (uint32_t i = 0; i < TL_AXES; i++) {
-        tl_axis_t *a = &s->ax[i];
-        tl_enc_sample_t e;
-        hal_enc_read(i, &e);
-        a->pos = wrap_add(e.pos, a->offset);
-        uint16_t f = axis_checks(s, i, &e, safety);
+    tl_axis_t *a = &s->ax[i];
+    tl_enc_sample_t e;
+    hal_enc_read(i, &e);
+    a->pos = wrap_add(e.pos, a->offset);
+    uint8_t out = 0;
+    uint16_t f = axis_checks(a, i, &e, t, &out);
+    if (f) {
         uint16_t fresh = f & (uint16_t)~a->faults;
         a->faults |= f;
         if (f & (TLP_FAULT_ENCODER | TLP_FAULT_RUNAWAY))
             a->home = TLP_HOME_STATE_NOT_HOMED;   /* the position is no longer trusted */
-        /* A new fault stops the axis; an old direction-blocking one lets it be driven out. */
-        if (a->enabled && (fresh || (a->faults & (uint16_t)~TLP_FAULT_DIRECTIONAL)))
+        if (a->enabled && fresh)
             disable_axis(s, i);
-        if (a->home == TLP_HOME_STATE_HOMING)
-            home_tick(a, i, e.now);
-        int32_t cmd = tl_ctl_step(&a->c, &a->ctl, a->pos, e.edge_time, e.now, e.interval, a->enabled);
-        uint8_t b = blocked(a);
+    }
+    /* An old direction-blocking fault lets the axis be driven out; any other stops it. */
+    if (a->enabled && (a->faults & (uint16_t)~TLP_FAULT_DIRECTIONAL))
+        disable_axis(s, i);
+    bool homing = a->home == TLP_HOME_STATE_HOMING;
+    if (homing)
+        home_tick(a, i, e.now);
+    int32_t cmd = tl_ctl_step(&a->c, &a->ctl, a->pos, e.edge_time, e.now, e.interval, a->enabled);
+    if (!a->enabled) {
+        cmd = 0;
+    } else {
+        /* blocked(a): the soft-limit sides from the checks, unless homing moved the position */
+        uint8_t b = homing ? blocked(a) : (uint8_t)(a->limits | out |
+                    ((a->faults & TLP_FAULT_LIMIT_NEG) ? TLP_LIMIT_NEG : 0u) |
+                    ((a->faults & TLP_FAULT_LIMIT_POS) ? TLP_LIMIT_POS : 0u));
         if (((b & TLP_LIMIT_NEG) && cmd < 0) || ((b & TLP_LIMIT_POS) && cmd > 0))
             cmd = 0;
-        a->cmd = a->enabled ? cmd : 0;
-        hal_pwm_cmd(i, a->cmd);
     }
+    a->cmd = cmd;
+    hal_pwm_cmd(i, cmd);
+}
+
+void tl_servo_tick(tl_servo_t *s)
+{
+    tick_faults_t t;
+    t.safety = hal_safety();
+    s->ticks++;
+    if (s->link_idle_ticks != 0xFFFFFFFFu)
+        s->link_idle_ticks++;
+    t.all = (t.safety & TL_HAL_SAFE_ESTOP_IN) ? TLP_FAULT_ESTOP : 0u;
+    t.enabled = (uint16_t)(((t.safety & TL_HAL_SAFE_ESTOP) ? TLP_FAULT_ESTOP : 0u) |
+                           ((t.safety & TL_HAL_SAFE_WDOG) ? TLP_FAULT_HW_SAFE : 0u));
+    t.link = s->link_idle_ticks > s->link_timeout_ticks;
+    _Static_assert(TL_AXES == 2, "the control iteration is written out for two axes");
+    axis_tick(s, 0u, &t);
+    axis_tick(s, 1u, &t);
     /* telem_phase = ticks mod telem_every, counted: no divide in the interrupt */
     if (s->telem_every && ++s->telem_phase >= s->telem_every) {
         s->telem_phase = 0;
