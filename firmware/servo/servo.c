@@ -234,7 +234,7 @@ uint32_t tl_servo_period_cycles(const tl_servo_t *s) { return s->period_cycles; 
  * measured motion runs away against the command) or one channel flickering
  * never does.  A compare and a counter per period: no division, no history. */
 #define STALL_DV_Q8 (20 * 256)   /* 20 counts/s */
-static uint16_t stall_check(tl_axis_t *a)
+static inline __attribute__((always_inline)) uint16_t stall_check(tl_axis_t *a)
 {
     int32_t lim = pv(a, TLP_P_STALL_CMD);
     int8_t dir = a->cmd >= lim ? 1 : (a->cmd <= -lim ? -1 : 0);
