@@ -28,7 +28,6 @@ typedef struct {
 #define TL_HAL_SAFE_FAULT1 0x10u
 #define TL_HAL_SAFE_WDOG 0x20u
 
-void hal_enc_read(uint32_t axis, tl_enc_sample_t *s);
 void hal_enc_clear_illegal(uint32_t axis);
 /* Encoder index latch: arm it, then poll; true once an index pulse latched *pos (encoder counts). */
 void hal_enc_index_arm(uint32_t axis);
@@ -36,10 +35,8 @@ bool hal_enc_index(uint32_t axis, int32_t *pos);
 /* Hardware limit block: while on, the bridge side that drives toward an open
  * limit switch is held off in the SoC (LIMIT_SW = 1); off for an axis without switches. */
 void hal_limit_block(uint32_t axis, bool on);
-void hal_pwm_cmd(uint32_t axis, int32_t cmd);
 void hal_pwm_enable(uint32_t axis, bool on, bool brake);
 void hal_pwm_config(uint32_t axis, uint32_t fdiv, uint32_t pw0, uint32_t pwmax);
-uint32_t hal_safety(void);
 /* Write-one-to-clear the latched cause bits (TL_HAL_SAFE_ESTOP/FAULTn/WDOG). */
 void hal_safety_ack(uint32_t bits);
 uint32_t hal_build_id(void);
@@ -51,5 +48,14 @@ uint32_t hal_cycles(void);
 void hal_set_baud_div(uint32_t div);
 void hal_irq_off(void);
 void hal_irq_on(void);
+
+/* The control iteration's accessors: inline on the SoC (hal_soc_inline.h), functions elsewhere. */
+#ifdef TL_HAL_SOC_INLINE
+#include "hal_soc_inline.h"
+#else
+void hal_enc_read(uint32_t axis, tl_enc_sample_t *s);
+void hal_pwm_cmd(uint32_t axis, int32_t cmd);
+uint32_t hal_safety(void);
+#endif
 
 #endif

@@ -37,7 +37,8 @@ SOURCES = [FW / "common" / "crt0.S", FW / "common" / "mem.c", FW / "protocol" / 
            FW / "servo" / "main.c"]
 INCLUDES = [FW / "include", FW / "protocol", FW / "crypto", FW / "servo"]
 CFLAGS = ["-march=rv32im_zicsr", "-mabi=ilp32", "-O2", "-ffreestanding", "-nostdlib", "-static",
-          "-std=c11", "-Wall", "-Wextra", "-Werror", "-ffunction-sections", "-fdata-sections"]
+          "-std=c11", "-Wall", "-Wextra", "-Werror", "-ffunction-sections", "-fdata-sections",
+          "-DTL_HAL_SOC_INLINE"]   # hal_soc_inline.h: the control iteration's register accessors inline
 CC = "riscv64-unknown-elf-gcc"
 
 

@@ -1,0 +1,52 @@
+/* SPDX-License-Identifier: MIT */
+/* The accessors of hal.h that the control iteration calls for every axis and
+ * period, on the torqueloop SoC: static inline (included by hal.h when
+ * TL_HAL_SOC_INLINE is defined, as the servo image's build does), so that the
+ * iteration, written out for each axis, reads and writes its registers at
+ * constant addresses without a call (docs/firmware.md, "Timing"). */
+#ifndef TL_HAL_SOC_INLINE_H
+#define TL_HAL_SOC_INLINE_H
+
+#include "torqueloop_regs.h"
+
+/* Axis register of axis i: the AXIS0 offset moved to that axis's page. */
+#define AX(i, REG) TL_REG32(((i) ? TL_AXIS1_BASE : TL_AXIS0_BASE) + (TL_AXIS0_##REG##_ADDR - TL_AXIS0_BASE))
+
+static inline __attribute__((always_inline)) void hal_enc_read(uint32_t axis, tl_enc_sample_t *s)
+{
+    /* Position and edge time are two reads: retry if a count fell between them,
+     * so the pair always belongs to the same edge. */
+    uint32_t t0, t1;
+    do {
+        t0 = AX(axis, ENC_EDGE_TIME);
+        s->pos = (int32_t)AX(axis, ENC_POS);
+        s->interval = AX(axis, ENC_EDGE_INTERVAL);
+        t1 = AX(axis, ENC_EDGE_TIME);
+    } while (t0 != t1);
+    s->edge_time = t1;
+    s->now = AX(axis, ENC_TIMESTAMP);
+    s->illegal = AX(axis, ENC_ILLEGAL) & TL_AXIS_ENC_ILLEGAL_COUNT_MSK;
+    uint32_t st = AX(axis, PWM_STATUS);
+    s->bridge_fault = (st & TL_AXIS_PWM_STATUS_BRIDGE_FAULT_MSK) != 0u;
+    s->limits = (uint8_t)(((st & TL_AXIS_PWM_STATUS_LIM_NEG_MSK) ? TL_HAL_LIM_NEG : 0u) |
+                          ((st & TL_AXIS_PWM_STATUS_LIM_POS_MSK) ? TL_HAL_LIM_POS : 0u));
+}
+
+static inline __attribute__((always_inline)) void hal_pwm_cmd(uint32_t axis, int32_t cmd)
+{
+    AX(axis, PWM_CMD) = (uint32_t)cmd & TL_AXIS_PWM_CMD_CMD_MSK;
+}
+
+static inline __attribute__((always_inline)) uint32_t hal_safety(void)
+{
+    uint32_t r = TL_SYS_SAFETY, o = 0;
+    if (r & TL_SYS_SAFETY_SAFE_MSK) o |= TL_HAL_SAFE_FORCED;
+    if (r & TL_SYS_SAFETY_ESTOP_IN_MSK) o |= TL_HAL_SAFE_ESTOP_IN;
+    if (r & TL_SYS_SAFETY_ESTOP_MSK) o |= TL_HAL_SAFE_ESTOP;
+    if (r & TL_SYS_SAFETY_FAULT0_MSK) o |= TL_HAL_SAFE_FAULT0;
+    if (r & TL_SYS_SAFETY_FAULT1_MSK) o |= TL_HAL_SAFE_FAULT1;
+    if (r & TL_SYS_SAFETY_WDOG_MSK) o |= TL_HAL_SAFE_WDOG;
+    return o;
+}
+
+#endif
