@@ -9,20 +9,7 @@
  *  - the error inside the deadband (half a count by default) counts as zero,
  *    so the PI does not hunt between two encoder counts. */
 #include "control.h"
-
-static int64_t clamp64(int64_t v, int64_t lo, int64_t hi) { return v < lo ? lo : (v > hi ? hi : v); }
-static int64_t abs64(int64_t v) { return v < 0 ? -v : v; }
-/* Counts between two decoder readings: the 32-bit counter wraps, so the
- * difference is taken modulo 2^32 (a signed subtraction would overflow). */
-static int32_t count_diff(int32_t a, int32_t b) { return (int32_t)((uint32_t)a - (uint32_t)b); }
-
-/* x, hidden from the optimiser: n - (n / d) * d stays a multiply (4 cycles on
- * this CPU) instead of becoming a second divide (35). */
-static inline uint32_t opaque(uint32_t x)
-{
-    __asm__("" : "+r"(x));
-    return x;
-}
+#include "control_step.h"
 
 static uint32_t clz32(uint32_t x)
 {
@@ -185,7 +172,7 @@ static uint64_t stop_distance(uint32_t v, uint32_t m, uint32_t a)
 }
 
 /* Out of line: the profile's registers are saved only while a move runs. */
-__attribute__((noinline)) static void profile(tl_ctl_t *c)
+__attribute__((noinline)) void tl_ctl_profile(tl_ctl_t *c)
 {
     int64_t d = c->target_q16 - c->sp_q16;
     int32_t dir = d >= 0 ? 1 : -1;
@@ -228,163 +215,6 @@ __attribute__((noinline)) static void profile(tl_ctl_t *c)
     c->sp_q16 += c->prof_v_q16;
 }
 
-/* |d| counts over dt cycles in q8 counts/s, saturated to INT32_MAX: floor(|d| clk 2^8 / dt),
- * exact, with one or two 32-bit divides for up to fast_counts counts:
- *   dt <= 2^24: |d| clk / dt, then 8 more bits from the remainder (< dt, so r 2^8 fits);
- *   dt >  2^24: |d| clk / (dt >> 8) overestimates by less than one (the speed is below
- *               2^16 q8), so at most two steps down make it exact. */
-static inline int32_t edge_speed(const tl_ctl_t *c, uint32_t ad, uint32_t dt)
-{
-    if (ad > TL_CTL_DCOUNT_MAX)
-        ad = TL_CTL_DCOUNT_MAX;
-    uint32_t q;
-    if (ad <= c->d.fast_counts) {
-        uint32_t n = ad * c->d.clk_hz;                     /* < 2^32 */
-        if (dt <= 0x00FFFFFFu) {
-            uint32_t q1 = n / dt;
-            uint32_t r1 = n - opaque(q1) * dt;           /* < dt <= 2^24 */
-            if (q1 > 0x7FFFFFu)
-                return 0x7FFFFFFF;
-            q = (q1 << 8) + ((r1 << 8) / dt);
-        } else {
-            q = n / (dt >> 8);
-            uint64_t num = (uint64_t)n << 8;
-            while ((uint64_t)q * dt > num)
-                q--;
-        }
-    } else {
-        q = tl_div64_32((uint64_t)ad * c->d.clk_q8, dt);
-    }
-    return q > 0x7FFFFFFFu ? 0x7FFFFFFF : (int32_t)q;
-}
-
-static inline void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos,
-                                              uint32_t edge_time, uint32_t now, uint32_t interval)
-{
-    if (p->vel_mode == 0u) {
-        /* The paper: Euler difference over T_s, low-pass weight 1/2 (torqueloop/sim/model_loop.py),
-         * with 2^8 1e6 / T_s rounded once per configuration (exact for T_s dividing 2^14 5^6 us). */
-        int64_t euler = (int64_t)count_diff(pos, c->pos_prev) * c->d.euler_k;
-        c->vel_q8 = (int32_t)clamp64((euler + c->vel_q8) / 2, -0x7FFFFFFF, 0x7FFFFFFF);
-    } else if (pos != c->pos_ref) {
-        /* Moving since the last sample: distance over the time between the decoder's edge
-         * timestamps - the exact average speed, free of sampling quantisation.  First counts
-         * after a silent sample: the old reference edge dates from before the standstill,
-         * so take one count over the decoder's last edge interval instead. */
-        int32_t d = count_diff(pos, c->pos_ref);
-        uint32_t dt = edge_time - c->t_ref;
-        if (!c->moved_last) {
-            d = d > 0 ? 1 : -1;
-            dt = interval;
-        }
-        if (dt == 0u)
-            dt = 1u;
-        int32_t v = edge_speed(c, d < 0 ? 0u - (uint32_t)d : (uint32_t)d, dt);
-        c->vel_q8 = d < 0 ? -v : v;
-        c->pos_ref = pos;
-        c->t_ref = edge_time;
-        c->moved_last = true;
-    } else {
-        c->moved_last = false;
-        /* No count this sample: the speed cannot exceed one count over the time since the
-         * last edge, so the estimate decays as 1/t to zero when the axis stops. */
-        uint32_t dt = now - c->t_ref;
-        if (dt > 0x7FFFFFFFu)
-            c->t_ref = now - 0x7FFFFFFFu;   /* keep the reference inside the 32-bit window */
-        int32_t bound = dt ? edge_speed(c, 1u, dt) : 0x7FFFFFFF;
-        if (c->vel_q8 > bound)
-            c->vel_q8 = bound;
-        else if (c->vel_q8 < -bound)
-            c->vel_q8 = -bound;
-    }
-    c->pos_prev = pos;
-}
-
-/* The 64-bit product of two 32-bit numbers: mul and mulh on RV32IM (GCC 12
- * otherwise sign-extends an operand it cannot see is 32-bit and multiplies
- * 64 by 32 bits, four multiplies). */
-static inline int64_t mul32(int32_t a, int32_t b)
-{
-#if defined(__riscv) && __riscv_xlen == 32
-    int32_t hi;
-    __asm__("mulh %0, %1, %2" : "=r"(hi) : "r"(a), "r"(b));
-    return (int64_t)(((uint64_t)(uint32_t)hi << 32) | ((uint32_t)a * (uint32_t)b));
-#else
-    return (int64_t)a * (int64_t)b;
-#endif
-}
-
-/* v saturated to +-0x7FFFFFFF (the law's error range). */
-static int32_t sat31(int64_t v) { return v > 0x7FFFFFFF ? 0x7FFFFFFF : (v < -0x7FFFFFFF ? -0x7FFFFFFF : (int32_t)v); }
-
-static inline int32_t law(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, bool run_law)
-{
-    /* The error, q16 counts: 32 bits within +-32767 counts (the usual case), saturated beyond. */
-    int64_t e_q16 = c->sp_q16 - (int64_t)pos * 65536;
-    int32_t e = (int32_t)e_q16;
-    bool fits = (int32_t)(e_q16 >> 32) == (e >> 31) && e != INT32_MIN;
-    if (fits) {
-        c->err_counts = (e >> 16) + ((e >> 15) & 1);   /* (e + 2^15) >> 16 without overflow */
-    } else {
-        c->err_counts = sat31((e_q16 + 32768) >> 16);
-        e = e_q16 < 0 ? -0x7FFFFFFF : 0x7FFFFFFF;
-    }
-    if (!run_law || p->law == TL_LAW_OFF) {
-        c->integ_q32 = 0;
-        c->cmd = 0;
-        return 0;
-    }
-    if (fits && (e < 0 ? -e : e) <= p->deadband_q16)
-        e = 0;
-    int32_t limit = p->cmd_limit;
-    /* eq. (20): P;  eq. (21): + Kd * (0 - v);  eq. (22): + Ki * integral(e) */
-    int64_t u_q16 = mul32(p->kp_q16, e) >> 16;
-    if (p->law >= TL_LAW_PD)
-        u_q16 -= mul32(p->kd_q16, c->vel_q8) >> 8;
-    if (p->law == TL_LAW_PID) {
-        int32_t e_sign = e > 0 ? 1 : (e < 0 ? -1 : 0);
-        if (!(c->sat_sign != 0 && e_sign == c->sat_sign)) {
-            int32_t ek = e > c->d.ki_e_max ? c->d.ki_e_max : (e < -c->d.ki_e_max ? -c->d.ki_e_max : e);
-            int64_t i = c->integ_q32 + ((c->d.ki_dt_q32 * ek) >> 16);
-            /* clamp to +-cmd_limit q32, whose low word is zero: compare high words */
-            int32_t ih = (int32_t)(i >> 32);
-            if (ih >= limit && (ih > limit || (uint32_t)i != 0u))
-                i = c->d.lim_q32;
-            else if (ih < -limit)
-                i = -c->d.lim_q32;
-            c->integ_q32 = i;
-        }
-        u_q16 += c->integ_q32 >> 16;
-    } else {
-        c->integ_q32 = 0;
-    }
-    /* round to the nearest PWM step and saturate (eq. 19/25): u = (u_q16 + 2^15) >> 16 */
-    int64_t t = u_q16 + 32768;
-    int32_t cmd;
-    if (t >= c->d.sat_hi_q16) {
-        cmd = limit;
-        c->sat_sign = 1;
-    } else if (t < c->d.sat_lo_q16) {
-        cmd = -limit;
-        c->sat_sign = -1;
-    } else {
-        cmd = (int32_t)(t >> 16);
-        c->sat_sign = 0;
-    }
-    c->saturated = c->sat_sign != 0;
-    c->cmd = cmd;
-    return cmd;
-}
-
-int32_t tl_ctl_step(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t edge_time, uint32_t now,
-                    uint32_t interval, bool run_law)
-{
-    velocity(c, p, pos, edge_time, now, interval);
-    if (c->moving)
-        profile(c);
-    return law(c, p, pos, run_law);
-}
-
 /* 2 pi ~ 710 / 113 (error 2.7e-7); the Python side (torqueloop/spec/protocol.py) uses the same. */
 int32_t tl_gain_raw_from_phys(int32_t micro, int32_t tau_max_mnm, int32_t counts_per_rev)
 {
@@ -406,4 +236,10 @@ int32_t tl_gain_phys_from_raw(int32_t raw, int32_t tau_max_mnm, int32_t counts_p
         return 100000000;
     uint64_t r = ((uint64_t)raw * x + den / 2u) / den;
     return r > 100000000u ? 100000000 : (int32_t)r;
+}
+
+int32_t tl_ctl_step(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t edge_time, uint32_t now,
+                    uint32_t interval, bool run_law)
+{
+    return tl_ctl_step_inline(c, p, pos, edge_time, now, interval, run_law);
 }

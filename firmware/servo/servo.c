@@ -19,6 +19,7 @@
  *    with an error and changes nothing. */
 #include "servo.h"
 
+#include "control_step.h"
 #include "hal.h"
 
 #define IDX_NONE (-1)
@@ -420,7 +421,7 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
     bool homing = a->home == TLP_HOME_STATE_HOMING;
     if (homing)
         home_tick(a, i, e.now);
-    int32_t cmd = tl_ctl_step(&a->c, &a->ctl, a->pos, e.edge_time, e.now, e.interval, a->enabled);
+    int32_t cmd = tl_ctl_step_inline(&a->c, &a->ctl, a->pos, e.edge_time, e.now, e.interval, a->enabled);
     if (!a->enabled) {
         cmd = 0;
     } else {
