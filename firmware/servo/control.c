@@ -152,69 +152,6 @@ void tl_ctl_hold(tl_ctl_t *c, int32_t pos)
     c->moving = false;
 }
 
-/* Trapezoidal profile: each sample the speed toward the target rises by at
- * most a, never exceeds vmax, and never exceeds v_allow(d), the speed from
- * which braking by a per sample lands exactly on the target after d; the last
- * step lands on it (never beyond).
- *
- * Braking by a from v covers D(v) = v + (v - a) + ... + (v - m a) = (m + 1)(2v - a m) / 2
- * with m = floor(v / a), increasing in v, and D(v_allow(d)) <= d < D(v_allow(d) + 1), so
- * "v <= v_allow(d)" is "D(v) <= d": no square root.  m is carried from sample to sample
- * (v + a has m + 1, vmax has m_vmax, v_allow has n), so no sample divides by a.  When
- * braking, v_allow(d) = floor((d + a n (n + 1) / 2) / (n + 1)) with n = m(v_allow);
- * because D(v - a) = D(v) - v, the last speed v was on or inside the braking curve and
- * v_allow lies in [v - a, v + a): n is m(v + a) or one or two less, and the quotient is
- * v - a plus a remainder over n + 1 that fits 32 bits.  If a new target or a lower vmax
- * leaves the axis unable to stop in time (D(v - a) > d), it brakes by a and comes back. */
-static uint64_t stop_distance(uint32_t v, uint32_t m, uint32_t a)
-{
-    return ((uint64_t)(m + 1u) * (uint64_t)(2u * v - a * m)) >> 1;   /* 2v - a m = v + (v mod a) < 2^31 */
-}
-
-/* Out of line: the profile's registers are saved only while a move runs. */
-__attribute__((noinline)) void tl_ctl_profile(tl_ctl_t *c)
-{
-    int64_t d = c->target_q16 - c->sp_q16;
-    int32_t dir = d >= 0 ? 1 : -1;
-    uint64_t ad = (uint64_t)abs64(d);
-    uint32_t a = (uint32_t)c->d.amax_q16;
-    int32_t v = c->prof_v_q16 * dir;                 /* speed toward the target, accelerated: */
-    int32_t vs = v + (int32_t)a;
-    uint32_t m = v >= 0 ? c->prof_m + 1u : (c->prof_m ? c->prof_m - 1u : 0u);
-    if (vs > c->d.vmax_q16) {
-        vs = c->d.vmax_q16;
-        m = c->d.m_vmax;
-    }
-    if (vs > 0 && stop_distance((uint32_t)vs, m, a) > ad) {
-        uint32_t lo = v > (int32_t)a ? (uint32_t)v - a : 0u;   /* v_allow(d) >= lo when on the curve */
-        uint32_t mlo = v > (int32_t)a ? c->prof_m - 1u : 0u;
-        if (lo > 0u && stop_distance(lo, mlo, a) > ad) {
-            vs = (int32_t)lo;                        /* cannot stop in time: brake by a */
-            m = mlo;
-        } else {
-            uint32_t n = m;
-            uint64_t tn = ((uint64_t)(a * n) * (n + 1u)) >> 1;
-            while (n > 0u && tn > ad) {
-                n--;
-                tn -= (uint64_t)a * (n + 1u);
-            }
-            uint64_t x = ad + tn - (uint64_t)(n + 1u) * lo;   /* >= 0: v_allow >= lo */
-            vs = (int32_t)(lo + ((x >> 32) ? tl_div64_32(x, n + 1u) : (uint32_t)x / (n + 1u)));
-            m = n;
-        }
-    }
-    if (vs >= 0 && (uint64_t)vs >= ad) {
-        c->sp_q16 = c->target_q16;
-        c->prof_v_q16 = 0;
-        c->prof_m = 0;
-        c->moving = false;
-        return;
-    }
-    c->prof_v_q16 = vs * dir;
-    c->prof_m = m;
-    c->sp_q16 += c->prof_v_q16;
-}
-
 /* 2 pi ~ 710 / 113 (error 2.7e-7); the Python side (torqueloop/spec/protocol.py) uses the same. */
 int32_t tl_gain_raw_from_phys(int32_t micro, int32_t tau_max_mnm, int32_t counts_per_rev)
 {

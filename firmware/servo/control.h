@@ -91,8 +91,6 @@ void tl_ctl_apply(tl_ctl_t *c, const tl_ctl_derived_t *d);
  * cycles, advance the profile, run the law.  Returns the PWM command. */
 int32_t tl_ctl_step(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t edge_time, uint32_t now,
                     uint32_t interval, bool run_law);
-/* The trapezoid's next set-point (tl_ctl_step calls it while a move runs). */
-void tl_ctl_profile(tl_ctl_t *c);
 void tl_ctl_move(tl_ctl_t *c, int32_t target, bool trapezoid);
 void tl_ctl_hold(tl_ctl_t *c, int32_t pos);
 
