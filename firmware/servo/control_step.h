@@ -148,11 +148,13 @@ static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl
         uint32_t dt = now - c->t_ref;
         if (dt > 0x7FFFFFFFu)
             c->t_ref = now - 0x7FFFFFFFu;   /* keep the reference inside the 32-bit window */
-        int32_t bound = dt ? edge_speed(c, 1u, dt) : 0x7FFFFFFF;
-        if (c->vel_q8 > bound)
-            c->vel_q8 = bound;
-        else if (c->vel_q8 < -bound)
-            c->vel_q8 = -bound;
+        int32_t v = c->vel_q8;
+        uint32_t av = v < 0 ? 0u - (uint32_t)v : (uint32_t)v;
+        /* |v| <= floor(clk 2^8 / dt) <=> |v| dt <= clk 2^8: the bound's divides only when it clamps */
+        if (dt && (uint64_t)av * dt > c->d.clk_q8) {
+            int32_t bound = edge_speed(c, 1u, dt);
+            c->vel_q8 = v < 0 ? -bound : bound;
+        }
     }
     c->pos_prev = pos;
 }
@@ -168,6 +170,20 @@ static inline int64_t mul32(int32_t a, int32_t b)
     return (int64_t)(((uint64_t)(uint32_t)hi << 32) | ((uint32_t)a * (uint32_t)b));
 #else
     return (int64_t)a * (int64_t)b;
+#endif
+}
+
+/* x * y for 0 <= x < 2^63 whose product with y fits 64 bits: three multiplies on RV32IM
+ * (mulhsu takes y's sign; GCC 12 sign-extends y to 64 bits and spends a fourth). */
+static inline int64_t mul64u32s(int64_t x, int32_t y)
+{
+#if defined(__riscv) && __riscv_xlen == 32
+    uint32_t lo = (uint32_t)x, hi;
+    __asm__("mulhsu %0, %1, %2" : "=r"(hi) : "r"(y), "r"(lo));
+    hi += (uint32_t)(x >> 32) * (uint32_t)y;
+    return (int64_t)(((uint64_t)hi << 32) | (lo * (uint32_t)y));
+#else
+    return x * y;
 #endif
 }
 
@@ -202,7 +218,7 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
         int32_t e_sign = e > 0 ? 1 : (e < 0 ? -1 : 0);
         if (!(c->sat_sign != 0 && e_sign == c->sat_sign)) {
             int32_t ek = e > c->d.ki_e_max ? c->d.ki_e_max : (e < -c->d.ki_e_max ? -c->d.ki_e_max : e);
-            int64_t i = c->integ_q32 + ((c->d.ki_dt_q32 * ek) >> 16);
+            int64_t i = c->integ_q32 + (mul64u32s(c->d.ki_dt_q32, ek) >> 16);
             /* clamp to +-cmd_limit q32, whose low word is zero: compare high words */
             int32_t ih = (int32_t)(i >> 32);
             if (ih >= limit && (ih > limit || (uint32_t)i != 0u))
