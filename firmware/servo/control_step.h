@@ -211,9 +211,10 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
         e = 0;
     int32_t limit = p->cmd_limit;
     /* eq. (20): P;  eq. (21): + Kd * (0 - v);  eq. (22): + Ki * integral(e) */
-    int64_t u_q16 = mul32(p->kp_q16, e) >> 16;
+    int64_t pd_q16 = mul32(p->kp_q16, e) >> 16;
     if (p->law >= TL_LAW_PD)
-        u_q16 -= mul32(p->kd_q16, c->vel_q8) >> 8;
+        pd_q16 -= mul32(p->kd_q16, c->vel_q8) >> 8;
+    int32_t i_q16 = 0;
     if (p->law == TL_LAW_PID) {
         int32_t e_sign = e > 0 ? 1 : (e < 0 ? -1 : 0);
         if (!(c->sat_sign != 0 && e_sign == c->sat_sign)) {
@@ -227,22 +228,34 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
                 i = -c->d.lim_q32;
             c->integ_q32 = i;
         }
-        u_q16 += c->integ_q32 >> 16;
+        /* |integ| <= CMD_LIMIT 2^32 <= 1023 2^32 (every update is clamped): 27 bits in q16 */
+        i_q16 = (int32_t)(c->integ_q32 >> 16);
     } else {
         c->integ_q32 = 0;
     }
-    /* round to the nearest PWM step and saturate (eq. 19/25): u = (u_q16 + 2^15) >> 16 */
-    int64_t t = u_q16 + 32768;
+    /* round to the nearest PWM step and saturate (eq. 19/25): u = (pd + i + 2^15) >> 16.  The
+     * bounds are within +-2^26 (CMD_LIMIT <= 1023) and |i| < 2^27: with |pd| < 2^30 the sum
+     * fits 32 bits, and beyond, pd's sign alone decides the saturation. */
+    int32_t pd = (int32_t)pd_q16;
     int32_t cmd;
-    if (t >= c->d.sat_hi_q16) {
+    if ((int32_t)(pd_q16 >> 32) == (pd >> 31) && (uint32_t)pd + 0x40000000u < 0x80000000u) {
+        int32_t t = pd + i_q16 + 32768;
+        if (t >= (int32_t)c->d.sat_hi_q16) {
+            cmd = limit;
+            c->sat_sign = 1;
+        } else if (t < (int32_t)c->d.sat_lo_q16) {
+            cmd = -limit;
+            c->sat_sign = -1;
+        } else {
+            cmd = t >> 16;
+            c->sat_sign = 0;
+        }
+    } else if (pd_q16 > 0) {
         cmd = limit;
         c->sat_sign = 1;
-    } else if (t < c->d.sat_lo_q16) {
+    } else {
         cmd = -limit;
         c->sat_sign = -1;
-    } else {
-        cmd = (int32_t)(t >> 16);
-        c->sat_sign = 0;
     }
     c->saturated = c->sat_sign != 0;
     c->cmd = cmd;
