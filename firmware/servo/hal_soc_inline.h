@@ -37,16 +37,18 @@ static inline __attribute__((always_inline)) void hal_pwm_cmd(uint32_t axis, int
     AX(axis, PWM_CMD) = (uint32_t)cmd & TL_AXIS_PWM_CMD_CMD_MSK;
 }
 
+/* The register's bits 0-1 are FORCED and ESTOP_IN, bits 8-11 the latch bits in hal.h's order:
+ * two masks and a shift instead of a test per bit. */
+_Static_assert(TL_SYS_SAFETY_SAFE_MSK == TL_HAL_SAFE_FORCED && TL_SYS_SAFETY_ESTOP_IN_MSK == TL_HAL_SAFE_ESTOP_IN,
+               "SYS.SAFETY bits 0-1");
+_Static_assert((TL_SYS_SAFETY_ESTOP_MSK >> 6) == TL_HAL_SAFE_ESTOP && (TL_SYS_SAFETY_FAULT0_MSK >> 6) == TL_HAL_SAFE_FAULT0 &&
+               (TL_SYS_SAFETY_FAULT1_MSK >> 6) == TL_HAL_SAFE_FAULT1 && (TL_SYS_SAFETY_WDOG_MSK >> 6) == TL_HAL_SAFE_WDOG,
+               "SYS.SAFETY bits 8-11");
 static inline __attribute__((always_inline)) uint32_t hal_safety(void)
 {
-    uint32_t r = TL_SYS_SAFETY, o = 0;
-    if (r & TL_SYS_SAFETY_SAFE_MSK) o |= TL_HAL_SAFE_FORCED;
-    if (r & TL_SYS_SAFETY_ESTOP_IN_MSK) o |= TL_HAL_SAFE_ESTOP_IN;
-    if (r & TL_SYS_SAFETY_ESTOP_MSK) o |= TL_HAL_SAFE_ESTOP;
-    if (r & TL_SYS_SAFETY_FAULT0_MSK) o |= TL_HAL_SAFE_FAULT0;
-    if (r & TL_SYS_SAFETY_FAULT1_MSK) o |= TL_HAL_SAFE_FAULT1;
-    if (r & TL_SYS_SAFETY_WDOG_MSK) o |= TL_HAL_SAFE_WDOG;
-    return o;
+    uint32_t r = TL_SYS_SAFETY;
+    return (r & (TL_HAL_SAFE_FORCED | TL_HAL_SAFE_ESTOP_IN)) |
+           ((r >> 6) & (TL_HAL_SAFE_ESTOP | TL_HAL_SAFE_FAULT0 | TL_HAL_SAFE_FAULT1 | TL_HAL_SAFE_WDOG));
 }
 
 #endif
