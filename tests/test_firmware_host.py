@@ -17,7 +17,7 @@ import pytest
 
 from torqueloop.spec import protocol as P
 from torqueloop.flow.firmware import HOST_INCLUDES, HOST_SOURCES, FuzzerMissing, run_fuzz
-from torqueloop.models.servo import Axis, AxisParams
+from torqueloop.models.servo import DCOUNT_MAX, Axis, AxisParams, edge_speed_q8
 
 REPO = Path(__file__).resolve().parent.parent
 FW = REPO / "firmware"
@@ -135,11 +135,30 @@ def test_division_matches_python(host_tests: Path, seed: int) -> None:
         assert g == want, f"seed {seed}: {n} / {d}: C {g}, Python {want}"
 
 
+def test_edge_speed_quantisation_as_documented(seed: int) -> None:
+    """The one-divide edge speed (docs/firmware.md, "Control") lies below the exact
+    floor(N / dt), N = counts clk 2^8, by less than 2^(k+1) q8 with 2^k < N / 2^31:
+    a relative error below 2 dt / 2^31 (1e-6 at one 20 kHz period)."""
+    rng = random.Random(seed)
+    clk = 50_000_000
+    for _ in range(20_000):
+        counts = rng.choice([1, rng.randrange(1, 64), rng.randrange(1, 6000), rng.randrange(1, DCOUNT_MAX + 1)])
+        dt = rng.choice([rng.randrange(1, 5000), rng.randrange(1, 1 << 24), rng.randrange(1, 1 << 32)])
+        n = counts * clk * 256
+        k = max(0, n.bit_length() - 32)
+        exact = n // dt
+        v = edge_speed_q8(counts, dt, clk)
+        assert v == min(v, (1 << 31) - 1) and (v == (1 << 31) - 1 or exact - (1 << (k + 1)) < v <= exact), \
+            f"seed {seed}: {counts} counts / {dt}: {v}, exact {exact}"
+        assert (1 << k) <= max(1, n >> 31), (counts, k)
+    assert edge_speed_q8(1, 2500, clk) == 256 * 20_000   # one count per 20 kHz period: exact
+
+
 def test_velocity_estimate_matches_the_reference_model(host_tests: Path, seed: int) -> None:
-    """The edge-timestamp velocity (VEL_MODE 1: one or two 32-bit divides, or the
-    64-bit path) and the Euler difference against the reference over the whole
-    range of times: counts per sample up to beyond the fast path, edge spans and
-    standstills from one clock to 2^31 clocks."""
+    """The edge-timestamp velocity (VEL_MODE 1: one 32-bit divide, the numerator
+    from the speed table or, beyond it, computed) and the Euler difference against
+    the reference over the whole range of times: counts per sample up to beyond the
+    table, edge spans and standstills from one clock to 2^31 clocks."""
     rng = random.Random(seed)
     lines, want = [], []
     for _ in range(60):

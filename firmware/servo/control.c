@@ -92,6 +92,31 @@ static uint32_t bitlen64(uint64_t x)
     return hi ? 64u - clz32(hi) : (x ? 32u - clz32((uint32_t)x) : 0u);
 }
 
+uint32_t tl_speed_numerator(uint64_t n, uint32_t *k)
+{
+    uint32_t b = bitlen64(n);
+    *k = b > 32u ? b - 32u : 0u;
+    return (uint32_t)(n >> *k);
+}
+
+uint32_t tl_ctl_speed_m[TL_CTL_SPEED_TAB];
+uint8_t tl_ctl_speed_k[TL_CTL_SPEED_TAB];
+
+/* The speed table for clock clk_hz (the SoC's clock never changes, so a refill
+ * writes the values already there and the control iteration may read it meanwhile). */
+static void speed_table(uint32_t clk_hz)
+{
+    static uint32_t filled_for;
+    if (filled_for == clk_hz && clk_hz)
+        return;
+    for (uint32_t n = 0; n < TL_CTL_SPEED_TAB; n++) {
+        uint32_t k;
+        tl_ctl_speed_m[n] = tl_speed_numerator((uint64_t)n * clk_hz * 256u, &k);
+        tl_ctl_speed_k[n] = (uint8_t)k;
+    }
+    filled_for = clk_hz;
+}
+
 void tl_ctl_derived(tl_ctl_derived_t *d, const tl_ctl_params_t *p, uint32_t period_us, uint32_t clk_hz)
 {
     /* x * 2^16 / 1e6 = x * 1024 / 15625 and x * 2^16 / 1e12 = x * 16 / 5^12: exact. */
@@ -113,7 +138,9 @@ void tl_ctl_derived(tl_ctl_derived_t *d, const tl_ctl_params_t *p, uint32_t peri
     d->m_vmax = (uint32_t)d->vmax_q16 / (uint32_t)d->amax_q16;
     d->euler_k = (int32_t)((256000000u + period_us / 2u) / period_us);
     d->clk_q8 = (uint64_t)clk_hz * 256u;
-    d->fast_counts = clk_hz ? UINT32_MAX / clk_hz : 0u;
+    speed_table(clk_hz);
+    d->bound_m = tl_ctl_speed_m[1];
+    d->bound_k = tl_ctl_speed_k[1];
 }
 
 void tl_ctl_apply(tl_ctl_t *c, const tl_ctl_derived_t *d)

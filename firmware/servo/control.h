@@ -34,6 +34,13 @@
 #define TL_CTL_AMAX_Q16_MAX 0x20000000
 /* Counts between two velocity samples beyond this are clamped to it (not physical). */
 #define TL_CTL_DCOUNT_MAX 0x0FFFFFFF
+/* Edge-timestamp speed of n counts over dt cycles, q8 counts/s (docs/firmware.md, "Control"):
+ * N = n clk 2^8 brought below 2^32 by the smallest right shift k, then
+ * v = (floor(N / 2^k) / dt) << k - one 32-bit divide.  For n < TL_CTL_SPEED_TAB the
+ * shifted numerator and k come from this table, filled from the clock by tl_ctl_derived. */
+#define TL_CTL_SPEED_TAB 64u
+extern uint32_t tl_ctl_speed_m[TL_CTL_SPEED_TAB];
+extern uint8_t tl_ctl_speed_k[TL_CTL_SPEED_TAB];
 
 typedef struct {
     uint32_t law;
@@ -57,7 +64,8 @@ typedef struct {
     uint32_t m_vmax;            /* floor(vmax_q16 / amax_q16) */
     int32_t euler_k;            /* Euler difference: q8 counts/s per count per sample, round(2^8 1e6 / T_us) */
     uint64_t clk_q8;            /* decoder clock, q8: counts/s q8 = counts * clk_q8 / cycles */
-    uint32_t fast_counts;       /* counts whose product with clk_hz fits 32 bits */
+    uint32_t bound_m;           /* the standstill bound's numerator and shift: tl_ctl_speed_m/k[1] */
+    uint32_t bound_k;
     uint32_t period_us;
     uint32_t clk_hz;
 } tl_ctl_derived_t;
@@ -97,6 +105,8 @@ void tl_ctl_hold(tl_ctl_t *c, int32_t pos);
 /* floor(n / d) for a 64-bit n and 32-bit d > 0 whose quotient fits 32 bits
  * (n >> 32 < d), with 32-bit hardware divides only; UINT32_MAX if it does not fit. */
 uint32_t tl_div64_32(uint64_t n, uint32_t d);
+/* n >> k, k the smallest shift that brings n below 2^32 (tl_ctl_speed_m, edge_speed). */
+uint32_t tl_speed_numerator(uint64_t n, uint32_t *k);
 
 /* Physical <-> raw gains: micro N m per rad (per rad/s, per rad s) <-> q16 PWM steps per
  * count (per count/s, per count*s), through tau_max (PWM 1023) and counts per screw turn. */

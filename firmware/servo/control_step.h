@@ -85,34 +85,23 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
     c->sp_q16 += c->prof_v_q16;
 }
 
-/* |d| counts over dt cycles in q8 counts/s, saturated to INT32_MAX: floor(|d| clk 2^8 / dt),
- * exact, with one or two 32-bit divides for up to fast_counts counts:
- *   dt <= 2^24: |d| clk / dt, then 8 more bits from the remainder (< dt, so r 2^8 fits);
- *   dt >  2^24: |d| clk / (dt >> 8) overestimates by less than one (the speed is below
- *               2^16 q8), so at most two steps down make it exact. */
+/* |d| counts over dt cycles in q8 counts/s, saturated to INT32_MAX (control.h,
+ * TL_CTL_SPEED_TAB): v = (floor(N / 2^k) / dt) << k with N = |d| clk 2^8 and k the
+ * smallest shift that brings N below 2^32 - one divide; below the exact floor(N / dt)
+ * by less than 2^(k+1) q8 (docs/firmware.md, "Control"). */
 static inline __attribute__((always_inline)) int32_t edge_speed(const tl_ctl_t *c, uint32_t ad, uint32_t dt)
 {
-    if (ad > TL_CTL_DCOUNT_MAX)
-        ad = TL_CTL_DCOUNT_MAX;
-    uint32_t q;
-    if (ad <= c->d.fast_counts) {
-        uint32_t n = ad * c->d.clk_hz;                     /* < 2^32 */
-        if (dt <= 0x00FFFFFFu) {
-            uint32_t q1 = n / dt;
-            uint32_t r1 = n - opaque(q1) * dt;           /* < dt <= 2^24 */
-            if (q1 > 0x7FFFFFu)
-                return 0x7FFFFFFF;
-            q = (q1 << 8) + ((r1 << 8) / dt);
-        } else {
-            q = n / (dt >> 8);
-            uint64_t num = (uint64_t)n << 8;
-            while ((uint64_t)q * dt > num)
-                q--;
-        }
+    uint32_t m, k;
+    if (ad < TL_CTL_SPEED_TAB) {
+        m = tl_ctl_speed_m[ad];
+        k = tl_ctl_speed_k[ad];
     } else {
-        q = tl_div64_32((uint64_t)ad * c->d.clk_q8, dt);
+        if (ad > TL_CTL_DCOUNT_MAX)
+            ad = TL_CTL_DCOUNT_MAX;
+        m = tl_speed_numerator((uint64_t)ad * c->d.clk_q8, &k);
     }
-    return q > 0x7FFFFFFFu ? 0x7FFFFFFF : (int32_t)q;
+    uint32_t q = m / dt;
+    return q > (0x7FFFFFFFu >> k) ? 0x7FFFFFFF : (int32_t)(q << k);
 }
 
 static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos,
@@ -150,8 +139,10 @@ static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl
             c->t_ref = now - 0x7FFFFFFFu;   /* keep the reference inside the 32-bit window */
         int32_t v = c->vel_q8;
         uint32_t av = v < 0 ? 0u - (uint32_t)v : (uint32_t)v;
-        /* |v| <= floor(clk 2^8 / dt) <=> |v| dt <= clk 2^8: the bound's divides only when it clamps */
-        if (dt && (uint64_t)av * dt > c->d.clk_q8) {
+        /* |v| > bound = floor(m / dt) 2^k (m, k: one count)  <=>  ceil(|v| / 2^k) dt > m,
+         * a multiply: the bound's divide only when it clamps (|v| < 2^31, k <= 30: no overflow) */
+        uint32_t k = c->d.bound_k;
+        if (dt && (uint64_t)((av + (1u << k) - 1u) >> k) * dt > c->d.bound_m) {
             int32_t bound = edge_speed(c, 1u, dt);
             c->vel_q8 = v < 0 ? -bound : bound;
         }

@@ -59,6 +59,16 @@ def v_allow(d: int, a: int) -> int:
     return (d + a * n * (n + 1) // 2) // (n + 1)
 
 
+def edge_speed_q8(counts: int, dt: int, clk_hz: int) -> int:
+    """``counts`` (>= 0) over ``dt`` (> 0) clock cycles in q8 counts/s, saturated to
+    2^31 - 1: N = counts clk 2^8 brought below 2^32 by the smallest right shift k,
+    then (floor(N / 2^k) // dt) << k - one 32-bit divide in control_step.h; below the
+    exact N // dt by less than 2^(k+1)."""
+    n = min(counts, DCOUNT_MAX) * clk_hz * 256
+    k = max(0, n.bit_length() - 32)
+    return min(((n >> k) // dt) << k, (1 << 31) - 1)
+
+
 def _tdiv(a: int, b: int) -> int:
     """C integer division (truncates toward zero)."""
     q = abs(a) // abs(b)
@@ -164,15 +174,15 @@ class Axis:
             d, dt = count_diff(pos, self.pos_ref), (edge_time - self.t_ref) & 0xFFFFFFFF
             if not self.moved_last:
                 d, dt = (1 if d > 0 else -1), interval
-            d = max(-DCOUNT_MAX, min(DCOUNT_MAX, d))
-            self.vel_q8 = clamp(_tdiv(d * 256 * self.clk_hz, dt or 1), clamp32)
+            v = edge_speed_q8(abs(d), dt or 1, self.clk_hz)
+            self.vel_q8 = -v if d < 0 else v
             self.pos_ref, self.t_ref, self.moved_last = pos, edge_time, True
         else:
             self.moved_last = False
             dt = (now - self.t_ref) & 0xFFFFFFFF
             if dt > 0x7FFFFFFF:
                 self.t_ref = (now - 0x7FFFFFFF) & 0xFFFFFFFF
-            bound = _tdiv(256 * self.clk_hz, dt) if dt else clamp32
+            bound = edge_speed_q8(1, dt, self.clk_hz) if dt else clamp32
             if abs(self.vel_q8) > bound:
                 self.vel_q8 = bound if self.vel_q8 > 0 else -bound
         self.pos_prev = pos
