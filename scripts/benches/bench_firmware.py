@@ -25,16 +25,16 @@ FUZZ_SECONDS = int(os.environ.get("TL_FUZZ_BENCH_SECONDS", "120"))
 BUDGET_CYCLES = 1250
 
 
-def _measure(period_us: int, move_mode: int = 1) -> dict:
+def _measure(period_us: int, move_mode: int = 1, short: bool = False) -> dict:
     from bench import tb_module
     T = tb_module("firmware", "test_firmware")
     img = build("servo_tb", {k: str(v) for k, v in T.DEFINES.items()}, key=T.KEY)
-    out = REPO / "build" / "firmware" / f"measure_{period_us}_{move_mode}.json"
+    out = REPO / "build" / "firmware" / f"measure_{period_us}_{move_mode}{'_short' if short else ''}.json"
     run("soc", "verilator", "test_firmware",
         parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'},
         testcase="measure_control_iteration",
         extra_env={"TL_FW_MEASURE": "1", "TL_FW_PERIOD_US": str(period_us), "TL_FW_MOVE_MODE": str(move_mode),
-                   "TL_FW_MEASURE_OUT": str(out)})
+                   "TL_FW_SHORT_MOVE": "1" if short else "0", "TL_FW_MEASURE_OUT": str(out)})
     return json.loads(out.read_text())
 
 
@@ -42,10 +42,11 @@ def main() -> int:
     img = build("servo")
     print(f"image: text+rodata {img.text_bytes} B, data {img.data_bytes} B, bss {img.bss_bytes} B "
           f"(RAM 65536 B, 4096 B stack)")
-    for period, mode, what in ((50, 0, "step moves"), (50, 1, "trapezoid moves")):
+    for period, mode, short, what in ((50, 0, False, "step moves"), (50, 1, False, "trapezoid moves (accelerating)"),
+                                      (50, 1, True, "trapezoid moves (60 counts: accelerating, cruising, braking)")):
         t0 = time.monotonic()
         try:
-            m = _measure(period, mode)
+            m = _measure(period, mode, short)
         except Exception as e:   # report and go on with the rest
             print(f"control iteration at {period} us, {what}: failed: {e!r}")
             continue

@@ -701,7 +701,8 @@ def test_firmware(sim):
 @cocotb.test(skip=os.environ.get("TL_FW_MEASURE") != "1")
 async def measure_control_iteration(dut):
     """Benchmark (scripts/benches/bench_firmware.py): worst-case load - both axes PID with
-    trapezoid moves (TL_FW_MOVE_MODE=0: steps), edge-timestamp velocity, both encoders
+    trapezoid moves (TL_FW_MOVE_MODE=0: steps; TL_FW_SHORT_MOVE=1: a short trapezoid that
+    brakes inside the window), edge-timestamp velocity, both encoders
     counting, telemetry streaming, link traffic - at the period TL_FW_PERIOD_US; writes
     the worst iteration cycles and lateness to JSON."""
     tb = TB(dut)
@@ -720,10 +721,18 @@ async def measure_control_iteration(dut):
     await _enable(tb)
     # a 50-byte telemetry frame takes 500 us at 1 Mbaud: one every 800 us keeps up
     await tb.cmd("TELEMETRY", every=-(-800 // period))
-    movers = [cocotb.start_soon(tb.move_encoder(ax, 300 * (1 if ax else -1), step_ns=8_000)) for ax in (0, 1)]
     mode = int(os.environ.get("TL_FW_MOVE_MODE", "1"))
+    target = 2000
+    if os.environ.get("TL_FW_SHORT_MOVE") == "1":
+        # a trapezoid that accelerates (1 ms), cruises and brakes (1 ms) inside the window:
+        # the braking samples are the profile's dearest (the braking speed's search and divide)
+        target = 60
+        for ax in (0, 1):
+            await tb.set(ax, "VMAX", 50_000)
+            await tb.set(ax, "AMAX", 50_000_000)
+    movers = [cocotb.start_soon(tb.move_encoder(ax, 300 * (1 if ax else -1), step_ns=8_000)) for ax in (0, 1)]
     for ax in (0, 1):
-        await tb.cmd("MOVE", axis=ax, mode=U | mode, target=2000 * (1 if ax else -1))
+        await tb.cmd("MOVE", axis=ax, mode=U | mode, target=target * (1 if ax else -1))
     n_cmd = 0
     t_end = now_ns() + 3_000_000
     while now_ns() < t_end:
@@ -734,7 +743,7 @@ async def measure_control_iteration(dut):
     st = [await tb.status(ax) for ax in (0, 1)]
     await tb.cmd("TELEMETRY", every=0)
     c = await tb.cmd("COUNTERS")
-    out = {"period_us": period, "move_mode": mode, "loop_cycles_max": st[0]["loop_cycles_max"],
+    out = {"period_us": period, "move_mode": mode, "target": target, "loop_cycles_max": st[0]["loop_cycles_max"],
            "jitter_cycles_max": st[0]["jitter_cycles_max"], "commands_answered": n_cmd,
            "telemetry_frames": len(tb.telemetry), "telemetry_dropped": c["tx_dropped"],
            "faults": [s["faults"] for s in st]}
