@@ -66,7 +66,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
             uint64_t tn = ((uint64_t)(a * n) * (n + 1u)) >> 1;
             while (n > 0u && tn > ad) {
                 n--;
-                tn -= (uint64_t)a * (n + 1u);
+                tn -= a * (n + 1u);   /* a (n + 1) <= v + a < 2^31: a 32-bit product */
             }
             uint64_t x = ad + tn - (uint64_t)(n + 1u) * lo;   /* >= 0: v_allow >= lo */
             vs = (int32_t)(lo + ((x >> 32) ? tl_div64_32(x, n + 1u) : (uint32_t)x / (n + 1u)));
