@@ -57,6 +57,11 @@ uint32_t tl_div64_32(uint64_t n, uint32_t d)
     return (q1 << 16) | q0;
 }
 
+/* Configuration and commands, outside the control iteration: compiled for size
+ * (docs/firmware.md, "Build"). */
+#pragma GCC push_options
+#pragma GCC optimize("Os")
+
 void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now)
 {
     c->sp_q16 = (int64_t)pos * 65536;
@@ -201,6 +206,8 @@ int32_t tl_gain_phys_from_raw(int32_t raw, int32_t tau_max_mnm, int32_t counts_p
     uint64_t r = ((uint64_t)raw * x + den / 2u) / den;
     return r > 100000000u ? 100000000 : (int32_t)r;
 }
+
+#pragma GCC pop_options
 
 int32_t tl_ctl_step(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t edge_time, uint32_t now,
                     uint32_t interval, bool run_law)

@@ -49,11 +49,14 @@ void hal_set_baud_div(uint32_t div);
 void hal_irq_off(void);
 void hal_irq_on(void);
 
-/* The control iteration's accessors: inline on the SoC (hal_soc_inline.h), functions elsewhere. */
+/* The control iteration's accessors: inline on the SoC (hal_soc_inline.h; the iteration
+ * reads the decoder with hal_enc_read_inline, every other caller with the function),
+ * functions elsewhere. */
+void hal_enc_read(uint32_t axis, tl_enc_sample_t *s);
 #ifdef TL_HAL_SOC_INLINE
 #include "hal_soc_inline.h"
 #else
-void hal_enc_read(uint32_t axis, tl_enc_sample_t *s);
+#define hal_enc_read_inline hal_enc_read
 void hal_pwm_cmd(uint32_t axis, int32_t cmd);
 uint32_t hal_safety(void);
 #endif

@@ -5,7 +5,9 @@
 #include "tl_protocol.h"
 #include "torqueloop_regs.h"
 
-/* hal_enc_read, hal_pwm_cmd and hal_safety: static inline in hal_soc_inline.h (AX there too). */
+/* hal_pwm_cmd and hal_safety: static inline in hal_soc_inline.h (AX there too). */
+
+void hal_enc_read(uint32_t axis, tl_enc_sample_t *s) { hal_enc_read_inline(axis, s); }
 
 
 /* PWM_CTRL.LIMIT_EN as hal_limit_block set it, kept in every PWM_CTRL write. */

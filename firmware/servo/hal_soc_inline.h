@@ -3,7 +3,9 @@
  * period, on the torqueloop SoC: static inline (included by hal.h when
  * TL_HAL_SOC_INLINE is defined, as the servo image's build does), so that the
  * iteration, written out for each axis, reads and writes its registers at
- * constant addresses without a call (docs/firmware.md, "Timing"). */
+ * constant addresses without a call (docs/firmware.md, "Timing").  The decoder
+ * read is hal_enc_read_inline there and an ordinary function (hal_soc.c) for
+ * the other callers, whose copies would not fit the factory slot. */
 #ifndef TL_HAL_SOC_INLINE_H
 #define TL_HAL_SOC_INLINE_H
 
@@ -12,7 +14,7 @@
 /* Axis register of axis i: the AXIS0 offset moved to that axis's page. */
 #define AX(i, REG) TL_REG32(((i) ? TL_AXIS1_BASE : TL_AXIS0_BASE) + (TL_AXIS0_##REG##_ADDR - TL_AXIS0_BASE))
 
-static inline __attribute__((always_inline)) void hal_enc_read(uint32_t axis, tl_enc_sample_t *s)
+static inline __attribute__((always_inline)) void hal_enc_read_inline(uint32_t axis, tl_enc_sample_t *s)
 {
     /* Position and edge time are two reads: retry if a count fell between them,
      * so the pair always belongs to the same edge. */

@@ -41,6 +41,9 @@ int tl_param_index(uint8_t id) { return TLP_PARAM_INDEX[id]; }
 static inline int32_t pv(const tl_axis_t *a, uint8_t id) { return a->p[TLP_PARAM_INDEX[id]]; }
 static inline int32_t gv(const tl_servo_t *s, uint8_t id) { return s->g[TLP_PARAM_INDEX[id]]; }
 
+/* Positions wrap modulo 2^32 like the decoder's counter: no signed overflow. */
+static inline int32_t wrap_add(int32_t x, int32_t y) { return (int32_t)((uint32_t)x + (uint32_t)y); }
+
 /* What an axis's parameters and the period give the control iteration. */
 typedef struct {
     tl_ctl_params_t ctl;
@@ -50,6 +53,12 @@ typedef struct {
 } axis_cfg_t;
 
 #define PI(id) TLP_PARAM_INDEX[id]
+
+/* Configuration, start-up and the command handler (below) run outside the control
+ * iteration: compiled for size, so that the image with the iteration written out per
+ * axis keeps within the boot ROM's factory slot (docs/firmware.md, "Build"). */
+#pragma GCC push_options
+#pragma GCC optimize("Os")
 
 /* From a parameter array; divides, so it runs with interrupts on. */
 static void axis_cfg(const int32_t *p, uint32_t period_us, uint32_t clk_hz, axis_cfg_t *out)
@@ -83,8 +92,6 @@ static void commit_axis(tl_servo_t *s, uint32_t i, const axis_cfg_t *cfg)
     hal_limit_block(i, pv(a, TLP_P_LIMIT_SW) != 0);
 }
 
-/* Positions wrap modulo 2^32 like the decoder's counter: no signed overflow. */
-static int32_t wrap_add(int32_t x, int32_t y) { return (int32_t)((uint32_t)x + (uint32_t)y); }
 
 /* The period in clock cycles and the link timeout in periods, from global parameters g. */
 static void global_cfg(const int32_t *g, uint32_t clk_hz, uint32_t *period_cycles, uint32_t *link_timeout_ticks)
@@ -222,6 +229,8 @@ void tl_servo_init(tl_servo_t *s)
     /* The key last: its HMAC states cost ~55 000 cycles, and the link rate is set before them. */
     tl_auth_init(&s->auth, hal_key_slot());
 }
+
+#pragma GCC pop_options
 
 uint32_t tl_servo_period_cycles(const tl_servo_t *s) { return s->period_cycles; }
 
@@ -403,7 +412,7 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
 {
     tl_axis_t *a = &s->ax[i];
     tl_enc_sample_t e;
-    hal_enc_read(i, &e);
+    hal_enc_read_inline(i, &e);
     a->pos = wrap_add(e.pos, a->offset);
     uint8_t out = 0;
     uint16_t f = axis_checks(a, i, &e, t, &out);
@@ -458,6 +467,10 @@ void tl_servo_tick(tl_servo_t *s)
 }
 
 /* ---- link ---------------------------------------------------------------- */
+
+/* The command handler: compiled for size (see above). */
+#pragma GCC push_options
+#pragma GCC optimize("Os")
 
 static void sat_inc(uint16_t *c)
 {
@@ -976,6 +989,8 @@ void tl_servo_rx_byte(tl_servo_t *s, uint8_t byte, tl_tx_fn tx)
         break;
     }
 }
+
+#pragma GCC pop_options
 
 void tl_servo_telemetry(const tl_servo_t *s, uint8_t *p)
 {
