@@ -57,11 +57,6 @@ uint32_t tl_div64_32(uint64_t n, uint32_t d)
     return (q1 << 16) | q0;
 }
 
-/* Configuration and commands, outside the control iteration: compiled for size
- * (docs/firmware.md, "Build"). */
-#pragma GCC push_options
-#pragma GCC optimize("Os")
-
 void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now)
 {
     c->sp_q16 = (int64_t)pos * 65536;
@@ -84,7 +79,7 @@ void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now)
 /* floor(x * num / den) for x >= 0 whose quotient by den fits 32 bits, den and
  * (den - 1) * num below 2^32: the conversions per period, without libgcc's 64-bit
  * division, so that a SET_PARAM holds interrupts off for a few hundred cycles. */
-static int64_t muldiv(uint64_t x, uint32_t num, uint32_t den)
+TL_FOR_SIZE static int64_t muldiv(uint64_t x, uint32_t num, uint32_t den)
 {
     uint32_t q = tl_div64_32(x, den);
     uint32_t r = (uint32_t)(x - (uint64_t)q * den);
@@ -109,7 +104,7 @@ uint8_t tl_ctl_speed_k[TL_CTL_SPEED_TAB];
 
 /* The speed table for clock clk_hz (the SoC's clock never changes, so a refill
  * writes the values already there and the control iteration may read it meanwhile). */
-static void speed_table(uint32_t clk_hz)
+TL_FOR_SIZE static void speed_table(uint32_t clk_hz)
 {
     static uint32_t filled_for;
     if (filled_for == clk_hz && clk_hz)
@@ -122,7 +117,7 @@ static void speed_table(uint32_t clk_hz)
     filled_for = clk_hz;
 }
 
-void tl_ctl_derived(tl_ctl_derived_t *d, const tl_ctl_params_t *p, uint32_t period_us, uint32_t clk_hz)
+TL_FOR_SIZE void tl_ctl_derived(tl_ctl_derived_t *d, const tl_ctl_params_t *p, uint32_t period_us, uint32_t clk_hz)
 {
     /* x * 2^16 / 1e6 = x * 1024 / 15625 and x * 2^16 / 1e12 = x * 16 / 5^12: exact. */
     d->period_us = period_us;
@@ -206,8 +201,6 @@ int32_t tl_gain_phys_from_raw(int32_t raw, int32_t tau_max_mnm, int32_t counts_p
     uint64_t r = ((uint64_t)raw * x + den / 2u) / den;
     return r > 100000000u ? 100000000 : (int32_t)r;
 }
-
-#pragma GCC pop_options
 
 int32_t tl_ctl_step(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, uint32_t edge_time, uint32_t now,
                     uint32_t interval, bool run_law)

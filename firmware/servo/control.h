@@ -22,6 +22,16 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+/* Code that runs with interrupts on and outside the control iteration (configuration,
+ * start-up, command parsing) is compiled for size: the image with the iteration written
+ * out per axis then keeps within the boot ROM's factory slot (docs/firmware.md, "Build").
+ * Not code that runs with interrupts off: -Os copies structures byte by byte. */
+#if defined(__riscv) && defined(__GNUC__) && !defined(__clang__)
+#define TL_FOR_SIZE __attribute__((optimize("Os")))
+#else
+#define TL_FOR_SIZE
+#endif
+
 #define TL_LAW_OFF 0u
 #define TL_LAW_P 1u
 #define TL_LAW_PD 2u

@@ -54,14 +54,8 @@ typedef struct {
 
 #define PI(id) TLP_PARAM_INDEX[id]
 
-/* Configuration, start-up and the command handler (below) run outside the control
- * iteration: compiled for size, so that the image with the iteration written out per
- * axis keeps within the boot ROM's factory slot (docs/firmware.md, "Build"). */
-#pragma GCC push_options
-#pragma GCC optimize("Os")
-
 /* From a parameter array; divides, so it runs with interrupts on. */
-static void axis_cfg(const int32_t *p, uint32_t period_us, uint32_t clk_hz, axis_cfg_t *out)
+TL_FOR_SIZE static void axis_cfg(const int32_t *p, uint32_t period_us, uint32_t clk_hz, axis_cfg_t *out)
 {
     out->ctl.law = (uint32_t)p[PI(TLP_P_LAW)];
     out->ctl.kp_q16 = p[PI(TLP_P_KP_Q16)];
@@ -74,8 +68,9 @@ static void axis_cfg(const int32_t *p, uint32_t period_us, uint32_t clk_hz, axis
     out->ctl.amax_cps2 = p[PI(TLP_P_AMAX)];
     tl_ctl_derived(&out->d, &out->ctl, period_us, clk_hz);
     out->stall_limit_ticks = ((uint32_t)p[PI(TLP_P_STALL_MS)] * 1000u + period_us - 1u) / period_us;
-    /* counts/s * us * 2^16 / 1e6 = x * 1024 / 15625, as control.c's vmax */
-    out->home_step_q16 = (int64_t)p[PI(TLP_P_HOME_VEL)] * (int64_t)period_us * 1024 / 15625;
+    /* counts/s * us * 2^16 / 1e6 = x * 1024 / 15625, as control.c's vmax; HOME_VEL >= 1, so
+     * unsigned (the image then needs no signed 64-bit division from libgcc) */
+    out->home_step_q16 = (int64_t)((uint64_t)(uint32_t)p[PI(TLP_P_HOME_VEL)] * period_us * 1024u / 15625u);
     if (out->home_step_q16 < (1 << HOME_SLOW_SHIFT))
         out->home_step_q16 = 1 << HOME_SLOW_SHIFT;
 }
@@ -94,7 +89,7 @@ static void commit_axis(tl_servo_t *s, uint32_t i, const axis_cfg_t *cfg)
 
 
 /* The period in clock cycles and the link timeout in periods, from global parameters g. */
-static void global_cfg(const int32_t *g, uint32_t clk_hz, uint32_t *period_cycles, uint32_t *link_timeout_ticks)
+TL_FOR_SIZE static void global_cfg(const int32_t *g, uint32_t clk_hz, uint32_t *period_cycles, uint32_t *link_timeout_ticks)
 {
     uint32_t period_us = (uint32_t)g[PI(TLP_P_PERIOD_US)];
     *period_cycles = (uint32_t)((uint64_t)period_us * clk_hz / 1000000u);
@@ -103,7 +98,7 @@ static void global_cfg(const int32_t *g, uint32_t clk_hz, uint32_t *period_cycle
         *link_timeout_ticks = 1u;
 }
 
-static void sync_all(tl_servo_t *s)
+TL_FOR_SIZE static void sync_all(tl_servo_t *s)
 {
     axis_cfg_t cfg;
     for (uint32_t i = 0; i < TL_AXES; i++) {
@@ -177,7 +172,7 @@ static void home_finish(tl_axis_t *a, int32_t ref, uint32_t now)
     a->home = TLP_HOME_STATE_HOMED;
 }
 
-void tl_servo_init(tl_servo_t *s)
+TL_FOR_SIZE void tl_servo_init(tl_servo_t *s)
 {
     s->clk_hz = hal_clk_hz();
     for (uint32_t k = 0; k < TLP_PARAM_COUNT; k++)
@@ -229,8 +224,6 @@ void tl_servo_init(tl_servo_t *s)
     /* The key last: its HMAC states cost ~55 000 cycles, and the link rate is set before them. */
     tl_auth_init(&s->auth, hal_key_slot());
 }
-
-#pragma GCC pop_options
 
 uint32_t tl_servo_period_cycles(const tl_servo_t *s) { return s->period_cycles; }
 
@@ -468,9 +461,6 @@ void tl_servo_tick(tl_servo_t *s)
 
 /* ---- link ---------------------------------------------------------------- */
 
-/* The command handler: compiled for size (see above). */
-#pragma GCC push_options
-#pragma GCC optimize("Os")
 
 static void sat_inc(uint16_t *c)
 {
@@ -478,7 +468,7 @@ static void sat_inc(uint16_t *c)
         (*c)++;
 }
 
-static void send(tl_servo_t *s, tl_tx_fn tx, uint16_t seq, uint8_t cmd, const uint8_t *p, uint8_t len)
+TL_FOR_SIZE static void send(tl_servo_t *s, tl_tx_fn tx, uint16_t seq, uint8_t cmd, const uint8_t *p, uint8_t len)
 {
     uint8_t wire[TLP_MAX_WIRE];
     uint32_t n = (uint32_t)tl_frame_encode(seq, cmd, p, len, wire, sizeof wire);
@@ -486,14 +476,14 @@ static void send(tl_servo_t *s, tl_tx_fn tx, uint16_t seq, uint8_t cmd, const ui
         sat_inc(&s->cnt.tx_dropped);
 }
 
-static void send_status(tl_servo_t *s, tl_tx_fn tx, uint16_t seq, uint8_t cmd, uint8_t st)
+TL_FOR_SIZE static void send_status(tl_servo_t *s, tl_tx_fn tx, uint16_t seq, uint8_t cmd, uint8_t st)
 {
     send(s, tx, seq, cmd, &st, 1u);
 }
 
 static bool axis_mask_ok(uint8_t m) { return m != 0u && (m & ~((1u << TL_AXES) - 1u)) == 0u; }
 
-static uint8_t get_param(const tl_servo_t *s, uint8_t axis, uint8_t id, int32_t *out)
+TL_FOR_SIZE static uint8_t get_param(const tl_servo_t *s, uint8_t axis, uint8_t id, int32_t *out)
 {
     int k = tl_param_index(id);
     if (k == IDX_NONE)
@@ -575,7 +565,7 @@ static uint8_t param_allowed(const tl_servo_t *s, uint8_t axis, uint8_t id, int 
     }
 }
 
-static uint8_t set_param(tl_servo_t *s, uint8_t axis, uint8_t id, int32_t v)
+TL_FOR_SIZE static uint8_t set_param(tl_servo_t *s, uint8_t axis, uint8_t id, int32_t v)
 {
     int k = tl_param_index(id);
     if (k == IDX_NONE)
@@ -639,7 +629,7 @@ static uint8_t set_param(tl_servo_t *s, uint8_t axis, uint8_t id, int32_t v)
     return TLP_ST_OK;
 }
 
-static uint8_t do_enable(tl_servo_t *s, uint8_t mask, uint8_t on)
+TL_FOR_SIZE static uint8_t do_enable(tl_servo_t *s, uint8_t mask, uint8_t on)
 {
     if (!axis_mask_ok(mask) || on > 1u)
         return TLP_ST_BAD_ARG;
@@ -690,7 +680,7 @@ static uint8_t do_enable(tl_servo_t *s, uint8_t mask, uint8_t on)
     return TLP_ST_OK;
 }
 
-static uint8_t do_clear(tl_servo_t *s, uint8_t mask)
+TL_FOR_SIZE static uint8_t do_clear(tl_servo_t *s, uint8_t mask)
 {
     if (!axis_mask_ok(mask))
         return TLP_ST_BAD_ARG;
@@ -727,7 +717,7 @@ static uint8_t do_clear(tl_servo_t *s, uint8_t mask)
     return left ? TLP_ST_STATE : TLP_ST_OK;
 }
 
-static uint8_t do_move(tl_servo_t *s, uint8_t axis, uint8_t mode, int32_t target)
+TL_FOR_SIZE static uint8_t do_move(tl_servo_t *s, uint8_t axis, uint8_t mode, int32_t target)
 {
     if (axis >= TL_AXES || (mode & (uint8_t)~(TLP_MOVE_TRAPEZOID | TLP_MOVE_UNHOMED)))
         return TLP_ST_BAD_ARG;
@@ -750,7 +740,7 @@ static uint8_t do_move(tl_servo_t *s, uint8_t axis, uint8_t mode, int32_t target
     return TLP_ST_OK;
 }
 
-static uint8_t do_home(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index)
+TL_FOR_SIZE static uint8_t do_home(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index)
 {
     if (axis >= TL_AXES || mode > TLP_HOME_MODE_HERE || index > 1u)
         return TLP_ST_BAD_ARG;
@@ -780,7 +770,7 @@ static uint8_t do_home(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index)
     return TLP_ST_OK;
 }
 
-static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
+TL_FOR_SIZE static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
 {
     uint8_t rc = f->cmd | TLP_REPLY_FLAG;
     uint8_t rep[TLP_MAX_PAYLOAD];
@@ -967,7 +957,7 @@ static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
     send(s, tx, f->seq, rc, rep, n);
 }
 
-void tl_servo_rx_byte(tl_servo_t *s, uint8_t byte, tl_tx_fn tx)
+TL_FOR_SIZE void tl_servo_rx_byte(tl_servo_t *s, uint8_t byte, tl_tx_fn tx)
 {
     tl_frame_t f;
     uint8_t st = 0;
@@ -989,8 +979,6 @@ void tl_servo_rx_byte(tl_servo_t *s, uint8_t byte, tl_tx_fn tx)
         break;
     }
 }
-
-#pragma GCC pop_options
 
 void tl_servo_telemetry(const tl_servo_t *s, uint8_t *p)
 {
