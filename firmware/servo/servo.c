@@ -565,7 +565,7 @@ static uint8_t param_allowed(const tl_servo_t *s, uint8_t axis, uint8_t id, int 
     }
 }
 
-TL_FOR_SIZE static uint8_t set_param(tl_servo_t *s, uint8_t axis, uint8_t id, int32_t v)
+static uint8_t set_param(tl_servo_t *s, uint8_t axis, uint8_t id, int32_t v)
 {
     int k = tl_param_index(id);
     if (k == IDX_NONE)
@@ -629,7 +629,7 @@ TL_FOR_SIZE static uint8_t set_param(tl_servo_t *s, uint8_t axis, uint8_t id, in
     return TLP_ST_OK;
 }
 
-TL_FOR_SIZE static uint8_t do_enable(tl_servo_t *s, uint8_t mask, uint8_t on)
+static uint8_t do_enable(tl_servo_t *s, uint8_t mask, uint8_t on)
 {
     if (!axis_mask_ok(mask) || on > 1u)
         return TLP_ST_BAD_ARG;
@@ -680,7 +680,7 @@ TL_FOR_SIZE static uint8_t do_enable(tl_servo_t *s, uint8_t mask, uint8_t on)
     return TLP_ST_OK;
 }
 
-TL_FOR_SIZE static uint8_t do_clear(tl_servo_t *s, uint8_t mask)
+static uint8_t do_clear(tl_servo_t *s, uint8_t mask)
 {
     if (!axis_mask_ok(mask))
         return TLP_ST_BAD_ARG;
@@ -717,7 +717,7 @@ TL_FOR_SIZE static uint8_t do_clear(tl_servo_t *s, uint8_t mask)
     return left ? TLP_ST_STATE : TLP_ST_OK;
 }
 
-TL_FOR_SIZE static uint8_t do_move(tl_servo_t *s, uint8_t axis, uint8_t mode, int32_t target)
+static uint8_t do_move(tl_servo_t *s, uint8_t axis, uint8_t mode, int32_t target)
 {
     if (axis >= TL_AXES || (mode & (uint8_t)~(TLP_MOVE_TRAPEZOID | TLP_MOVE_UNHOMED)))
         return TLP_ST_BAD_ARG;
@@ -740,7 +740,7 @@ TL_FOR_SIZE static uint8_t do_move(tl_servo_t *s, uint8_t axis, uint8_t mode, in
     return TLP_ST_OK;
 }
 
-TL_FOR_SIZE static uint8_t do_home(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index)
+static uint8_t do_home(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index)
 {
     if (axis >= TL_AXES || mode > TLP_HOME_MODE_HERE || index > 1u)
         return TLP_ST_BAD_ARG;
