@@ -25,7 +25,8 @@
 /* Code that runs with interrupts on and outside the control iteration (configuration,
  * start-up, command parsing) is compiled for size: the image with the iteration written
  * out per axis then keeps within the boot ROM's factory slot (docs/firmware.md, "Build").
- * Not code that runs with interrupts off: -Os copies structures byte by byte. */
+ * Not code that runs with interrupts off, nor the commands with critical sections:
+ * -Os copies structures byte by byte and would delay the control interrupt. */
 #if defined(__riscv) && defined(__GNUC__) && !defined(__clang__)
 #define TL_FOR_SIZE __attribute__((optimize("Os")))
 #else
