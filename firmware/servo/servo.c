@@ -87,7 +87,6 @@ static void commit_axis(tl_servo_t *s, uint32_t i, const axis_cfg_t *cfg)
     hal_limit_block(i, pv(a, TLP_P_LIMIT_SW) != 0);
 }
 
-
 /* The period in clock cycles and the link timeout in periods, from global parameters g. */
 TL_FOR_SIZE static void global_cfg(const int32_t *g, uint32_t clk_hz, uint32_t *period_cycles, uint32_t *link_timeout_ticks)
 {
@@ -460,7 +459,6 @@ void tl_servo_tick(tl_servo_t *s)
 }
 
 /* ---- link ---------------------------------------------------------------- */
-
 
 static void sat_inc(uint16_t *c)
 {
