@@ -131,16 +131,24 @@ static bool any_enabled(const tl_servo_t *s)
 /* Faults the SoC safety latch bits mean for axis i: its own bridge bit always
  * (a bridge fault is a fault of that axis whatever it was doing), the shared
  * e-stop and watchdog bits for an axis they stopped (enabled). */
+static inline __attribute__((always_inline)) uint16_t latch_bridge(uint32_t i, uint32_t safety)
+{
+    return (safety & (i == 0u ? TL_HAL_SAFE_FAULT0 : TL_HAL_SAFE_FAULT1)) ? TLP_FAULT_BRIDGE : 0u;
+}
+static inline __attribute__((always_inline)) uint16_t latch_enabled(uint32_t safety)
+{
+    return (uint16_t)(((safety & TL_HAL_SAFE_ESTOP) ? TLP_FAULT_ESTOP : 0u) |
+                      ((safety & TL_HAL_SAFE_WDOG) ? TLP_FAULT_HW_SAFE : 0u));
+}
 static uint16_t latch_faults(const tl_axis_t *a, uint32_t i, uint32_t safety)
 {
-    uint16_t f = (safety & (i == 0u ? TL_HAL_SAFE_FAULT0 : TL_HAL_SAFE_FAULT1)) ? TLP_FAULT_BRIDGE : 0u;
-    if (a->enabled) {
-        if (safety & TL_HAL_SAFE_ESTOP)
-            f |= TLP_FAULT_ESTOP;
-        if (safety & TL_HAL_SAFE_WDOG)
-            f |= TLP_FAULT_HW_SAFE;
-    }
-    return f;
+    return latch_bridge(i, safety) | (a->enabled ? latch_enabled(safety) : 0u);
+}
+
+/* The soft-limit side the position is beyond (SOFT_MIN <= SOFT_MAX: at most one). */
+static inline __attribute__((always_inline)) uint8_t soft_side(const tl_axis_t *a)
+{
+    return a->pos < pv(a, TLP_P_SOFT_MIN) ? TLP_LIMIT_NEG : (a->pos > pv(a, TLP_P_SOFT_MAX) ? TLP_LIMIT_POS : 0u);
 }
 
 /* Record every latched SoC bit as a fault of the axes it stopped (those axes
@@ -289,8 +297,8 @@ static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, 
                                                                   const tick_faults_t *t, uint8_t *out)
 {
     /* latch_faults, the e-stop input and the bridge input */
-    uint16_t f = t->all;
-    if ((t->safety & (i == 0u ? TL_HAL_SAFE_FAULT0 : TL_HAL_SAFE_FAULT1)) || e->bridge_fault)
+    uint16_t f = t->all | latch_bridge(i, t->safety);
+    if (e->bridge_fault)
         f |= TLP_FAULT_BRIDGE;
     if (e->illegal != a->illegal_seen) {
         f |= TLP_FAULT_ENCODER;
@@ -321,7 +329,7 @@ static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, 
         f |= TLP_FAULT_FOLLOWING;
     /* Outside the soft limits: a fault unless the axis was enabled out there
      * (it may then only come back in); back inside, that allowance ends. */
-    uint8_t o = a->pos < pv(a, TLP_P_SOFT_MIN) ? TLP_LIMIT_NEG : (a->pos > pv(a, TLP_P_SOFT_MAX) ? TLP_LIMIT_POS : 0u);
+    uint8_t o = soft_side(a);
     *out = o;
     if (a->recover | o) {
         a->recover &= o;
@@ -332,20 +340,13 @@ static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, 
 }
 
 /* Sides toward which the axis must not be driven: a latched limit fault, a
- * limit switch open now, or a position outside the soft limits. */
-static uint8_t blocked(const tl_axis_t *a)
+ * limit switch open now, or soft, the soft-limit side the position is beyond. */
+static inline __attribute__((always_inline)) uint8_t blocked_with(const tl_axis_t *a, uint8_t soft)
 {
-    uint8_t b = a->limits;
-    if (a->faults & TLP_FAULT_LIMIT_NEG)
-        b |= TLP_LIMIT_NEG;
-    if (a->faults & TLP_FAULT_LIMIT_POS)
-        b |= TLP_LIMIT_POS;
-    if (a->pos < pv(a, TLP_P_SOFT_MIN))
-        b |= TLP_LIMIT_NEG;
-    if (a->pos > pv(a, TLP_P_SOFT_MAX))
-        b |= TLP_LIMIT_POS;
-    return b;
+    return (uint8_t)(a->limits | soft | ((a->faults & TLP_FAULT_LIMIT_NEG) ? TLP_LIMIT_NEG : 0u) |
+                     ((a->faults & TLP_FAULT_LIMIT_POS) ? TLP_LIMIT_POS : 0u));
 }
+static uint8_t blocked(const tl_axis_t *a) { return blocked_with(a, soft_side(a)); }
 
 /* One period of homing (the phases above); the point found reads HOME_POS. */
 static void home_tick(tl_axis_t *a, uint32_t i, uint32_t now)
@@ -427,9 +428,7 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
         cmd = 0;
     } else {
         /* blocked(a): the soft-limit sides from the checks, unless homing moved the position */
-        uint8_t b = homing ? blocked(a) : (uint8_t)(a->limits | out |
-                    ((a->faults & TLP_FAULT_LIMIT_NEG) ? TLP_LIMIT_NEG : 0u) |
-                    ((a->faults & TLP_FAULT_LIMIT_POS) ? TLP_LIMIT_POS : 0u));
+        uint8_t b = homing ? blocked(a) : blocked_with(a, out);
         if (((b & TLP_LIMIT_NEG) && cmd < 0) || ((b & TLP_LIMIT_POS) && cmd > 0))
             cmd = 0;
     }
@@ -445,8 +444,7 @@ void tl_servo_tick(tl_servo_t *s)
     if (s->link_idle_ticks != 0xFFFFFFFFu)
         s->link_idle_ticks++;
     t.all = (t.safety & TL_HAL_SAFE_ESTOP_IN) ? TLP_FAULT_ESTOP : 0u;
-    t.enabled = (uint16_t)(((t.safety & TL_HAL_SAFE_ESTOP) ? TLP_FAULT_ESTOP : 0u) |
-                           ((t.safety & TL_HAL_SAFE_WDOG) ? TLP_FAULT_HW_SAFE : 0u));
+    t.enabled = latch_enabled(t.safety);
     t.link = s->link_idle_ticks > s->link_timeout_ticks;
     _Static_assert(TL_AXES == 2, "the control iteration is written out for two axes");
     axis_tick(s, 0u, &t);
@@ -665,8 +663,7 @@ static uint8_t do_enable(tl_servo_t *s, uint8_t mask, uint8_t on)
         hal_enc_read(i, &e);
         a->pos = wrap_add(e.pos, a->offset);
         tl_ctl_reset(&a->c, a->pos, e.now);   /* set-point = where it is: no jump */
-        a->recover = a->pos < pv(a, TLP_P_SOFT_MIN) ? TLP_LIMIT_NEG
-                   : (a->pos > pv(a, TLP_P_SOFT_MAX) ? TLP_LIMIT_POS : 0u);
+        a->recover = soft_side(a);
         a->stall_dir = 0;
         a->cmd = 0;
         a->enabled = true;
