@@ -44,6 +44,7 @@ class BoardServer:
         self.port = self.sock.getsockname()[1]
         self.client: socket.socket | None = None
         self._stop = False
+        self._t0, self._sim0 = time.monotonic(), board.t
 
     def stop(self) -> None:
         self._stop = True
@@ -54,6 +55,8 @@ class BoardServer:
         except BlockingIOError:
             return
         if self.client is not None:
+            self._read_client(64)    # a client that has just hung up is gone, not busy
+        if self.client is not None:
             c.close()          # the RN-XV refuses a second client; so do we
             return
         c.setblocking(False)
@@ -62,6 +65,23 @@ class BoardServer:
         self.log(f"client {addr[0]}:{addr[1]} connected")
         if self.hello:
             self._send(b"*HELLO*")
+
+    def _read_client(self, chunks: int = 1) -> None:
+        """Up to ``chunks`` reads of what the client sent, to the board; drops
+        the client at the end of its stream."""
+        for _ in range(chunks):
+            if self.client is None:
+                return
+            try:
+                data = self.client.recv(4096)
+            except BlockingIOError:
+                return
+            except OSError:
+                data = b""
+            if not data:
+                self._drop()
+                return
+            self.board.write(data)
 
     def _send(self, data: bytes) -> None:
         if self.client is None or not data:
@@ -78,31 +98,29 @@ class BoardServer:
             self.log("client disconnected")
 
     def serve_forever(self, until: Callable[[], bool] | None = None) -> None:
-        t0 = time.monotonic()
-        sim0 = self.board.t
-        while not self._stop and not (until and until()):
-            socks = [self.sock] + ([self.client] if self.client else [])
-            ahead = (self.board.t - sim0) - (time.monotonic() - t0) * self.speed
-            wait = max(0.0, min(MAX_STEP_S, ahead / self.speed)) if self.speed > 0 else 0.0
-            readable, _, _ = select.select(socks, [], [], wait)
-            if self.sock in readable:
-                self._accept()
-            if self.client is not None and self.client in readable:
-                try:
-                    data = self.client.recv(4096)
-                except OSError:
-                    data = b""
-                if data:
-                    self.board.write(data)
-                else:
-                    self._drop()
+        self._t0, self._sim0 = time.monotonic(), self.board.t
+        try:
+            while not self._stop and not (until and until()):
+                self.turn()
+        finally:
+            self._drop()
+            self.sock.close()
+
+    def turn(self) -> None:
+        """One look at the sockets and at most MAX_STEP_S of simulated time."""
+        socks = [self.sock] + ([self.client] if self.client else [])
+        ahead = (self.board.t - self._sim0) - (time.monotonic() - self._t0) * self.speed
+        wait = max(0.0, min(MAX_STEP_S, ahead / self.speed)) if self.speed > 0 else 0.0
+        readable, _, _ = select.select(socks, [], [], wait)
+        if self.client is not None and self.client in readable:
+            self._read_client()
+        if self.sock in readable:
+            self._accept()
+        self._send(self.board.read())
+        behind = (time.monotonic() - self._t0) * self.speed - (self.board.t - self._sim0)
+        if self.speed > 0 and behind > MAX_LAG_S:
+            self._t0 += (behind - MAX_LAG_S) / self.speed     # slip: never run faster than real time
+            behind = MAX_LAG_S
+        if self.speed <= 0 or behind > 0:
+            self.board.advance(MAX_STEP_S if self.speed <= 0 else min(MAX_STEP_S, behind + 1e-6))
             self._send(self.board.read())
-            behind = (time.monotonic() - t0) * self.speed - (self.board.t - sim0)
-            if self.speed > 0 and behind > MAX_LAG_S:
-                t0 += (behind - MAX_LAG_S) / self.speed     # slip: never run faster than real time
-                behind = MAX_LAG_S
-            if self.speed <= 0 or behind > 0:
-                self.board.advance(MAX_STEP_S if self.speed <= 0 else min(MAX_STEP_S, behind + 1e-6))
-                self._send(self.board.read())
-        self._drop()
-        self.sock.close()
