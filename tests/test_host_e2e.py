@@ -411,6 +411,7 @@ def test_a_busy_board_is_reported_as_busy(url, capsys) -> None:
 
 
 def test_key_errors_are_one_line_and_stopping_needs_no_key(url, keyfile, capsys, tmp_path, monkeypatch) -> None:
+    run(url, capsys, "home", "here", "--axis", "0")   # homed: only the key can refuse the moves below
     # no key at all: refused by the tool before anything is sent; reading, stop and disable work
     monkeypatch.delenv(auth.KEY_FILE_ENV)
     _, err = run(url, capsys, "enable", "--axis", "0", rc=1)

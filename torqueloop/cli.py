@@ -31,7 +31,7 @@ from torqueloop.host import analysis
 from torqueloop.spec import units
 from torqueloop.spec.pwm import carrier_hz
 from torqueloop.host import config as hconfig
-from torqueloop.host.client import Client, NoAnswer, ProtocolError, decode_faults, describe_faults
+from torqueloop.host.client import Client, NoAnswer, ProtocolError, decode_faults, describe_faults, key_missing
 from torqueloop.host.transport import DEFAULT_BAUD, LinkOpenError, open_link
 from torqueloop.host.upload import ImageRefused
 from torqueloop.spec.units import BadValue
@@ -57,6 +57,14 @@ class Ctx:
             return auth.read_key_file(path), src, ""
         except auth.KeyFileError as e:
             return None, src, str(e)
+
+    def require_key(self, command: str, **fields: int) -> None:
+        """A command that changes the machine (auth.needs_key) is refused here,
+        before the link is opened, when the tool has no usable key."""
+        if auth.needs_key(command, fields):
+            key, _, err = self.key()
+            if key is None:
+                raise key_missing(command, err)
 
     @property
     def client(self) -> Client:
@@ -175,6 +183,7 @@ def cmd_get(ctx: Ctx) -> int:
 def cmd_set(ctx: Ctx) -> int:
     a = ctx.args
     units.to_raw(a.name, a.value)          # a bad value is refused before the link is opened
+    ctx.require_key("SET_PARAM")
     clk = (ctx.client.identity or {}).get("clk_hz", units.CLK_HZ)
     param, raw = units.to_raw(a.name, a.value, clk)
     _check_pair(ctx, param, raw, a.axis, clk)
@@ -238,6 +247,7 @@ def _check_gains(ctx: Ctx, param: str, raw: int, axis: int) -> None:
 
 def cmd_enable(ctx: Ctx, on: bool) -> int:
     axes = _axes(ctx.args)
+    ctx.require_key("ENABLE", enable=int(on))
     ctx.client.enable(_mask(axes), on)
     ctx.out({"axes": axes, "enabled": on}, f"axes {axes} {'enabled' if on else 'disabled'}")
     if on and not ctx.args.json:
@@ -301,6 +311,7 @@ def _check_move(ctx: Ctx, axis: int, target: int, trapezoid: bool, unhomed: bool
 def cmd_move(ctx: Ctx) -> int:
     a = ctx.args
     units.parse_position(a.target, units.Mechanics(), a.unit)   # refused before the link is opened
+    ctx.require_key("MOVE")
     mech = ctx.mech(a.axis)
     target = units.parse_position(a.target, mech, a.unit if a.unit != "counts" else "counts")
     st = ctx.client.status(a.axis)
@@ -331,6 +342,7 @@ def cmd_move(ctx: Ctx) -> int:
 
 def cmd_home(ctx: Ctx) -> int:
     a = ctx.args
+    ctx.require_key("HOME")
     c = ctx.client
     st = c.status(a.axis)
     if a.mode != "here":
@@ -371,6 +383,7 @@ def cmd_stop(ctx: Ctx) -> int:
 
 def cmd_clear_fault(ctx: Ctx) -> int:
     axes = _axes(ctx.args)
+    ctx.require_key("CLEAR_FAULT")
     before = {a: ctx.client.status(a)["faults"] for a in axes}
     f0, f1 = ctx.client.clear_fault(_mask(axes))
     after = {0: f0, 1: f1}
@@ -490,6 +503,7 @@ def cmd_plot(ctx: Ctx) -> int:
 def cmd_step_test(ctx: Ctx) -> int:
     a = ctx.args
     units.parse_position(a.target, units.Mechanics(), a.unit)   # refused before the link is opened
+    ctx.require_key("MOVE")
     c = ctx.client
     mech = ctx.mech(a.axis)
     s0 = c.status(a.axis)
@@ -570,6 +584,7 @@ def cmd_config(ctx: Ctx) -> int:
                 f"saved {len(glob) + sum(map(len, axes))} parameters to {a.file} (build id 0x{ident['build_id']:08x})")
         return 0
     cfg = hconfig.load_file(a.file)   # the file first: a bad one needs no board
+    ctx.require_key("SET_PARAM")
     c = ctx.client
     ident = c.identity or c.identify()
     warn = []

@@ -71,6 +71,13 @@ class KeyMissing(ProtocolError):
     """A command that needs the key, and the tool has none (or a bad key file)."""
 
 
+def key_missing(name: str, key_error: str = "") -> KeyMissing:
+    """``name`` needs the key and there is none (``key_error``: why not)."""
+    why = f" ({key_error})" if key_error else ""
+    return KeyMissing(f"{name} changes the machine and needs the link key{why}: name the key file with "
+                      f"--key-file FILE or ${auth.KEY_FILE_ENV} (docs/security.md)")
+
+
 class AuthFailed(ProtocolError):
     """The board does not accept our key: it holds another one."""
 
@@ -265,9 +272,7 @@ class Client:
 
     # ---- authentication ------------------------------------------------------
     def _key_missing(self, name: str) -> KeyMissing:
-        why = f" ({self.key_error})" if self.key_error else ""
-        return KeyMissing(f"{name} changes the machine and needs the link key{why}: name the key file with "
-                          f"--key-file FILE or ${auth.KEY_FILE_ENV} (docs/security.md)")
+        return key_missing(name, self.key_error)
 
     def _board_has_no_key(self, name: str) -> BoardHasNoKey:
         return BoardHasNoKey(f"{name} refused: the board has no link key, so it refuses every command that "
@@ -300,9 +305,11 @@ class Client:
 
     def transact(self, name: str, **fields: int) -> dict[str, int]:
         """Run one command; returns the reply fields (status OK) or raises."""
+        needs = auth.needs_key(name, fields)
+        if needs and self.key is None:
+            raise self._key_missing(name)              # refused here: nothing is sent
         if not self._synced and name != "IDENTIFY":
             self.connect()
-        needs = auth.needs_key(name, fields)
         if self.key is None or name in UNTAGGED:
             if needs:
                 raise self._key_missing(name)
