@@ -83,10 +83,7 @@ def build_library() -> Path:
     lib = BUILD / f"simboard_{h.hexdigest()[:12]}.so"
     if not lib.exists():
         tmp = lib.with_suffix(f".{os.getpid()}.tmp")   # concurrent builders (pytest -n) do not collide
-        # the decoder sample in hal.h is gaining an edge-interval field (firmware work in progress)
-        has_interval = "interval;" in (FW / "servo" / "hal.h").read_text()
-        subprocess.run(["gcc", "-std=c11", *(["-DSB_HAL_HAS_INTERVAL"] if has_interval else []),
-                        "-O2", "-shared", "-fPIC", "-Wall", "-Wextra", "-Werror",
+        subprocess.run(["gcc", "-std=c11", "-O2", "-shared", "-fPIC", "-Wall", "-Wextra", "-Werror",
                         f"-I{FW / 'servo'}", f"-I{FW / 'protocol'}", f"-I{FW / 'crypto'}", *map(str, SOURCES),
                         "-o", str(tmp)],
                        check=True)

@@ -144,11 +144,7 @@ void sb_set_encoder(uint32_t axis, int32_t pos, uint32_t edge_time, uint32_t int
     enc[axis].limits = (uint8_t)limits;
     enc[axis].pos = pos;
     enc[axis].edge_time = edge_time;
-#ifdef SB_HAL_HAS_INTERVAL   /* hal.h's decoder sample grew the last edge interval; simboard.py detects it */
     enc[axis].interval = interval;
-#else
-    (void)interval;
-#endif
     enc[axis].now = now;
     cycles = now;
     enc[axis].illegal = illegal;
