@@ -74,13 +74,17 @@ def characterization(plant: str, out: Path, quick: bool) -> Path:
 
 
 def _job(job: tuple) -> tuple:
-    kind, key, cfg = job
+    from dataclasses import replace
+
     from torqueloop.sim import experiment
+
+    kind, key, cfg = job
 
     t0 = time.monotonic()
     try:
-        if kind == "rtl":
-            run = experiment.run_rtl(cfg, log=lambda m, **k: print(f"  {m.strip()}", flush=True))
+        if kind == "rtl":   # and its implementation check: the fast path with the carriers' phase it met
+            rtl = experiment.run_rtl(cfg, log=lambda m, **k: print(f"  {m.strip()}", flush=True))
+            run = (rtl, experiment.run_fast(replace(cfg, progress=False), rtl.carrier_start_clk))
         elif kind == "model":
             run = experiment.run_paper_model(cfg)
         else:
@@ -136,7 +140,6 @@ def main(argv: list[str] | None = None) -> int:
         jobs.append(("rtl", (law,), replace(exp, law=law)))
     for law in a.laws:
         jobs.append(("model", (law,), replace(base, law=law, plant=a.model_plant)))
-        jobs.append(("fast", ("check", law), replace(exp, law=law, progress=False)))
         for name, (_, kw) in VARIANTS.items():
             jobs.append(("fast", ("variant", name, law), replace(exp, law=law, progress=False, **kw)))
     sweep_laws = ["P"] if a.quick else a.laws
@@ -145,8 +148,8 @@ def main(argv: list[str] | None = None) -> int:
             for pw0 in (True, False):
                 jobs.append(("fast", ("sweep", f, pw0, law),
                              replace(exp, law=law, t_end_s=t_sweep, pwm_hz=(f, f), pw0_off=not pw0, progress=False)))
-    _say(f"{len(jobs)} runs on {a.jobs} processes: {len(a.laws)} x experiment arm (RTL, T = {t_end:g} s), "
-         f"model arm, implementation check and {len(VARIANTS)} variants per law, "
+    _say(f"{len(jobs)} runs on {a.jobs} processes: {len(a.laws)} x experiment arm (RTL, T = {t_end:g} s, "
+         f"then its implementation check), model arm and {len(VARIANTS)} variants per law, "
          f"{sum(j[1][0] == 'sweep' for j in jobs if j[0] == 'fast')} sweep runs (T = {t_sweep:g} s)")
     st = report.Study(t_end_s=t_end, target_rad=base.target_counts * 2 * math.pi / experiment.COUNTS_PER_REV,
                       laws=list(a.laws), sweep_t_end_s=t_sweep,
@@ -163,11 +166,9 @@ def main(argv: list[str] | None = None) -> int:
                 continue
             _say(f"{done}/{len(jobs)} {what} ({dt:.0f} s; {time.monotonic() - t0:.0f} s so far)")
             if kind == "rtl":
-                st.experiment_arm[key[0]] = run
+                st.experiment_arm[key[0]], st.fast_check[key[0]] = run
             elif kind == "model":
                 st.model_arm[key[0]] = run
-            elif key[0] == "check":
-                st.fast_check[key[1]] = run
             elif key[0] == "variant":
                 st.variants.setdefault(key[1], {})[key[2]] = run
             else:

@@ -45,15 +45,17 @@ class PwmSetting:
 
 class PwmChannel:
     """One axis's PWM block.  ``load`` a setting; ``fire(now)`` at every
-    instant ``next_event()`` names; ``pins`` holds from then on."""
+    instant ``next_event()`` names; ``pins`` holds from then on.
+    ``first_start``: the clock of the first period start (the carrier's
+    phase; on the board it depends on when the divider was last written)."""
 
     def __init__(self, setting: PwmSetting = PwmSetting(), off_phase: Pins = BRAKE,
-                 pwm_bits: int = SYSTEM.pwm_bits) -> None:
+                 pwm_bits: int = SYSTEM.pwm_bits, first_start: int = 0) -> None:
         self.m = full_scale(pwm_bits)
         self.off_phase = off_phase
         self.pending = setting
         self.active = setting
-        self.next_start = 0               # clock of the next period start
+        self.next_start = first_start     # clock of the next period start
         self.off_at: int | None = None    # clock the on phase ends in this period
         self.pins: Pins = setting.safe
 

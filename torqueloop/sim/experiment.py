@@ -144,6 +144,9 @@ class RtlRun:
     uart_errors: int = 0
     board: tuple = ()          # the settings read back from the board after configuring
     resistance_ohm: tuple = () # winding resistance per axis (copper loss)
+    #: per axis, clocks from the step's sample to the first period start that
+    #: drives the bridge (the carrier's phase; None: it never drove)
+    carrier_start_clk: tuple = ()
 
 
 def firmware_image(key: bytes | None = auth.TEST_KEY) -> firmware.Image:
@@ -235,6 +238,7 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
             link.poll()
         target = cfg.target_counts
         # the paper's step from rest, relative to where the stage was at power-up: UNHOMED
+        bridge.watch(board.cycle)       # the first drive edges give the carriers' phase at the step
         seqs = [link.post("MOVE", axis=ax, mode=tp.MOVE_UNHOMED, target=target) for ax in (0, 1)]
         for s in seqs:
             r = link.wait(s)
@@ -267,7 +271,7 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
                 log(f"  [{cfg.law}] sim {done:6.2f} / {cfg.t_end_s:.1f} s  wall {wall:6.1f} s  "
                     f"{speed / 1e6:5.2f} Mcycle/s  ({speed / CLK_HZ:5.3f} x real time)", flush=True)
         link.poll()
-        run = _assemble(cfg, link, trace, target, period_cycles)
+        run = _assemble(cfg, link, trace, target, period_cycles, bridge.watched)
         run.cycles = board.cycle
         run.identify = ident
         run.config_faults = config_faults
@@ -284,38 +288,57 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
     return run
 
 
-def _assemble(cfg: ExperimentConfig, link: Link, trace: list[tuple], target: int, period_cycles: int) -> RtlRun:
+def _assemble(cfg: ExperimentConfig, link: Link, trace: list[tuple], target: int, period_cycles: int,
+              pin_changes: list[list[int]]) -> RtlRun:
+    """Each axis's samples from the first control iteration that used the
+    step's target: the first frame whose error is target - position (the
+    error is the iteration's; a frame is built after its iteration, so a MOVE
+    that arrives in between shows in its setpoint too early).  The two MOVEs
+    may straddle a sample (two authenticated frames take ~7 ms at 115 200
+    baud): each axis is then aligned on its own step."""
     tel = link.telemetry
-    k0 = next(i for i, f in enumerate(tel) if all(a["setpoint"] == target for a in f.axes))
     n = int(round(cfg.t_end_s * 1e6 / cfg.period_us)) + 1
-    sel = tel[k0:k0 + n]
-    if len(sel) < n:
-        raise RuntimeError(f"only {len(sel)} of {n} control samples arrived")
-    steps = [(f.time_us - sel[0].time_us) // cfg.period_us for f in sel]
-    if steps != list(range(n)):
-        raise RuntimeError("telemetry frames missing (the firmware dropped some)")
-    rad = 2 * math.pi / COUNTS_PER_REV
-    pos = np.array([[a["position"] for a in f.axes] for f in sel], float) * rad
-    vel = np.array([[a["velocity_q8"] for a in f.axes] for f in sel], float) / 256 * rad
-    cmd = np.array([[a["pwm_cmd"] for a in f.axes] for f in sel], float)
-    err = np.array([[a["error"] for a in f.axes] for f in sel], float) * rad
-    faults = sorted({a["faults"] for f in sel for a in f.axes})
     # place the samples on the plant's clock: a sample at firmware time time_us
     # leaves its first telemetry byte L clocks later; the smallest latency seen
     # is taken as the sample instant (the spread is reported)
     off = np.array([f.cycle - f.time_us * (CLK_HZ // 1_000_000) for f in tel[1:]], float)
     base = off.min()
-    c_step = base + sel[0].time_us * (CLK_HZ // 1_000_000)
     tr = np.array(trace, float)
-    tt = (tr[:, 0] - c_step) / CLK_HZ
     t = np.arange(n) * cfg.period_us * 1e-6
-    true_pos = np.stack([np.interp(t, tt, tr[:, 1 + a]) for a in (0, 1)], axis=1)
-    charge = np.stack([np.interp(t, tt, tr[:, 7 + a]) for a in (0, 1)], axis=1)
-    i2 = np.stack([np.interp(t, tt, tr[:, 9 + a]) for a in (0, 1)], axis=1)
+    rad = 2 * math.pi / COUNTS_PER_REV
+    cols: dict[str, list[np.ndarray]] = {k: [] for k in ("pos", "vel", "cmd", "err", "true", "q", "q2")}
+    start, tts, k0s = [], [], []
+    for a in (0, 1):
+        k0 = next(i for i, f in enumerate(tel) if f.axes[a]["error"] == target - f.axes[a]["position"])
+        sel = tel[k0:k0 + n]
+        k0s.append(k0)
+        if len(sel) < n:
+            raise RuntimeError(f"only {len(sel)} of {n} control samples arrived")
+        if [(f.time_us - sel[0].time_us) // cfg.period_us for f in sel] != list(range(n)):
+            raise RuntimeError("telemetry frames missing (the firmware dropped some)")
+        ax = [f.axes[a] for f in sel]
+        cols["pos"].append(np.array([x["position"] for x in ax], float) * rad)
+        cols["vel"].append(np.array([x["velocity_q8"] for x in ax], float) / 256 * rad)
+        cols["cmd"].append(np.array([x["pwm_cmd"] for x in ax], float))
+        cols["err"].append(np.array([x["error"] for x in ax], float) * rad)
+        c_step = base + sel[0].time_us * (CLK_HZ // 1_000_000)
+        tt = (tr[:, 0] - c_step) / CLK_HZ
+        for k, col in (("true", 1), ("q", 7), ("q2", 9)):
+            cols[k].append(np.interp(t, tt, tr[:, col + a]))
+        tts.append(tt)
+        # the first pin change after the MOVE is the first period start that
+        # takes the step's command; at least 1 clock, so that the fast path's
+        # carrier takes the command loaded at the sample
+        start.append(max(1, round(pin_changes[a][0] - c_step)) if pin_changes[a] else None)
+    pos, vel, cmd, err, true_pos, charge, i2 = (np.stack(cols[k], axis=1)
+                                                for k in ("pos", "vel", "cmd", "err", "true", "q", "q2"))
+    faults = sorted({x["faults"] for f in tel[min(k0s):max(k0s) + n] for x in f.axes})
+    tt = tts[0]                      # the plant trace on axis x's step clock
     keep = tt >= -0.1
     traj = Trajectory(t, pos, vel, cmd, err, true_pos, charge - charge[0], i2 - i2[0])
     return RtlRun(cfg, traj, tt[keep], tr[keep][:, 1:3], tr[keep][:, 3:5], tr[keep][:, 5:7],
-                  t0_jitter_s=float(np.percentile(off, 95) - base) / CLK_HZ, faults=faults)
+                  t0_jitter_s=float(np.percentile(off, 95) - base) / CLK_HZ, faults=faults,
+                  carrier_start_clk=tuple(start))
 
 
 @dataclass
@@ -343,7 +366,7 @@ def run_paper_model(cfg: ExperimentConfig) -> ModelRun:
                     tuple(a.resistance_ohm for a in params.axes))
 
 
-def run_fast(cfg: ExperimentConfig) -> ModelRun:
+def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
     """The fast path: the board's settings (``cfg.board()``) and plant with
     the *firmware's* law in Python (torqueloop/models/servo.py, the oracle of
     firmware/servo/control.c: fixed point, anti-windup, deadband, dead-zone
@@ -351,7 +374,11 @@ def run_fast(cfg: ExperimentConfig) -> ModelRun:
     (torqueloop.models.pwm_schedule).  No RTL, CPU or pins: between this and
     the RTL arm the difference is the implementation (the implementation
     check); copper loss and current ripple come from the plant's exact
-    current integrals."""
+    current integrals.  ``carrier_start_clk``: per axis, the clock of the
+    first period start after the step's sample (an RTL run's
+    ``carrier_start_clk``, for the implementation check); by default a
+    period starts at the sample, before its command is loaded, so the step
+    drives one carrier period later (the latest the board can)."""
     from torqueloop.models.pwm_schedule import PwmChannel, PwmSetting, run_until
     from torqueloop.models.servo import Axis, AxisParams
     from torqueloop.spec.bridge import BRAKE, COAST
@@ -361,7 +388,8 @@ def run_fast(cfg: ExperimentConfig) -> ModelRun:
     safe = BRAKE if cfg.brake else COAST
     board = cfg.board()
     setting = [dict(div=b["FDIV"], pw0=b["PW0"], pwmax=b["PWMAX"], safe=safe) for b in board]
-    channels = [PwmChannel(PwmSetting(**st), off_phase=safe) for st in setting]
+    starts = [s or 0 for s in carrier_start_clk] or [0, 0]
+    channels = [PwmChannel(PwmSetting(**st), off_phase=safe, first_start=s) for st, s in zip(setting, starts)]
     axes = []
     for ax in (0, 1):
         g = TABLE1[cfg.law][ax]
@@ -396,6 +424,7 @@ def run_fast(cfg: ExperimentConfig) -> ModelRun:
                       out["q"], out["q2"])
     return ModelRun(traj, time.monotonic() - w0,
                     {"arm": "fast path", "plant": cfg.plant, "law": cfg.law, "board": list(board),
+                     "carrier_start_clk": starts,
                      "pwm_hz": list(cfg.pwm_hz_actual), "implementation": "torqueloop.models.servo (firmware law)"},
                     tuple(a.resistance_ohm for a in params.axes))
 

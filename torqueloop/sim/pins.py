@@ -78,6 +78,14 @@ class PlantOnPins:
     #: any more) or "reversed" (A and B swapped: the count runs the wrong way)
     encoder_fault: list = field(default_factory=lambda: [None, None])
     _last_code: int = -1
+    #: after :meth:`watch`: the clocks of each axis's first pin changes (up to 16)
+    watched: list[list[int]] = field(default_factory=lambda: [[], []])
+    _watch_from: int | None = None
+
+    def watch(self, from_cycle: int) -> None:
+        """Record the pin changes of each axis from ``from_cycle`` on, in :attr:`watched`."""
+        self._watch_from = from_cycle
+        self.watched = [[], []]
 
     def _predict(self, now: int) -> int | None:
         best = None
@@ -96,6 +104,8 @@ class PlantOnPins:
                 if (code >> (4 * ax)) & 0xF != (self._last_code >> (4 * ax)) & 0xF:
                     ch = self._changes[ax]
                     ch.append(cycle)
+                    if self._watch_from is not None and cycle >= self._watch_from and len(self.watched[ax]) < 16:
+                        self.watched[ax].append(cycle)
                     if len(ch) > 4:
                         del ch[0]
         self._last_code = code

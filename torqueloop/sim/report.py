@@ -142,7 +142,8 @@ def build(st: Study) -> dict[str, Any]:
         f = st.fast_check.get(law)
         if f is not None and e is not None:
             rep["implementation_check"][law] = compare(e.traj, f.traj) | {
-                "fast_path": run_metrics(f, st.target_rad), "fast_path_wall_s": f.wall_s}
+                "fast_path": run_metrics(f, st.target_rad), "fast_path_wall_s": f.wall_s,
+                "carrier_start_clk": list(e.carrier_start_clk)}
     for name, runs in st.variants.items():
         rep["variants"][name] = {"description": st.variant_labels.get(name, name)}
         for law, r in runs.items():
@@ -224,12 +225,16 @@ def markdown(rep: dict[str, Any]) -> str:
         L += ["## Implementation check: RTL in the loop against the fast path (same plant, same settings)", "",
               "This compares the board image and its pins with the firmware's law in Python on the same plant: it "
               "checks the implementation, and licenses the fast path for the variants and the sweep. It cannot "
-              "see an error of interpretation: both sides share every assumption.", "",
-              "| law | position RMSE (rad) | velocity RMSE (rad/s) | max diff x / z (counts) |", "|---|---|---|---|"]
+              "see an error of interpretation: both sides share every assumption. The fast path's carriers "
+              "start where the RTL run's first drove the bridge after the step (the carrier's phase is set "
+              "by when the divider was written, not by the law).", "",
+              "| law | position RMSE (rad) | velocity RMSE (rad/s) | max diff x / z (counts) | carrier start x / z "
+              "(clocks after the step's sample) |", "|---|---|---|---|---|"]
         for law, v in rep["implementation_check"].items():
             pa = v["per_axis"]
             L.append(f"| {law} | {v['rmse_position_rad']:.5f} | {v['rmse_velocity_rad_s']:.4f} | "
-                     f"{pa['x']['max_abs_diff_counts']} / {pa['z']['max_abs_diff_counts']} |")
+                     f"{pa['x']['max_abs_diff_counts']} / {pa['z']['max_abs_diff_counts']} | "
+                     f"{' / '.join(str(c) for c in v['carrier_start_clk'])} |")
         L.append("")
     if rep["variants"]:
         L += ["## What the method buys: the experiment arm's variants (fast path)", "",
