@@ -14,7 +14,8 @@ and current ripple come from the plant's exact current integrals.
   ``.rmse_velocity_rad_s`` - eq. (26);
 * ``arms.<model|experiment>.<law>.<x|z>`` - the step metrics of each arm;
 * ``implementation_check.<law>.rmse_position_rad``, ``.rmse_velocity_rad_s``
-  (and ``.per_axis``) - RTL arm against the fast path on the same plant and settings;
+  (and ``.per_axis``, ``.carrier_start_clk``) - RTL arm against the fast path on
+  the same plant, settings and carrier phase;
 * ``variants.<name>.<law>`` - experiment-arm variants on the fast path, with
   their RMSE against the model arm and their step metrics;
 * ``sweep`` - rows ``{freq_hz, pw0, law, axis, ...metrics}``;
