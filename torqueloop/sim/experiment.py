@@ -309,7 +309,9 @@ def _assemble(cfg: ExperimentConfig, link: Link, trace: list[tuple], target: int
     cols: dict[str, list[np.ndarray]] = {k: [] for k in ("pos", "vel", "cmd", "err", "true", "q", "q2")}
     start, tts, k0s = [], [], []
     for a in (0, 1):
-        k0 = next(i for i, f in enumerate(tel) if f.axes[a]["error"] == target - f.axes[a]["position"])
+        k0 = next((i for i, f in enumerate(tel) if f.axes[a]["error"] == target - f.axes[a]["position"]), None)
+        if k0 is None:
+            raise RuntimeError(f"no telemetry frame of axis {a} shows an iteration that used the step's target")
         sel = tel[k0:k0 + n]
         k0s.append(k0)
         if len(sel) < n:
