@@ -310,9 +310,7 @@ class Client:
             raise self._key_missing(name)              # refused here: nothing is sent
         if not self._synced and name != "IDENTIFY":
             self.connect()
-        if self.key is None or name in UNTAGGED:
-            if needs:
-                raise self._key_missing(name)
+        if self.key is None or name in UNTAGGED:   # here only commands that need no key
             return self._transact(name, fields, None)
         try:
             return self._authenticated(name, fields)

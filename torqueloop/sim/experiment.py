@@ -271,7 +271,7 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
                 log(f"  [{cfg.law}] sim {done:6.2f} / {cfg.t_end_s:.1f} s  wall {wall:6.1f} s  "
                     f"{speed / 1e6:5.2f} Mcycle/s  ({speed / CLK_HZ:5.3f} x real time)", flush=True)
         link.poll()
-        run = _assemble(cfg, link, trace, target, period_cycles, bridge.watched)
+        run = _assemble(cfg, link, trace, target, bridge.watched)
         run.cycles = board.cycle
         run.identify = ident
         run.config_faults = config_faults
@@ -288,7 +288,7 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
     return run
 
 
-def _assemble(cfg: ExperimentConfig, link: Link, trace: list[tuple], target: int, period_cycles: int,
+def _assemble(cfg: ExperimentConfig, link: Link, trace: list[tuple], target: int,
               pin_changes: list[list[int]]) -> RtlRun:
     """Each axis's samples from the first control iteration that used the
     step's target: the first frame whose error is target - position (the
