@@ -39,7 +39,7 @@ os.environ["PATH"] = os.pathsep.join([str(VENV / "tools" / "bin"), str(VENV / "b
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "tb" / "cpu"))
 
-from torqueloop.models.rv32 import read_elf  # noqa: E402
+from torqueloop.oracles.rv32 import read_elf  # noqa: E402
 
 from torqueloop.spec import regs  # noqa: E402
 

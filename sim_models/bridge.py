@@ -18,24 +18,10 @@ conduction, handled by the axis model as a mode).
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 from sim_models.params import BridgeParams
+from torqueloop.spec.bridge import BRAKE, COAST, Pins  # noqa: F401  (re-exported: the plant's pin vocabulary)
 
 H, L, Z = 0, 1, 2  # half-bridge output states: high side on, low side on, off
-
-
-class Pins(NamedTuple):
-    """IBT-2 logic inputs of one axis (1 = high)."""
-
-    rpwm: int
-    lpwm: int
-    r_en: int
-    l_en: int
-
-
-BRAKE = Pins(0, 0, 1, 1)   # both low sides on: slow decay
-COAST = Pins(0, 0, 0, 0)   # both sides off: fast decay through the diodes
 
 
 def half_state(pwm: int, en: int) -> int:

@@ -2,7 +2,7 @@
 """Input waveforms for the plant's own tests and benchmarks: a carrier of
 any frequency with any duty fraction, on the FPGA clock grid, and the fast
 stepper run through one.  (What the board's PWM block makes is modelled by
-torqueloop.models.pwm_schedule, which the simulations of the board use.)"""
+torqueloop.oracles.pwm_schedule, which the simulations of the board use.)"""
 
 from __future__ import annotations
 

@@ -3,7 +3,7 @@
 plant; docs/security.md), at the byte pipe, as someone on the WLAN would
 reach the RN-XV's port:
 
-- the attack of issue 18 without the key - limits off, link watchdog 60 s,
+- the attack without the key - limits off, link watchdog 60 s,
   enable, ten screw turns at full command, then BOOTLOADER and an upload -
   is refused command by command, and nothing moves or changes;
 - the same commands with the key, in a session, work;

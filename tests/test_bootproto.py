@@ -172,7 +172,7 @@ def test_image_from_elf(tmp_path):
 
 
 def test_only_firmware_for_this_board_is_uploaded(tmp_path):
-    """Issue 17: `torqueloop upload` took a 12-byte text file and 3 kB of random
+    """`torqueloop upload` took a 12-byte text file and 3 kB of random
     bytes as raw images.  Now: an RV32 ELF inside program RAM, or a raw binary
     with --raw and the firmware image header; anything else is refused."""
     base, end = regs.RAM_BASE, regs.RAM_BASE + regs.RAM_SIZE

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 """Firmware C on the host: unit tests (gcc, ASan + UBSan), control.c against
-the Python reference torqueloop/models/servo.py on random inputs, the physical
+the Python reference torqueloop/oracles/servo.py on random inputs, the physical
 gain conversion against torqueloop/spec/protocol.py, a bounded libFuzzer run of the
 receive path (clang; skipped with a message if clang or its fuzzer runtime is
 missing) and the RV32 build."""
@@ -17,7 +17,7 @@ import pytest
 
 from torqueloop.spec import protocol as P
 from torqueloop.flow.firmware import HOST_INCLUDES, HOST_SOURCES, FuzzerMissing, run_fuzz
-from torqueloop.models.servo import DCOUNT_MAX, Axis, AxisParams, edge_speed_q8
+from torqueloop.oracles.servo import DCOUNT_MAX, Axis, AxisParams, edge_speed_q8
 
 REPO = Path(__file__).resolve().parent.parent
 FW = REPO / "firmware"
@@ -233,7 +233,7 @@ def test_rv32_image_builds_and_fits() -> None:
     img = build("servo_check", out=REPO / "build" / "firmware" / "check")
     assert img.text_bytes + img.data_bytes + img.bss_bytes + 4096 < 64 * 1024
     # the boot stub, run on the ISS: arms the watchdog as the boot ROM does, then enters the image
-    from torqueloop.models.rv32 import Memory, Rv32
+    from torqueloop.oracles.rv32 import Memory, Rv32
     from torqueloop.spec import bootproto, regs
     words = [int(w, 16) for w in img.rom_hex.read_text().split()]
     mem = Memory()
@@ -279,7 +279,7 @@ def _call_graph(elf: Path) -> tuple[dict[str, set[str]], set[str]]:
 
 def test_control_interrupt_never_divides_64_bit() -> None:
     """No libgcc 64-bit division is reachable from the interrupt handler (the
-    control iteration): issue 16's formats divide 32-bit numbers only."""
+    control iteration): its formats divide 32-bit numbers only."""
     from torqueloop.flow.firmware import build
     img = build("servo_check", out=REPO / "build" / "firmware" / "check")
     calls, indirect = _call_graph(img.elf)

@@ -10,7 +10,7 @@ follows, a step test's files and figures, a following-error fault decoded
 and cleared, config save/load round trip (and the characterisation file),
 an upload that changes the build id, and a corrupted one that the boot ROM
 refuses, leaving the factory firmware working; the careless user of
-issue 17: every bad value refused with one line and exit status 2 before
+Every bad value refused with one line and exit status 2 before
 anything is sent, a refused `move --enable` that leaves the axis disabled, a
 step beyond the following limit refused with the reason, a busy board named
 busy, safety limits that cannot be loosened while an axis is enabled, and
@@ -288,7 +288,7 @@ def test_corrupted_upload_is_refused_and_the_board_keeps_working(url, capsys, tm
     bad.write_bytes(b"\x7fELF\x01\x01" + bytes(10))
     _, err = run(url, capsys, "upload", str(bad), rc=2)
     assert "bad.elf" in err
-    (tmp_path / "notes.txt").write_text("hello world\n")              # issue 17: 12 bytes of text ...
+    (tmp_path / "notes.txt").write_text("hello world\n")              # 12 bytes of text ...
     (tmp_path / "noise.bin").write_bytes(os.urandom(3000))            # ... and 3 kB of random bytes "ran"
     for name in ("notes.txt", "noise.bin"):
         for raw in ([], ["--raw"]):
@@ -331,7 +331,7 @@ def test_every_bad_value_gets_one_line_and_exit_status_2(url, capsys, args) -> N
 
 def test_pwm_carrier_and_pw0_are_bounded_by_the_tool_and_the_board(url, capsys) -> None:
     run(url, capsys, "disable", "--all")
-    _, err = run(url, capsys, "set", "pwm_freq", "100000", rc=2)       # issue 17: silently 48.9 kHz before
+    _, err = run(url, capsys, "set", "pwm_freq", "100000", rc=2)       # silently 48.9 kHz before
     assert "25000" in err
     run(url, capsys, "set", "pwm_freq", "24000")
     got, _ = run(url, capsys, "get", "pwm_freq", "FDIV")
@@ -374,7 +374,7 @@ def test_get_reads_back_what_set_wrote_at_every_gain(url, capsys) -> None:
             got, _ = run(url, capsys, "get", name)
             assert got[name]["value"] == res["value"], (name, value, res, got)
             assert abs(res["value"] - float(value)) <= 0.00005 + float(value) * 1e-4, (name, value, res)
-    # a raw gain the physical view cannot show (issue 17: read back as 100 N m/rad, 1000x too low)
+    # a raw gain the physical view cannot show (read back as 100 N m/rad, 1000x too low)
     _, err = run(url, capsys, "set", "KP_Q16", "2147483647", rc=2)
     assert "N m/rad" in err
     run(url, capsys, "set", "kp", "100")

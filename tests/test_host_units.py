@@ -15,7 +15,7 @@ from torqueloop.spec import protocol as P
 from torqueloop.host import analysis
 from torqueloop.spec import units
 from torqueloop.host import config as hc
-from torqueloop.models import freq_div
+from torqueloop.oracles import freq_div
 
 MECH = units.Mechanics(8400, 4000)
 

@@ -39,7 +39,7 @@ def tree(tmp_path: Path) -> Path:
     # sideways, lazily inside a function: the host tool must not need the plant
     ("torqueloop/host/planted.py", "def f():\n    import sim_models.stepper\n", "torqueloop.host imports sim_models"),
     # relative import reaching up a level
-    ("torqueloop/models/planted.py", "from ..characterize import method\n", "torqueloop.models imports torqueloop.characterize"),
+    ("torqueloop/oracles/planted.py", "from ..characterize import method\n", "torqueloop.oracles imports torqueloop.characterize"),
     ("sim_models/planted.py", "from torqueloop import flow\n", "sim_models imports torqueloop.flow"),
     ("torqueloop/sim/planted.py", "import importlib.util\nspec = importlib.util.spec_from_file_location('x', 'y.py')\n",
      "loads a file by path"),

@@ -1,10 +1,10 @@
 # SPDX-License-Identifier: MIT
-"""The PWM block's event model (torqueloop.models.pwm_schedule): the
+"""The PWM block's event model (torqueloop.oracles.pwm_schedule): the
 carrier's phase (``first_start``) and the double-buffered command."""
 
 from __future__ import annotations
 
-from torqueloop.models.pwm_schedule import PwmChannel, PwmSetting
+from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting
 from torqueloop.spec.bridge import BRAKE, on_pins
 from torqueloop.spec.pwm import duty_ticks, full_scale
 

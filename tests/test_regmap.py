@@ -112,10 +112,10 @@ def test_ram_fits_the_device_with_room_to_spare():
 
 
 def test_bus_oracle_decodes_the_map():
-    """torqueloop/models/soc_bus.py (the benches' decode oracle) against the map:
+    """torqueloop/oracles/soc_bus.py (the benches' decode oracle) against the map:
     every register answers, the word after each block's last register and
     the unused pages do not, and execution is limited to ROM and RAM."""
-    from torqueloop.models.soc_bus import BusModel
+    from torqueloop.oracles.soc_bus import BusModel
     rm = regmap.load()
     m = BusModel()
     for b in rm.blocks:

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""The RV32IM ISS (torqueloop/models/rv32.py), the CPU's oracle, checked on its own:
+"""The RV32IM ISS (torqueloop/oracles/rv32.py), the CPU's oracle, checked on its own:
 spec tables for the M extension, numpy as an independent integer model,
 trap and interrupt rules of the privileged spec, and a C program whose
 results the host compiler computes natively."""
@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from torqueloop.flow.manifest import REPO_ROOT
-from torqueloop.models import rv32
-from torqueloop.models.rv32 import MASK32, Memory, Rv32
+from torqueloop.oracles import rv32
+from torqueloop.oracles.rv32 import MASK32, Memory, Rv32
 
 BASE = 0x8000_0000
 

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""Issue 17 on the simulated board (the servo firmware's C around the plant,
+"""Safety on the simulated board (the servo firmware's C around the plant,
 torqueloop/sim/simboard.py): the faults a real motor needs, shown with the
 plant moving.
 

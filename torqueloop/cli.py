@@ -220,7 +220,7 @@ def _check_pair(ctx: Ctx, param: str, raw: int, axis: int, clk: int) -> None:
 
 def _check_gains(ctx: Ctx, param: str, raw: int, axis: int) -> None:
     """The firmware keeps every raw gain within its physical gain's range, so
-    that `get` reads back what `set` wrote (issue 17: a raw gain 1000x the
+    that `get` reads back what `set` wrote (a raw gain 1000x the
     largest physical one read back as 100 N m/rad)."""
     c = ctx.client
     tau, cpr = c.get_param("TAU_MAX_MNM", axis), c.get_param("COUNTS_PER_REV", axis)

@@ -5,7 +5,7 @@
  *
  *   host_tests unit [seed]   run every test; prints the seed and the counts
  *   host_tests ctl           line-driven control.c, compared with
- *                            torqueloop/models/servo.py by the Python test */
+ *                            torqueloop/oracles/servo.py by the Python test */
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -376,7 +376,7 @@ static uint8_t home(uint8_t axis, uint8_t mode, uint8_t index)
     return send_cmd(TLP_CMD_HOME, p, 3);
 }
 
-/* Issue 17, "a fault can be lost": axis 1's bridge fault latched in the SoC
+/* "A fault can be lost": axis 1's bridge fault latched in the SoC
  * but not yet seen by a control tick; a command for axis 0 must not
  * acknowledge it away (axis 1 would drive on), and a cause latching between
  * the firmware's read and its acknowledgement must survive. */

@@ -8,7 +8,7 @@
 // constant low and duty M a constant high: neither shows a glitch pulse, and
 // eq. (24)'s 2^N - 1 steps span 0 .. 100 %.
 //
-// Mapping (docs/pwm_torque.md; torqueloop/models/pwm_torque.py: map_duty):
+// Mapping (docs/pwm_torque.md; torqueloop/oracles/pwm_torque.py: map_duty):
 //   cmd == 0 -> duty 0, else
 //   duty = min(pw0, pw_max) + round(min(|cmd|, M) * max(pw_max - pw0, 0) / M)
 // i.e. any non-zero command skips the dead zone (-PW0, PW0) and lands
@@ -77,7 +77,7 @@ module tl_pwm_torque #(
 
     // ---- stage 3: divide by M and add the dead-zone edge (eq. 1) ----
     // floor(x / (2^N - 1)) == (x + (x >> N) + 1) >> N for 0 <= x < 2^2N - 2^N
-    // (checked exhaustively by tests/test_ref_pwm_torque.py); x here is at most
+    // (checked exhaustively by tests/test_oracle_pwm_torque.py); x here is at most
     // M*M + (M-1)/2, so the sum stays below 2^2N.  The low N bits are the
     // discarded remainder.
     /* verilator lint_off UNUSEDSIGNAL */

@@ -19,7 +19,7 @@ from torqueloop.characterize import load_config
 from torqueloop.characterize.cli import EXIT_OK
 from torqueloop.characterize.cli import main as characterize
 from torqueloop.flow.manifest import REPO_ROOT
-from torqueloop.models import freq_div
+from torqueloop.oracles import freq_div
 
 OUT = REPO_ROOT / "build" / "characterize_bench"
 

@@ -21,7 +21,7 @@ from torqueloop.spec.repo import REPO_ROOT as REPO
 FUZZ_SECONDS = int(os.environ.get("TL_FUZZ_BENCH_SECONDS", "120"))
 
 
-#: 25 us: 20 kHz at 50 % of the CPU (issue 16)
+#: 25 us: 20 kHz at 50 % of the CPU (the control budget)
 BUDGET_CYCLES = 1250
 
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from torqueloop.flow import eda
 from torqueloop.flow.manifest import core
-from torqueloop.models.freq_div import frequency_error
+from torqueloop.oracles.freq_div import frequency_error
 
 FREQS_HZ = [50, 100, 150, 200, 250, 300, 350, 400, 450, 500, 20_000]
 

@@ -1,14 +1,14 @@
 # SPDX-License-Identifier: MIT
 """Quadrature decoder: maximum count rate and glitch rejection per filter
 setting (from the reference model's formulas, checked tight in
-tests/test_ref_quad_decoder.py), the default setting's margin over the
+tests/test_oracle_quad_decoder.py), the default setting's margin over the
 paper's motor, and Cyclone V resources."""
 
 from __future__ import annotations
 
 from torqueloop.flow import eda
 from torqueloop.flow.manifest import core
-from torqueloop.models.quad_decoder import (
+from torqueloop.oracles.quad_decoder import (
     COUNTS_PER_MOTOR_REV,
     COUNTS_PER_SCREW_REV,
     QuadSettings,

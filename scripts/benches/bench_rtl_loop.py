@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 """RTL in the loop: simulated clock cycles per CPU second of the native
-harness build against the build before issue 16 (torqueloop.sim.native:
+harness build against the portable baseline build (torqueloop.sim.native:
 DEFAULT against BASELINE), measured side by side in this run - the board
 image alone and the full closed loop (servo firmware on the board image, two
 axes, plant on the pins, host link) - with the telemetry of the two builds
@@ -38,7 +38,7 @@ BASELINE_PORTABLE = dataclasses.replace(native.BASELINE, name="baseline-portable
                                         opt_global="-O2")
 #: The harness ideas one at a time, each on top of the previous one.
 LADDER = [
-    ("build before issue 16, without -march=native", BASELINE_PORTABLE),
+    ("portable baseline, without -march=native", BASELINE_PORTABLE),
     ("+ one evaluation per clock", dataclasses.replace(BASELINE_PORTABLE, name="idea-1eval", eval_per_clock=1)),
     ("+ -O3 really (no -CFLAGS -O2 after it), harness -O3",
      dataclasses.replace(BASELINE_PORTABLE, name="idea-O3", eval_per_clock=1, cflags="-fPIC", harness_opt="-O3")),
@@ -120,7 +120,7 @@ def main() -> int:
         alone["new"].append(_alone(native.DEFAULT, n_alone))
     new_a, old_a = statistics.median(alone["new"]), statistics.median(alone["old"])
     print(f"board image alone (firmware idle loop, no plant, no Python), median of {reps} alternate runs:")
-    print(f"  before issue 16 {old_a / 1e6:5.2f} Mclk/CPU-s, now {new_a / 1e6:5.2f} Mclk/CPU-s: "
+    print(f"  portable baseline {old_a / 1e6:5.2f} Mclk/CPU-s, now {new_a / 1e6:5.2f} Mclk/CPU-s: "
           f"x{new_a / old_a:.2f}")
 
     # ---- the closed loop, the two builds alternately ----------------------------------------
@@ -131,15 +131,15 @@ def main() -> int:
         runs["new"].append(_closed(native.DEFAULT, t_end))
     speed = {k: statistics.median(r.cycles / r.cpu_s for r in rs) for k, rs in runs.items()}
     print(f"closed loop (P, {t_end:g} s after the step, 25 ms period), median of {reps} alternate runs:")
-    _line("before issue 16", runs["old"][-1])
+    _line("before the speed work", runs["old"][-1])
     _line("now", runs["new"][-1])
     ratio = speed["new"] / speed["old"]
     same = all(_same_telemetry(r, runs["old"][0]) for r in runs["new"] + runs["old"][1:])
     print(f"  closed-loop clocks per CPU-second: {speed['old'] / 1e6:.2f} -> {speed['new'] / 1e6:.2f} M, "
-          f"x{ratio:.2f} against the build before issue 16 (target x2)")
+          f"x{ratio:.2f} against the portable baseline build (target x2)")
     print(f"  telemetry of {len(runs['new'][0].traj.t)} control samples identical between the builds: {same}")
     cpu40 = 40 * CLK / speed["new"]
-    print(f"  projected 40 s experiment: {cpu40:.0f} CPU-s per law ({cpu40 / 60:.1f} min; before issue 16 "
+    print(f"  projected 40 s experiment: {cpu40:.0f} CPU-s per law ({cpu40 / 60:.1f} min; portable baseline "
           f"{40 * CLK / speed['old'] / 60:.1f} min); three laws on two free cores {1.5 * cpu40 / 60:.1f} min")
     print(f"  peak resident memory of this process: {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
 

@@ -26,7 +26,7 @@ MIN_MHZ = 55.0
 #: placer seeds: the median of three is the figure (one seed moves Fmax by several percent)
 SEEDS = (1, 2, 3)
 #: (core, ECP5 part, parameters): the CPU alone on the smallest part (as
-#: first tried for issue 19), the SoC with its full 64 KiB RAM on the part
+#: first tried), the SoC with its full 64 KiB RAM on the part
 #: whose block RAM holds it
 DESIGNS = [("cpu", "25k", {}), ("soc", "45k", {"RAM_BYTES": RAM_SIZE})]
 

@@ -11,7 +11,7 @@ import time
 
 from torqueloop.flow import eda
 from torqueloop.flow.manifest import core
-from torqueloop.models.uart import LineDecoder, UartParams, baud_of, div_for, frame_segments
+from torqueloop.oracles.uart import LineDecoder, UartParams, baud_of, div_for, frame_segments
 
 
 def tolerance(div: int, sign: int, rng: random.Random) -> float:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from torqueloop.flow.manifest import REPO_ROOT
 from torqueloop.spec import regs
-from torqueloop.models.rv32 import Memory, Rv32, load_elf, read_elf, run_to_tohost
+from torqueloop.oracles.rv32 import Memory, Rv32, load_elf, read_elf, run_to_tohost
 
 PROGS = Path(__file__).resolve().parent / "progs"
 BUILD = REPO_ROOT / "build" / "cpu_progs"

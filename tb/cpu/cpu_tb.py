@@ -15,7 +15,7 @@ import cocotb
 from cocotb.clock import Clock
 from cocotb.triggers import First, ReadOnly, RisingEdge, Timer
 
-from torqueloop.models.rv32 import Elf
+from torqueloop.oracles.rv32 import Elf
 from torqueloop.spec import regs
 
 CLK_NS = 20  # CLOCK_50

@@ -17,7 +17,7 @@ from pathlib import Path
 import cocotb
 
 from cpu_tb import CpuTb
-from torqueloop.models.rv32 import read_elf
+from torqueloop.oracles.rv32 import read_elf
 
 
 @cocotb.test()

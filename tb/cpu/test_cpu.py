@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""CPU core (rtl/cpu) against the ISS oracle (torqueloop/models/rv32.py).
+"""CPU core (rtl/cpu) against the ISS oracle (torqueloop/oracles/rv32.py).
 
 Every program is compiled at test time, run on cpu_sim_top and on the ISS,
 and the two must agree on the tohost value and on every signature word
@@ -23,7 +23,7 @@ from cocotb.triggers import ReadOnly, RisingEdge
 import randprog
 from cpu_progs import BUILD, PROGS, build, run_iss
 from cpu_tb import CpuTb
-from torqueloop.models.rv32 import read_elf
+from torqueloop.oracles.rv32 import read_elf
 from torqueloop.flow.simrun import run, sims_for
 
 TAG = os.environ.get("CPU_PROG_TAG", "default")

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 """debounce: random bouncing inputs against the reference model
-(torqueloop/models/sync.py DebounceModel): bursts of glitches shorter than
+(torqueloop/oracles/sync.py DebounceModel): bursts of glitches shorter than
 STABLE_CLKS never reach the output, held levels do, after exactly
 STABLE_CLKS clocks; reset holds the output at RESET_VAL."""
 
@@ -12,7 +12,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge
 
 from torqueloop.flow.simrun import run, sims_for
-from torqueloop.models.sync import DebounceModel
+from torqueloop.oracles.sync import DebounceModel
 
 
 @cocotb.test()

@@ -8,7 +8,7 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge
 
-from torqueloop.models.drive_interlock import DriveInterlockModel, InterlockInputs
+from torqueloop.oracles.drive_interlock import DriveInterlockModel, InterlockInputs
 from torqueloop.flow.simrun import run, sims_for
 
 

@@ -8,7 +8,7 @@ to it only through the pins: the link protocol on uart_rx/uart_tx
 (cocotbext-uart + torqueloop.spec.protocol, the host tool's own codec), encoder
 quadrature on enc_a/enc_b, e-stop and bridge-fault inputs, and it watches the
 bridge pins rpwm/lpwm/r_en/l_en.  Expected PWM commands come from
-torqueloop/models/servo.py (the control law in Python integers).
+torqueloop/oracles/servo.py (the control law in Python integers).
 
 The stub ROM's key slot holds auth.TEST_KEY; the bench opens a session after
 boot and sends every command but the reads with its MAC, as the host tool
@@ -35,7 +35,7 @@ from cocotb.utils import get_sim_time
 
 from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
-from torqueloop.models import servo as ref
+from torqueloop.oracles import servo as ref
 
 import tbutil
 
@@ -469,7 +469,7 @@ async def runaway_with_a_frozen_and_a_reversed_encoder(dut):
 
 @cocotb.test()
 async def lengthening_the_period_with_frames_queued_keeps_the_watchdog_fed(dut):
-    """Issue 17: lengthening PERIOD_US with frames queued behind it could trip the
+    """Lengthening PERIOD_US with frames queued behind it could trip the
     watchdog (the firmware reloaded it with 4 old periods while the next tick was a
     new period away).  The hardware watchdog is now the boot ROM's, fixed, and fed
     by every tick: 0.5 ms -> 25 ms with 20 frames queued latches nothing, and an

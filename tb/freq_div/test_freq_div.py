@@ -10,7 +10,7 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge
 
-from torqueloop.models.freq_div import FreqDivModel, FreqDivParams, effective_div
+from torqueloop.oracles.freq_div import FreqDivModel, FreqDivParams, effective_div
 from torqueloop.flow.simrun import run, sims_for
 
 

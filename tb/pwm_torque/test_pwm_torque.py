@@ -18,8 +18,8 @@ from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, ReadOnly, RisingEdge, Timer
 
 from torqueloop.flow.manifest import REPO_ROOT
-from torqueloop.models.freq_div import FreqDivParams, carrier_hz, count_max
-from torqueloop.models.pwm_torque import (PIPE_CLOCKS, PwmInputs, PwmOutputs, PwmTorqueModel,
+from torqueloop.oracles.freq_div import FreqDivParams, carrier_hz, count_max
+from torqueloop.oracles.pwm_torque import (PIPE_CLOCKS, PwmInputs, PwmOutputs, PwmTorqueModel,
                                        full_scale, map_duty, safe_pins)
 from torqueloop.flow.simrun import run, sims_for
 
@@ -314,7 +314,7 @@ async def full_width_duty_table(dut):
 @cocotb.test()
 async def chain_carrier_matches_ref(dut):
     """freq_div driving pwm_torque (char_bench_top / pwm_chain_top.vhd): the carrier period and pulse
-    width on RPWM, timed in ns, equal torqueloop.models.freq_div.carrier_hz() and
+    width on RPWM, timed in ns, equal torqueloop.oracles.freq_div.carrier_hz() and
     map_duty() for the reset default (eq. 4 Count_max) and written divisors."""
     p = FreqDivParams(clk_hz=int(dut.CLK_HZ.value), pwm_bits=int(dut.PWM_BITS.value),
                       div_bits=int(dut.DIV_BITS.value), default_div=int(dut.DEFAULT_DIV.value))

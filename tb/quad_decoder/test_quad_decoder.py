@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 """quad_decoder: every output compared with the clock-level reference model
 on every clock, plus the end-to-end count of the encoder waveform generator
-(torqueloop/models/quad_decoder.py).  Directed cases first, then seeded random
+(torqueloop/oracles/quad_decoder.py).  Directed cases first, then seeded random
 streams with glitches shorter and longer than the filter, illegal
 transitions and index pulses, up to the stated maximum count rate."""
 
@@ -14,7 +14,7 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge
 
-from torqueloop.models.quad_decoder import (
+from torqueloop.oracles.quad_decoder import (
     GRAY_UP,
     QuadDecoderModel,
     QuadInputs,

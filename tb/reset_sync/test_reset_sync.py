@@ -8,7 +8,7 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, ReadOnly, RisingEdge, Timer
 
-from torqueloop.models.sync import ResetSyncModel
+from torqueloop.oracles.sync import ResetSyncModel
 from torqueloop.flow.simrun import run, sims_for
 
 

@@ -5,7 +5,7 @@ the one-cycle ack; rdata/err with ack).
 
 Oracles: the generated register table (torqueloop/spec/regs.py, from
 torqueloop/spec/regmap.toml) for every register's reset value and access type, and
-torqueloop/models/soc_bus.py for address decode and memory contents.  The ROM
+torqueloop/oracles/soc_bus.py for address decode and memory contents.  The ROM
 and RAM images are hex files written here; the test reads them back as the
 expected contents.
 """
@@ -21,7 +21,7 @@ import pytest
 from cocotb.triggers import ClockCycles, FallingEdge, Timer
 
 from torqueloop.spec import regs
-from torqueloop.models.soc_bus import BusModel
+from torqueloop.oracles.soc_bus import BusModel
 from torqueloop.flow.simrun import BUILD_ROOT, run, sims_for
 
 import tbutil
@@ -408,7 +408,7 @@ async def _expired_within(tb, cycles: int) -> int:
 
 @cocotb.test()
 async def the_armed_watchdog_cannot_be_disabled_lengthened_or_fed_by_any_write(dut):
-    """Issue 17: the watchdog was off at reset, firmware could write it back to 0,
+    """The watchdog was off at reset, firmware could write it back to 0,
     any write kicked it and firmware could clear its latch.  Now: unarmed it
     does nothing; armed (ARM_KEY) it stays armed, WDOG_LOAD is frozen, only
     KICK_A then KICK_B feed it, anything else on WDOG_KICK expires it at once,

@@ -9,7 +9,7 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Timer
 
-from torqueloop.models.sync import Sync2ffModel
+from torqueloop.oracles.sync import Sync2ffModel
 from torqueloop.flow.simrun import run, sims_for
 
 

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 """uart (top: rx, tx, FIFOs, flow control) against cocotbext-uart, an
-independent bus model, and the reference model in torqueloop/models/uart.py.
+independent bus model, and the reference model in torqueloop/oracles/uart.py.
 
 Fast links (16-100 clocks per bit) keep simulated time short; one case runs
 the real setting (50 MHz, baud_div = 0 -> 115200).  Random bytes and the
@@ -18,7 +18,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, Timer, ValueChange, with_t
 from cocotb.utils import get_sim_time
 from cocotbext.uart import UartSink, UartSource
 
-from torqueloop.models.uart import (
+from torqueloop.oracles.uart import (
     LineDecoder,
     RxFifoModel,
     UartParams,

@@ -3,7 +3,7 @@
 
 Nobody here can run Quartus, so the patterns that work in Icarus, Verilator
 and Yosys but are not what Intel documents for Quartus are refused before
-they land (issue 19; Intel, "Quartus Prime Standard Edition User Guide:
+they land (Intel, "Quartus Prime Standard Edition User Guide:
 Design Recommendations", chapter Recommended HDL Coding Styles):
 
 * include: a file that uses the register map's `TL_* names includes

@@ -2,7 +2,7 @@
 """The layers of the Python side and the one direction their imports may go.
 
     spec                               the single sources, one definition of each equation
-    host   models   sim_models   flow  the lab tool | core models | the plant | EDA flows
+    host   oracles  sim_models   flow  the lab tool | core oracles | the plant | EDA flows
     sim                                co-simulation, simulated boards, the experiment
     characterize                       the characterisation method and its bench
     cli                                the ``torqueloop`` command (the application)
@@ -31,14 +31,14 @@ from torqueloop.spec.repo import REPO_ROOT
 ALLOWED: dict[str, frozenset[str]] = {
     "torqueloop.spec": frozenset(),
     "torqueloop.host": frozenset({"torqueloop.spec"}),
-    "torqueloop.models": frozenset({"torqueloop.spec"}),
+    "torqueloop.oracles": frozenset({"torqueloop.spec"}),
     "sim_models": frozenset({"torqueloop.spec"}),
     "torqueloop.flow": frozenset({"torqueloop.spec"}),
-    "torqueloop.sim": frozenset({"torqueloop.spec", "torqueloop.host", "torqueloop.models", "sim_models",
+    "torqueloop.sim": frozenset({"torqueloop.spec", "torqueloop.host", "torqueloop.oracles", "sim_models",
                                  "torqueloop.flow"}),
-    "torqueloop.characterize": frozenset({"torqueloop.spec", "torqueloop.host", "torqueloop.models",
+    "torqueloop.characterize": frozenset({"torqueloop.spec", "torqueloop.host", "torqueloop.oracles",
                                           "sim_models", "torqueloop.flow", "torqueloop.sim"}),
-    "torqueloop.cli": frozenset({"torqueloop.spec", "torqueloop.host", "torqueloop.models", "sim_models",
+    "torqueloop.cli": frozenset({"torqueloop.spec", "torqueloop.host", "torqueloop.oracles", "sim_models",
                                  "torqueloop.flow", "torqueloop.sim", "torqueloop.characterize"}),
 }
 #: modules outside every layer that any module may import

@@ -13,7 +13,7 @@ or PID and the Table 1 gains, for T seconds (the paper's 40 s):
   path, then the law and gains), closing the loop only through its pins with
   a plant it does not know (``lab``) (:mod:`.pins`);
 * **fast path** (:func:`run_fast`): the same board settings and plant with the
-  firmware's law in Python (torqueloop/models/servo.py, the oracle of
+  firmware's law in Python (torqueloop/oracles/servo.py, the oracle of
   control.c) and the PWM block's event model; checked against the RTL arm
   law by law (the implementation check) before the variants and the
   frequency sweep run on it.
@@ -370,10 +370,10 @@ def run_paper_model(cfg: ExperimentConfig) -> ModelRun:
 
 def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
     """The fast path: the board's settings (``cfg.board()``) and plant with
-    the *firmware's* law in Python (torqueloop/models/servo.py, the oracle of
+    the *firmware's* law in Python (torqueloop/oracles/servo.py, the oracle of
     firmware/servo/control.c: fixed point, anti-windup, deadband, dead-zone
     compensation by the PWM block) and the PWM block's event model
-    (torqueloop.models.pwm_schedule).  No RTL, CPU or pins: between this and
+    (torqueloop.oracles.pwm_schedule).  No RTL, CPU or pins: between this and
     the RTL arm the difference is the implementation (the implementation
     check); copper loss and current ripple come from the plant's exact
     current integrals.  ``carrier_start_clk``: per axis, the clock of the
@@ -381,8 +381,8 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
     ``carrier_start_clk``, for the implementation check); by default a
     period starts at the sample, before its command is loaded, so the step
     drives one carrier period later (the latest the board can)."""
-    from torqueloop.models.pwm_schedule import PwmChannel, PwmSetting, run_until
-    from torqueloop.models.servo import Axis, AxisParams
+    from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, run_until
+    from torqueloop.oracles.servo import Axis, AxisParams
     from torqueloop.spec.bridge import BRAKE, COAST
     params = cfg.plant_params()
     plant = TwoAxisPlant(params, seed=0, energy=True)
@@ -427,7 +427,7 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
     return ModelRun(traj, time.monotonic() - w0,
                     {"arm": "fast path", "plant": cfg.plant, "law": cfg.law, "board": list(board),
                      "carrier_start_clk": starts,
-                     "pwm_hz": list(cfg.pwm_hz_actual), "implementation": "torqueloop.models.servo (firmware law)"},
+                     "pwm_hz": list(cfg.pwm_hz_actual), "implementation": "torqueloop.oracles.servo (firmware law)"},
                     tuple(a.resistance_ohm for a in params.axes))
 
 

@@ -15,7 +15,7 @@ position x_k from the encoder count (8400 counts per screw turn),
 speed v_k = a (x_k - x_{k-1}) / T_s + (1 - a) v_{k-1} (filtered Euler),
 tau = K_p e + K_d (-v) + K_i sum(e T_s), the 10-bit command of eq. (23)-(25)
 with saturation eq (19) (torqueloop.spec.pwm.command_for), and the board's
-PWM block (torqueloop.models.pwm_schedule: the divisor of eq. 4 for each
+PWM block (torqueloop.oracles.pwm_schedule: the divisor of eq. 4 for each
 carrier, dead-zone compensation eq (1) with PW0, double buffering), the
 one event-level model of the PWM that every simulation without the RTL uses.  The integral has the
 firmware's anti-windup (held while the output saturates in the error's
@@ -33,7 +33,7 @@ import numpy as np
 
 from sim_models.params import PlantParams, load_params
 from sim_models.stepper import TwoAxisPlant
-from torqueloop.models.pwm_schedule import PwmChannel, PwmSetting, run_until
+from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, run_until
 from torqueloop.spec.bridge import BRAKE, COAST
 from torqueloop.spec.pwm import command_for, divider_for, duty_ticks, full_scale
 from torqueloop.spec.system import SYSTEM, Gains

@@ -7,7 +7,7 @@ is created, from fixed paths in the build folder, so a new firmware image
 needs no rebuild.  The build is skipped when the sources, the harness and the
 flags are unchanged (a hash stamp), and serialised with a file lock so
 parallel runs never load a half-built library.  :data:`DEFAULT` is the build
-every run uses; :data:`BASELINE` is the build before issue 16, which
+every run uses; :data:`BASELINE` is the portable baseline build, which
 scripts/benches/bench_rtl_loop.py measures side by side with it.
 """
 
@@ -88,7 +88,7 @@ class Variant:
 
 #: The co-simulation build.
 DEFAULT = Variant("fast")
-#: The build before issue 16, kept for the side-by-side comparison of
+#: The build before the speed work, kept for the side-by-side comparison of
 #: scripts/benches/bench_rtl_loop.py: g++, two evaluations per clock through
 #: eval(), and -CFLAGS -O2, which overrode OPT_FAST's -O3 on the compiler line
 #: (the model really ran at -O2).

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 """The RTL board image as a :class:`~torqueloop.sim.simboard.BytePipe`, so
-``torqueloop sim --rtl`` serves the co-simulated SoC (issue 7,
+``torqueloop sim --rtl`` serves the co-simulated SoC (
 torqueloop/sim: the Verilator model of the whole board image running the
 real servo firmware, the plant closing the loop through its pins) on the
 same TCP port as the firmware-in-the-loop board.

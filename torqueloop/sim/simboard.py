@@ -7,7 +7,7 @@ Firmware-in-the-loop, not RTL-in-the-loop: servo.c, tl_link.c and control.c
 the HAL in ``simboard_hal.c``; the FPGA blocks around them are modelled at
 the level their reference models define:
 
-- PWM (freq_div + pwm_torque): ``torqueloop.models.pwm_schedule``, the one
+- PWM (freq_div + pwm_torque): ``torqueloop.oracles.pwm_schedule``, the one
   event-level model of the PWM block (carrier of FDIV x 1023 clocks, eq. 1
   duty, double buffering, brake in the off phase, the BRAKE parameter's
   safe state while disabled);
@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Protocol
 
 from torqueloop.flow.firmware import AUTH_SOURCES
-from torqueloop.models.pwm_schedule import PwmChannel, PwmSetting, run_until
+from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, run_until
 from torqueloop.spec import auth
 from torqueloop.spec.bridge import BRAKE, COAST
 from torqueloop.spec.system import SYSTEM
@@ -240,7 +240,7 @@ class SimBoard:
 
     def _load_drives(self) -> None:
         """What the firmware last wrote to each axis's PWM registers, as the
-        PWM block takes it (torqueloop.models.pwm_schedule)."""
+        PWM block takes it (torqueloop.oracles.pwm_schedule)."""
         for a, ch in enumerate(self._pwm):
             d = self.drive(a)
             cmd = d["cmd"] if d["on"] else 0

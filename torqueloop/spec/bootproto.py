@@ -42,7 +42,7 @@ WDOG_MS = 100
 
 # ROM layout: bootloader code, then the factory descriptor and image; the key
 # slot takes the last auth.KEY_SLOT_BYTES of the ROM.
-BOOT_CODE_BYTES = 0x1400                 # 5 KiB: HMAC-SHA-256 (issue 18) and the watchdog (issue 17)
+BOOT_CODE_BYTES = 0x1400                 # 5 KiB: HMAC-SHA-256 and the watchdog
 FACTORY_MAGIC = 0x57464C54               # 'TLFW' little-endian
 FACTORY_DESC_FMT = "<IIII"               # magic, length, CRC-32, load address
 FACTORY_OFS = BOOT_CODE_BYTES

@@ -4,7 +4,7 @@ numbers docs/freq_div.md quotes and the characterisation flow relies on."""
 
 import pytest
 
-from torqueloop.models.freq_div import (FreqDivModel, FreqDivParams, carrier_hz, count_max,
+from torqueloop.oracles.freq_div import (FreqDivModel, FreqDivParams, carrier_hz, count_max,
                                      frequency_error, tick_hz)
 
 

@@ -7,7 +7,7 @@ import random
 
 import pytest
 
-from torqueloop.models.uart import (
+from torqueloop.oracles.uart import (
     LineDecoder,
     RxFifoModel,
     UartParams,

@@ -8,7 +8,7 @@ import random
 import numpy as np
 import pytest
 
-from torqueloop.models.pwm_torque import (PwmInputs, PwmTorqueModel, full_scale, map_direction,
+from torqueloop.oracles.pwm_torque import (PwmInputs, PwmTorqueModel, full_scale, map_direction,
                                        map_duty)
 
 

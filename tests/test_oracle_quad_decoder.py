@@ -8,7 +8,7 @@ import random
 
 import pytest
 
-from torqueloop.models.quad_decoder import (
+from torqueloop.oracles.quad_decoder import (
     COUNTS_PER_MOTOR_REV,
     COUNTS_PER_SCREW_REV,
     GRAY_UP,
