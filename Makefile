@@ -22,7 +22,7 @@ export TORQUELOOP_SIM := $(SIM)
 PYTEST_K := $(if $(TB),-k "$(TB)",)
 XDIST    := $(if $(filter 1,$(JOBS)),,-n $(JOBS))
 
-.PHONY: help setup sim lint test unit synth run bench characterize quartus firmware board-sim board-sim-rtl clean
+.PHONY: help setup sim lint test unit synth run bench characterize quartus firmware board-sim board-sim-rtl clean test-durations
 
 help: ## this list
 	@grep -hE '^[a-z][a-zA-Z_-]*:.*## ' $(MAKEFILE_LIST) | \
@@ -53,6 +53,9 @@ unit: $(STAMP) ## Python unit tests (plant, reference models, tools)
 test: $(STAMP) ## lint + sim + unit: what CI runs
 	$(MAKE) --no-print-directory lint
 	$(PY) -m pytest tb tests $(PYTEST_K) $(XDIST)
+
+test-durations: $(STAMP) ## fold the last test run's wall times into tests/durations.json (the longest tests start first)
+	$(PY) scripts/test_durations.py
 
 synth: $(STAMP) ## Yosys synth_intel_alm (Cyclone V): per-core table in build/synth/, then the board top against the 5CEBA4
 	$(PY) scripts/synth.py
