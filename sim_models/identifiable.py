@@ -23,6 +23,20 @@ deflection rates, which are zero, so b = 0 for every plant this project
 models: the viscous term is reported (as 0) so that an identification that
 finds one can be compared.
 
+The dead zone is read at a carrier f: a rotor at rest breaks away when the
+torque at the peak of the armature current's ripple exceeds its static
+friction and load, so at a finite carrier the breakaway duty is below the
+averaged V_break / V_s.  The current's periodic steady state at standstill
+is piecewise exponential (on: V_s - V_b across R and L; off, the IBT-2's
+brake: -V_b, the current stopping at zero when it reaches it, the
+discontinuous conduction of axis.py), so the peak has a closed form per
+duty and the breakaway duty is found by bisection.  This holds while the
+rotor, once broken away, keeps moving: at carriers well above the
+mechanical response (above about 5 kHz here); at low carriers the rotor
+breaks away and sticks again within each period, and what counts as
+"moves" is then the threshold of the test (the characterisation's
+business, not this closed form's).
+
 The friction at the motor shaft T_f collects the rotor's Coulomb friction
 and the table's friction and gravity reflected through the screw (R_n) and
 the gear: a load the motor drives costs T_out / (xi G) (efficiency xi); a
@@ -87,8 +101,39 @@ def rigid_inertia_at_motor(c: AxisConsts) -> float:
     return float(j[0] + behind / (c.xi * c.G**2))
 
 
-def identifiable(a: AxisParams, bridge: BridgeParams) -> Identifiable:
-    """The closed form above for one axis."""
+def peak_current(c: AxisConsts, supply_v: float, duty: float, carrier_hz: float) -> float:
+    """The largest armature current of a stalled rotor's periodic steady state
+    at ``duty`` (fraction) and ``carrier_hz`` (the module docstring)."""
+    tau_e = c.L / c.R
+    t_on, t_off = duty / carrier_hz, (1.0 - duty) / carrier_hz
+    i_on, i_b = (supply_v - c.vb) / c.R, c.vb / c.R
+    a_on, a_off = math.exp(-t_on / tau_e), math.exp(-t_off / tau_e)
+    # continuous conduction: i_min = (i_max + i_b) a_off - i_b, i_max = i_on + (i_min - i_on) a_on
+    i_min = ((i_on * (1 - a_on) + i_b) * a_off - i_b) / (1 - a_on * a_off)
+    if i_min < 0:                     # the current reaches zero in the off-phase: each period starts from 0
+        i_min = 0.0
+    return i_on + (i_min - i_on) * a_on
+
+
+def breakaway_duty(c: AxisConsts, supply_v: float, hold_n_m: float, carrier_hz: float | None) -> float:
+    """Smallest duty (fraction) whose peak torque k_t i exceeds ``hold_n_m``
+    (None: the averaged model, V_b + R T / k_t over V_s)."""
+    if hold_n_m <= 0:
+        return 0.0
+    if carrier_hz is None:
+        return min(1.0, (c.vb + c.R * hold_n_m / c.kt) / supply_v)
+    lo, hi = 0.0, 1.0
+    if c.kt * peak_current(c, supply_v, hi, carrier_hz) <= hold_n_m:
+        return 1.0
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        lo, hi = (lo, mid) if c.kt * peak_current(c, supply_v, mid, carrier_hz) > hold_n_m else (mid, hi)
+    return hi
+
+
+def identifiable(a: AxisParams, bridge: BridgeParams, carrier_hz: float | None = None) -> Identifiable:
+    """The closed form above for one axis; the dead zone at ``carrier_hz``
+    (None: the averaged model, an infinitely fast carrier)."""
     c = AxisConsts.build(a, bridge)
     b = 0.0
     k_gain = c.kt / (c.kt * c.ke + c.R * b)
@@ -101,15 +146,15 @@ def identifiable(a: AxisParams, bridge: BridgeParams) -> Identifiable:
     # breakaway from rest: the rotor's static friction (the table's static limit is its Coulomb force)
     s_pos = max(c.ts_m, c.tc_m) + _motor_load(c, +1, c.fc)
     s_neg = -max(c.ts_m, c.tc_m) + _motor_load(c, -1, c.fc)
-    v_break_pos = c.vb * math.copysign(1.0, s_pos) + c.R * s_pos / c.kt
-    v_break_neg = -(c.vb * math.copysign(1.0, s_neg) + c.R * s_neg / c.kt)
+    dz_pos = breakaway_duty(c, bridge.supply_V, s_pos, carrier_hz)
+    dz_neg = breakaway_duty(c, bridge.supply_V, -s_neg, carrier_hz)
     return Identifiable(
         speed_gain_rad_per_s_per_v=k_gain,
         time_constant_s=tau,
         friction_v_pos=vf_pos,
         friction_v_neg=vf_neg,
-        dead_zone_pos_pct=100.0 * max(v_break_pos, 0.0) / bridge.supply_V,
-        dead_zone_neg_pct=100.0 * max(v_break_neg, 0.0) / bridge.supply_V,
+        dead_zone_pos_pct=100.0 * dz_pos,
+        dead_zone_neg_pct=100.0 * dz_neg,
         back_emf_v_s_per_rad=c.ke,
         inertia_at_motor_kg_m2=rigid_inertia_at_motor(c),
         coulomb_pos_n_m=t_pos,
@@ -118,6 +163,6 @@ def identifiable(a: AxisParams, bridge: BridgeParams) -> Identifiable:
     )
 
 
-def identifiable_plant(p: PlantParams) -> dict[str, Identifiable]:
+def identifiable_plant(p: PlantParams, carrier_hz: float | None = None) -> dict[str, Identifiable]:
     """Both axes, by the plant file's axis names."""
-    return {name: identifiable(a, p.bridge) for name, a in zip(AXIS_NAMES, p.axes)}
+    return {name: identifiable(a, p.bridge, carrier_hz) for name, a in zip(AXIS_NAMES, p.axes)}

@@ -29,6 +29,7 @@ from pathlib import Path
 
 from sim_models.identifiable import identifiable_plant
 from sim_models.params import PlantParamError, PlantParams, params_from_dict, read_toml
+from torqueloop.spec.system import SYSTEM
 
 FORMAT = 1
 #: sections of the file that are not plant parameters
@@ -57,8 +58,10 @@ def _fields(obj: object) -> dict[str, object]:
     return {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)}
 
 
-def export_text(p: PlantParams, source: str, description: str = "") -> str:
-    """The plant file of ``p`` (``source``: the variant name or file it came from)."""
+def export_text(p: PlantParams, source: str, description: str = "",
+                carrier_hz: float = SYSTEM.working_hz) -> str:
+    """The plant file of ``p`` (``source``: the variant name or file it came
+    from); the identifiable dead zones at ``carrier_hz``."""
     lines = ["# torqueloop plant file: SI units, each key names its unit (docs/plant.md, 'The plant file').",
              "# [identifiable.*] is what an encoder-only identification can see; it is not read back as a plant.",
              ""]
@@ -67,8 +70,8 @@ def export_text(p: PlantParams, source: str, description: str = "") -> str:
     lines += _section("encoder", _fields(p.encoder))
     for i, a in enumerate(p.axes, start=1):
         lines += _section(f"axis{i}", _fields(a))
-    for axis, ident in identifiable_plant(p).items():
-        lines += _section(f"{IDENTIFIABLE}.{axis}", ident.as_dict())
+    for axis, ident in identifiable_plant(p, carrier_hz).items():
+        lines += _section(f"{IDENTIFIABLE}.{axis}", {"carrier_hz": float(carrier_hz), **ident.as_dict()})
     return "\n".join(lines)
 
 

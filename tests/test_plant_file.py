@@ -86,3 +86,26 @@ def test_the_dead_zone_is_where_the_rotor_breaks_away(axis, name, sign):
         assert (abs(w) > 1.0) == moves, (name, sign, factor, w)
         if moves:
             assert math.copysign(1, w) == sign
+
+
+@pytest.mark.parametrize("sign", [+1, -1])
+def test_the_dead_zone_at_a_carrier_is_where_the_pwm_driven_rotor_breaks_away(sign):
+    """At 20 kHz the ripple's peak breaks the rotor away below the averaged
+    breakaway; the closed form (peak of the periodic current) against the
+    stepper switching the bridge pins as pwm_torque does (on: the drive,
+    off: both low sides, the IBT-2's brake)."""
+    from sim_models.bridge import BRAKE
+    from torqueloop.spec.bridge import on_pins
+    p = load_variant("lab")
+    f = 20_000.0
+    dz = identifiable_plant(p, f)["x"]
+    dz = dz.dead_zone_pos_pct if sign > 0 else dz.dead_zone_neg_pct
+    assert dz < identifiable_plant(p)["x"].dead_zone_pos_pct - 0.5     # the ripple matters at 20 kHz
+    for factor, moves in ((0.98, False), (1.02, True)):
+        plant = TwoAxisPlant(p, seed=0)
+        t_on = factor * dz / 100 / f
+        for _ in range(round(0.05 * f)):
+            plant.advance(t_on, (on_pins(sign), BRAKE))
+            plant.advance(1 / f - t_on, (BRAKE, BRAKE))
+        w = plant.motor_speed(0)
+        assert (abs(w) > 1.0) == moves, (factor, w)
