@@ -39,13 +39,7 @@ from torqueloop.spec import protocol as P
 
 from .transport import Link, LinkInfo
 
-READ_ONLY = frozenset({"IDENTIFY", "GET_PARAM", "STATUS", "COUNTERS"})
-#: a lost reply to these is harmless to repeat with a fresh seq
-REPEATABLE = READ_ONLY | {"HEARTBEAT"}
 AUTH_STATUSES = frozenset({P.STATUS["AUTH"], P.STATUS["NO_SESSION"], P.STATUS["NO_KEY"]})
-#: sent without a MAC even with a key: reads and the telemetry rate (a MAC costs the board's
-#: main loop ~0.6 ms, which can delay a telemetry record at short control periods) and SESSION itself
-UNTAGGED = READ_ONLY | {"SESSION", "TELEMETRY"}
 FAULT_DESC: dict[str, str] = {f["name"]: f["desc"] for f in P.SPEC["fault"]}
 STATUS_DESC: dict[int, str] = {s["code"]: s["desc"] for s in P.SPEC["status"]}
 
@@ -310,7 +304,7 @@ class Client:
             raise self._key_missing(name)              # refused here: nothing is sent
         if not self._synced and name != "IDENTIFY":
             self.connect()
-        if self.key is None or name in UNTAGGED:   # here only commands that need no key
+        if self.key is None or P.COMMANDS[name].untagged:   # here only commands that need no key
             return self._transact(name, fields, None)
         try:
             return self._authenticated(name, fields)
@@ -351,7 +345,7 @@ class Client:
                 st = rep["status"]
             if st == P.STATUS["REPLAY"]:
                 # The first copy was accepted and executed; its reply was lost.
-                if name in REPEATABLE:
+                if P.COMMANDS[name].repeatable:
                     return self.transact(name, **fields)
                 if name == "SET_PARAM":
                     got = self.transact("GET_PARAM", axis=fields["axis"], param=fields["param"])

@@ -10,7 +10,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable
 
-from torqueloop.host.client import UNTAGGED
 from torqueloop.spec import auth
 from torqueloop.spec import protocol as tp
 
@@ -71,7 +70,7 @@ class Link:
         """Send a request without waiting; returns its seq."""
         seq = self.seq
         self.seq = (self.seq + 1) & 0xFFFF or 1
-        tagged = self.session is not None and name not in UNTAGGED
+        tagged = self.session is not None and not tp.COMMANDS[name].untagged
         self.send(self.session.request(name, seq, **fields) if tagged else tp.request(name, seq, **fields))
         return seq
 

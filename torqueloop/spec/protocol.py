@@ -33,6 +33,11 @@ class Command:
     feeds_link: bool = False    # executed with a new seq, it feeds the link watchdog
     auth: str = "key"                 # "key": needs a MAC (docs/security.md); "open": may come without
     open_when: dict = field(default_factory=dict)   # field -> value with which a "key" command is open
+    handler: str = ""           # the firmware function that runs it (firmware/servo/commands.c)
+    seq_checked: bool = True    # executed only with a new seq (False: accepted at any seq, which it leaves)
+    read_only: bool = False     # changes nothing on the board
+    repeatable: bool = False    # a lost reply: send it again with a fresh seq
+    untagged: bool = False      # the host sends it without a MAC even in a session
 
     @property
     def req_fmt(self) -> str:
@@ -102,12 +107,31 @@ FAULT: dict[str, int] = {f["name"]: 1 << f["bit"] for f in SPEC["fault"]}
 DIRECTIONAL_FAULTS: int = sum(1 << f["bit"] for f in SPEC["fault"] if f.get("blocks") == "direction")
 
 
+_COMMAND_KEYS = frozenset({"name", "cmd", "desc", "req", "rep", "feeds_link", "auth", "open_when", "handler",
+                           "seq", "read_only", "repeatable", "untagged"})
+
+
 def _command(c: dict) -> Command:
+    """One command's descriptor row; repeatable and untagged default to read_only."""
+    where = f"protocol.toml command {c.get('name', '?')}"
+    unknown = set(c) - _COMMAND_KEYS
+    if unknown:
+        raise ProtocolSpecError(f"{where}: unknown keys {sorted(unknown)}")
+    if c.get("seq", "checked") not in ("checked", "any"):
+        raise ProtocolSpecError(f"{where}: seq must be 'checked' or 'any'")
+    read_only = bool(c.get("read_only", False))
     cmd = Command(c["name"], c["cmd"], c["desc"], tuple(tuple(x) for x in c["req"]),
                   tuple(tuple(x) for x in c["rep"]), bool(c.get("feeds_link", False)), c.get("auth", ""),
-                  dict(c.get("open_when", {})))
+                  dict(c.get("open_when", {})), c.get("handler", ""), c.get("seq", "checked") == "checked",
+                  read_only, bool(c.get("repeatable", read_only)), bool(c.get("untagged", read_only)))
     if cmd.auth not in ("key", "open"):
-        raise ProtocolSpecError(f"protocol.toml command {cmd.name}: auth must be 'key' or 'open'")
+        raise ProtocolSpecError(f"{where}: auth must be 'key' or 'open'")
+    if not cmd.handler.startswith("cmd_") or not cmd.handler.isidentifier():
+        raise ProtocolSpecError(f"{where}: handler must name a C function cmd_*")
+    if cmd.untagged and cmd.auth == "key":
+        raise ProtocolSpecError(f"{where}: a command that needs the key cannot be untagged")
+    if cmd.read_only and cmd.feeds_link:
+        raise ProtocolSpecError(f"{where}: a read-only command does not show the host in control (feeds_link)")
     fields = dict(cmd.req)
     if cmd.open_when and (cmd.auth != "key" or any(fields.get(f) != "u8" for f in cmd.open_when)):
         raise ProtocolSpecError(f"protocol.toml command {cmd.name}: open_when names u8 request fields of a 'key' command")
@@ -119,6 +143,8 @@ class ProtocolSpecError(ValueError):
 
 
 COMMANDS: dict[str, Command] = {c["name"]: _command(c) for c in SPEC["command"]}
+if len({c.handler for c in COMMANDS.values()}) != len(COMMANDS):
+    raise ProtocolSpecError("protocol.toml: two commands name the same handler")
 #: MOVE mode bits
 MOVE_TRAPEZOID = 0x01
 MOVE_UNHOMED = 0x80
