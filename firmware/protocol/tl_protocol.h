@@ -34,6 +34,31 @@
 #define TLP_ST_AUTH 12u
 #define TLP_ST_NO_SESSION 13u
 #define TLP_ST_NO_KEY 14u
+/* the rule that refused a command: byte TLP_REPLY_WHY of its error reply */
+#define TLP_REPLY_WHY 1u
+#define TLP_WHY_NONE 0u
+#define TLP_WHY_AXIS 1u
+#define TLP_WHY_PARAM 2u
+#define TLP_WHY_SCOPE 3u
+#define TLP_WHY_CHOICE 4u
+#define TLP_WHY_BELOW_MIN 5u
+#define TLP_WHY_ABOVE_MAX 6u
+#define TLP_WHY_SOFT_ORDER 7u
+#define TLP_WHY_PW_ORDER 8u
+#define TLP_WHY_CARRIER 9u
+#define TLP_WHY_GAIN 10u
+#define TLP_WHY_TIGHTEN 11u
+#define TLP_WHY_OUTSIDE_SOFT 12u
+#define TLP_WHY_LIMIT 13u
+#define TLP_WHY_FOLLOW 14u
+#define TLP_WHY_DISABLED 15u
+#define TLP_WHY_HOMING 16u
+#define TLP_WHY_FAULT 17u
+#define TLP_WHY_ESTOP 18u
+#define TLP_WHY_FORCED 19u
+#define TLP_WHY_NO_SWITCHES 20u
+#define TLP_WHY_NOT_HOMED 21u
+#define TLP_WHY_CAUSE 22u
 
 #define TLP_FAULT_ESTOP 0x0001u
 #define TLP_FAULT_BRIDGE 0x0002u

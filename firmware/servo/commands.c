@@ -13,10 +13,11 @@
 
 /* A handler: q the request payload, rep the reply payload (rep[0], the status,
  * is written by dispatch); returns the status.  On TLP_ST_OK the reply is the
- * row's reply length, otherwise the status alone.  Compiled for size
+ * row's reply length; a refusal puts the rule into *why (TLP_WHY_*), and the
+ * reply is the status and the rule.  Compiled for size
  * (TL_FOR_SIZE) but MOVE, whose critical section is its own; the other
  * critical sections live in params.c, safety.c and homing.c, at -O2. */
-typedef uint8_t (*cmd_fn)(tl_servo_t *s, const uint8_t *q, uint8_t *rep);
+typedef uint8_t (*cmd_fn)(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why);
 
 typedef struct {
     cmd_fn fn;
@@ -25,7 +26,8 @@ typedef struct {
     uint8_t flags;   /* TLP_CF_* */
 } cmd_row_t;
 
-#define TL_CMD_DECLARE(code, fn, req_len, rep_len, flags) static uint8_t fn(tl_servo_t *s, const uint8_t *q, uint8_t *rep);
+#define TL_CMD_DECLARE(code, fn, req_len, rep_len, flags) \
+    static uint8_t fn(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why);
 TLP_COMMAND_TABLE(TL_CMD_DECLARE)
 #define TL_CMD_ROW(code, fn, req_len, rep_len, flags) [code] = {fn, req_len, rep_len, flags},
 static const cmd_row_t COMMANDS[TLP_CMD_LIMIT] = {TLP_COMMAND_TABLE(TL_CMD_ROW)};
@@ -38,8 +40,9 @@ static void sat_inc(uint16_t *c)
 
 /* ---- the commands ------------------------------------------------------- */
 
-TL_FOR_SIZE static uint8_t cmd_identify(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+TL_FOR_SIZE static uint8_t cmd_identify(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
+    (void)why;
     (void)q;
     rep[TLP_IDENTIFY_REP_PROTO_VERSION] = TLP_VERSION;
     tl_put_u16(&rep[TLP_IDENTIFY_REP_FW_VERSION], TLP_FIRMWARE_VERSION);
@@ -50,59 +53,65 @@ TL_FOR_SIZE static uint8_t cmd_identify(tl_servo_t *s, const uint8_t *q, uint8_t
     return TLP_ST_OK;
 }
 
-TL_FOR_SIZE static uint8_t cmd_get_param(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+TL_FOR_SIZE static uint8_t cmd_get_param(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
     int32_t v = 0;
-    uint8_t st = tl_param_get(s, q[TLP_GET_PARAM_REQ_AXIS], q[TLP_GET_PARAM_REQ_PARAM], &v);
+    uint8_t st = tl_param_get(s, q[TLP_GET_PARAM_REQ_AXIS], q[TLP_GET_PARAM_REQ_PARAM], &v, why);
     tl_put_u32(&rep[TLP_GET_PARAM_REP_VALUE], (uint32_t)v);
     return st;
 }
 
 /* The reply echoes the value stored (a physical gain reads back through its raw gain). */
-TL_FOR_SIZE static uint8_t cmd_set_param(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+TL_FOR_SIZE static uint8_t cmd_set_param(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
     uint8_t axis = q[TLP_SET_PARAM_REQ_AXIS], id = q[TLP_SET_PARAM_REQ_PARAM];
-    uint8_t st = tl_param_set(s, axis, id, (int32_t)tl_get_u32(&q[TLP_SET_PARAM_REQ_VALUE]));
+    uint8_t st = tl_param_set(s, axis, id, (int32_t)tl_get_u32(&q[TLP_SET_PARAM_REQ_VALUE]), why);
     int32_t v = 0;
     if (st == TLP_ST_OK)
-        (void)tl_param_get(s, axis, id, &v);
+        (void)tl_param_get(s, axis, id, &v, why);
     tl_put_u32(&rep[TLP_SET_PARAM_REP_VALUE], (uint32_t)v);
     return st;
 }
 
-TL_FOR_SIZE static uint8_t cmd_enable(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+TL_FOR_SIZE static uint8_t cmd_enable(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
     (void)rep;
     uint8_t mask = q[TLP_ENABLE_REQ_MASK], on = q[TLP_ENABLE_REQ_ENABLE];
-    if (!axis_mask_ok(mask) || on > 1u)
-        return TLP_ST_BAD_ARG;
+    if (!axis_mask_ok(mask))
+        return refuse(why, TLP_WHY_AXIS, TLP_ST_BAD_ARG);
+    if (on > 1u)
+        return refuse(why, TLP_WHY_CHOICE, TLP_ST_BAD_ARG);
     if (!on) {
         tl_axes_disable(s, mask);
         return TLP_ST_OK;
     }
-    return tl_axes_enable(s, mask);
+    return tl_axes_enable(s, mask, why);
 }
 
-static uint8_t cmd_move(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+static uint8_t cmd_move(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
     (void)rep;
     uint8_t axis = q[TLP_MOVE_REQ_AXIS], mode = q[TLP_MOVE_REQ_MODE];
     int32_t target = (int32_t)tl_get_u32(&q[TLP_MOVE_REQ_TARGET]);
-    if (axis >= TL_AXES || (mode & (uint8_t)~(TLP_MOVE_TRAPEZOID | TLP_MOVE_UNHOMED)))
-        return TLP_ST_BAD_ARG;
+    if (axis >= TL_AXES)
+        return refuse(why, TLP_WHY_AXIS, TLP_ST_BAD_ARG);
+    if (mode & (uint8_t)~(TLP_MOVE_TRAPEZOID | TLP_MOVE_UNHOMED))
+        return refuse(why, TLP_WHY_CHOICE, TLP_ST_BAD_ARG);
     tl_axis_t *a = &s->ax[axis];
-    if (!a->enabled || a->home == TLP_HOME_STATE_HOMING)
-        return TLP_ST_STATE;
+    if (!a->enabled)
+        return refuse(why, TLP_WHY_DISABLED, TLP_ST_STATE);
+    if (a->home == TLP_HOME_STATE_HOMING)
+        return refuse(why, TLP_WHY_HOMING, TLP_ST_STATE);
     if (a->home != TLP_HOME_STATE_HOMED && !(mode & TLP_MOVE_UNHOMED))
-        return TLP_ST_NOT_HOMED;
+        return refuse(why, TLP_WHY_NOT_HOMED, TLP_ST_NOT_HOMED);
     if (target < pv(a, TLP_P_SOFT_MIN) || target > pv(a, TLP_P_SOFT_MAX))
-        return TLP_ST_RANGE;
+        return refuse(why, TLP_WHY_OUTSIDE_SOFT, TLP_ST_RANGE);
     uint8_t b = tl_blocked(a);
     if (((b & TLP_LIMIT_NEG) && target < a->pos) || ((b & TLP_LIMIT_POS) && target > a->pos))
-        return TLP_ST_RANGE;
+        return refuse(why, TLP_WHY_LIMIT, TLP_ST_RANGE);
     int64_t d = (int64_t)target - a->pos;
     if (!(mode & TLP_MOVE_TRAPEZOID) && (d > pv(a, TLP_P_FOLLOW_LIMIT) || -d > pv(a, TLP_P_FOLLOW_LIMIT)))
-        return TLP_ST_RANGE;   /* a step that far would trip the following error at once */
+        return refuse(why, TLP_WHY_FOLLOW, TLP_ST_RANGE);   /* the following error would trip at once */
     hal_irq_off();
     tl_ctl_move(&a->c, target, (mode & TLP_MOVE_TRAPEZOID) != 0u);
     hal_irq_on();
@@ -110,12 +119,12 @@ static uint8_t cmd_move(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
 }
 
 /* Hold where they are (profile or homing abandoned); the axes stay enabled. */
-TL_FOR_SIZE static uint8_t cmd_stop(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+TL_FOR_SIZE static uint8_t cmd_stop(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
     (void)rep;
     uint8_t m = q[TLP_STOP_REQ_MASK];
     if (!axis_mask_ok(m))
-        return TLP_ST_BAD_ARG;
+        return refuse(why, TLP_WHY_AXIS, TLP_ST_BAD_ARG);
     hal_irq_off();
     for (uint32_t i = 0; i < TL_AXES; i++)
         if (m & (1u << i)) {
@@ -127,11 +136,11 @@ TL_FOR_SIZE static uint8_t cmd_stop(tl_servo_t *s, const uint8_t *q, uint8_t *re
     return TLP_ST_OK;
 }
 
-TL_FOR_SIZE static uint8_t cmd_status(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+TL_FOR_SIZE static uint8_t cmd_status(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
     uint8_t axis = q[TLP_STATUS_REQ_AXIS];
     if (axis >= TL_AXES)
-        return TLP_ST_BAD_ARG;
+        return refuse(why, TLP_WHY_AXIS, TLP_ST_BAD_ARG);
     const tl_axis_t *a = &s->ax[axis];
     rep[TLP_STATUS_REP_ENABLED] = a->enabled;
     tl_put_u16(&rep[TLP_STATUS_REP_FAULTS], a->faults);
@@ -150,8 +159,9 @@ TL_FOR_SIZE static uint8_t cmd_status(tl_servo_t *s, const uint8_t *q, uint8_t *
     return TLP_ST_OK;
 }
 
-TL_FOR_SIZE static uint8_t cmd_telemetry(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+TL_FOR_SIZE static uint8_t cmd_telemetry(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
+    (void)why;
     (void)rep;
     hal_irq_off();
     s->telem_every = tl_get_u16(&q[TLP_TELEMETRY_REQ_EVERY]);
@@ -160,30 +170,31 @@ TL_FOR_SIZE static uint8_t cmd_telemetry(tl_servo_t *s, const uint8_t *q, uint8_
     return TLP_ST_OK;
 }
 
-TL_FOR_SIZE static uint8_t cmd_clear_fault(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+TL_FOR_SIZE static uint8_t cmd_clear_fault(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
     uint8_t mask = q[TLP_CLEAR_FAULT_REQ_MASK];
     if (!axis_mask_ok(mask))
-        return TLP_ST_BAD_ARG;
-    uint8_t st = tl_axes_clear(s, mask);
+        return refuse(why, TLP_WHY_AXIS, TLP_ST_BAD_ARG);
+    uint8_t st = tl_axes_clear(s, mask, why);
     tl_put_u16(&rep[TLP_CLEAR_FAULT_REP_FAULTS0], s->ax[0].faults);
     tl_put_u16(&rep[TLP_CLEAR_FAULT_REP_FAULTS1], s->ax[1].faults);
     return st;
 }
 
 /* Both drives off; main.c jumps to the boot ROM once the reply is out. */
-TL_FOR_SIZE static uint8_t cmd_bootloader(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+TL_FOR_SIZE static uint8_t cmd_bootloader(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
     (void)rep;
     if (tl_get_u32(&q[TLP_BOOTLOADER_REQ_MAGIC]) != TLP_BOOTLOADER_MAGIC)
-        return TLP_ST_BAD_ARG;
+        return refuse(why, TLP_WHY_CHOICE, TLP_ST_BAD_ARG);
     tl_axes_disable(s, (uint8_t)((1u << TL_AXES) - 1u));
     s->bootloader_req = true;
     return TLP_ST_OK;
 }
 
-TL_FOR_SIZE static uint8_t cmd_counters(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+TL_FOR_SIZE static uint8_t cmd_counters(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
+    (void)why;
     (void)q;
     const uint16_t vals[10] = {s->cnt.frames_ok, s->cnt.crc, s->cnt.framing, s->cnt.length, s->cnt.oversize,
                                s->cnt.unknown, s->cnt.replay, s->cnt.rejected, s->cnt.tx_dropped, s->cnt.auth};
@@ -193,20 +204,21 @@ TL_FOR_SIZE static uint8_t cmd_counters(tl_servo_t *s, const uint8_t *q, uint8_t
 }
 
 /* Nothing but feeding the link watchdog (dispatch does that). */
-TL_FOR_SIZE static uint8_t cmd_heartbeat(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+TL_FOR_SIZE static uint8_t cmd_heartbeat(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
-    (void)s, (void)q, (void)rep;
+    (void)s, (void)q, (void)rep, (void)why;
     return TLP_ST_OK;
 }
 
-TL_FOR_SIZE static uint8_t cmd_home(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+TL_FOR_SIZE static uint8_t cmd_home(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
     (void)rep;
-    return tl_home_start(s, q[TLP_HOME_REQ_AXIS], q[TLP_HOME_REQ_MODE], q[TLP_HOME_REQ_INDEX]);
+    return tl_home_start(s, q[TLP_HOME_REQ_AXIS], q[TLP_HOME_REQ_MODE], q[TLP_HOME_REQ_INDEX], why);
 }
 
-TL_FOR_SIZE static uint8_t cmd_session(tl_servo_t *s, const uint8_t *q, uint8_t *rep)
+TL_FOR_SIZE static uint8_t cmd_session(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
 {
+    (void)why;   /* NO_KEY says it all */
     return tl_auth_session(&s->auth, &q[TLP_SESSION_REQ_HOST_NONCE], hal_cycles(), &rep[TLP_SESSION_REP_BOARD_NONCE],
                            &rep[TLP_SESSION_REP_PROOF]);
 }
@@ -274,11 +286,13 @@ TL_FOR_SIZE static void dispatch(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx
         return;
     }
     uint8_t rep[TLP_MAX_PAYLOAD];
-    st = c->fn(s, f->payload, rep);
+    uint8_t why = TLP_WHY_NONE;
+    st = c->fn(s, f->payload, rep, &why);
     uint8_t n = c->rep_len;
     if (st != TLP_ST_OK) {
         sat_inc(&s->cnt.rejected);
-        n = 1;
+        rep[TLP_REPLY_WHY] = why;
+        n = TLP_REPLY_WHY + 1u;
     } else if (tagged && (c->flags & TLP_CF_FEEDS_LINK)) {
         /* The host is in control: only a command that carried a verified MAC
          * feeds the watchdog (read-only commands never do, nor a STOP sent

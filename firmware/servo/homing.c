@@ -73,13 +73,15 @@ void tl_home_tick(tl_axis_t *a, uint32_t i, uint32_t now)
     tl_ctl_move(&a->c, (int32_t)(a->home_sp_q16 >> 16), false);
 }
 
-uint8_t tl_home_start(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index)
+uint8_t tl_home_start(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index, uint8_t *why)
 {
-    if (axis >= TL_AXES || mode > TLP_HOME_MODE_HERE || index > 1u)
-        return TLP_ST_BAD_ARG;
+    if (axis >= TL_AXES)
+        return refuse(why, TLP_WHY_AXIS, TLP_ST_BAD_ARG);
+    if (mode > TLP_HOME_MODE_HERE || index > 1u)
+        return refuse(why, TLP_WHY_CHOICE, TLP_ST_BAD_ARG);
     tl_axis_t *a = &s->ax[axis];
     if (a->home == TLP_HOME_STATE_HOMING)
-        return TLP_ST_STATE;
+        return refuse(why, TLP_WHY_HOMING, TLP_ST_STATE);
     hal_irq_off();
     if (mode == TLP_HOME_MODE_HERE) {
         tl_enc_sample_t e;
@@ -91,7 +93,8 @@ uint8_t tl_home_start(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index)
     }
     if (!a->enabled || a->faults || !pv(a, TLP_P_LIMIT_SW)) {
         hal_irq_on();
-        return TLP_ST_STATE;
+        return refuse(why, !a->enabled ? TLP_WHY_DISABLED : (a->faults ? TLP_WHY_FAULT : TLP_WHY_NO_SWITCHES),
+                      TLP_ST_STATE);
     }
     a->home = TLP_HOME_STATE_HOMING;
     a->home_phase = HOME_SEEK;

@@ -82,19 +82,28 @@ TL_FOR_SIZE void tl_params_sync(tl_servo_t *s)
     global_cfg(s->g, s->clk_hz, &s->period_cycles, &s->link_timeout_ticks);
 }
 
-TL_FOR_SIZE uint8_t tl_param_get(const tl_servo_t *s, uint8_t axis, uint8_t id, int32_t *out)
+/* The parameter's index, if id names one and axis addresses it (a global one with TLP_GLOBAL_AXIS). */
+static uint8_t param_slot(uint8_t axis, uint8_t id, int *k, uint8_t *why)
 {
-    int k = TLP_PARAM_INDEX[id];
-    if (k == IDX_NONE)
-        return TLP_ST_BAD_ARG;
+    *k = TLP_PARAM_INDEX[id];
+    if (*k == IDX_NONE)
+        return refuse(why, TLP_WHY_PARAM, TLP_ST_BAD_ARG);
+    if (TLP_PARAM_INFO[*k].global ? axis != TLP_GLOBAL_AXIS : axis >= TL_AXES)
+        return refuse(why, axis == TLP_GLOBAL_AXIS || TLP_PARAM_INFO[*k].global ? TLP_WHY_SCOPE : TLP_WHY_AXIS,
+                      TLP_ST_BAD_ARG);
+    return TLP_ST_OK;
+}
+
+TL_FOR_SIZE uint8_t tl_param_get(const tl_servo_t *s, uint8_t axis, uint8_t id, int32_t *out, uint8_t *why)
+{
+    int k;
+    uint8_t st = param_slot(axis, id, &k, why);
+    if (st != TLP_ST_OK)
+        return st;
     if (TLP_PARAM_INFO[k].global) {
-        if (axis != TLP_GLOBAL_AXIS)
-            return TLP_ST_BAD_ARG;
         *out = s->g[k];
         return TLP_ST_OK;
     }
-    if (axis >= TL_AXES)
-        return TLP_ST_BAD_ARG;
     const tl_axis_t *a = &s->ax[axis];
     int32_t tau = pv(a, TLP_P_TAU_MAX_MNM), cpr = pv(a, TLP_P_COUNTS_PER_REV);
     switch (id) {
@@ -122,46 +131,53 @@ static bool carrier_ok(const tl_servo_t *s, int32_t fdiv, int32_t max_hz)
     return (uint64_t)(uint32_t)fdiv * TL_PWM_FULL * (uint32_t)max_hz >= s->clk_hz;
 }
 
-/* Bounds between parameters and the tighten-only rule; TLP_ST_OK if v may be stored. */
-static uint8_t param_allowed(const tl_servo_t *s, uint8_t axis, uint8_t id, int k, int32_t v)
+/* The bound between parameters that v for axis parameter id keeps: TLP_WHY_NONE, or the rule it breaks. */
+static uint8_t axis_bound(const tl_servo_t *s, const tl_axis_t *a, uint8_t id, int32_t v)
 {
-    const tlp_param_info_t *info = &TLP_PARAM_INFO[k];
-    if (v < info->min || v > info->max)
-        return TLP_ST_RANGE;
-    if (info->tighten && tl_any_enabled(s)) {
-        int32_t cur = info->global ? s->g[k] : s->ax[axis].p[k];
-        if (info->tighten > 0 ? v < cur : v > cur)
-            return TLP_ST_LOOSEN;
-    }
-    if (info->global) {
-        if (id == TLP_P_PWM_MAX_HZ)
-            for (uint32_t i = 0; i < TL_AXES; i++)
-                if (!carrier_ok(s, pv(&s->ax[i], TLP_P_FDIV), v))
-                    return TLP_ST_RANGE;
-        return TLP_ST_OK;
-    }
-    const tl_axis_t *a = &s->ax[axis];
     int32_t tau = pv(a, TLP_P_TAU_MAX_MNM), cpr = pv(a, TLP_P_COUNTS_PER_REV);
     switch (id) {
-    case TLP_P_SOFT_MIN: return v > pv(a, TLP_P_SOFT_MAX) ? TLP_ST_RANGE : TLP_ST_OK;
-    case TLP_P_SOFT_MAX: return v < pv(a, TLP_P_SOFT_MIN) ? TLP_ST_RANGE : TLP_ST_OK;
-    case TLP_P_PW0: return v > pv(a, TLP_P_PWMAX) ? TLP_ST_RANGE : TLP_ST_OK;
-    case TLP_P_PWMAX: return v < pv(a, TLP_P_PW0) ? TLP_ST_RANGE : TLP_ST_OK;
-    case TLP_P_FDIV: return carrier_ok(s, v, gv(s, TLP_P_PWM_MAX_HZ)) ? TLP_ST_OK : TLP_ST_RANGE;
+    case TLP_P_SOFT_MIN: return v > pv(a, TLP_P_SOFT_MAX) ? TLP_WHY_SOFT_ORDER : TLP_WHY_NONE;
+    case TLP_P_SOFT_MAX: return v < pv(a, TLP_P_SOFT_MIN) ? TLP_WHY_SOFT_ORDER : TLP_WHY_NONE;
+    case TLP_P_PW0: return v > pv(a, TLP_P_PWMAX) ? TLP_WHY_PW_ORDER : TLP_WHY_NONE;
+    case TLP_P_PWMAX: return v < pv(a, TLP_P_PW0) ? TLP_WHY_PW_ORDER : TLP_WHY_NONE;
+    case TLP_P_FDIV: return carrier_ok(s, v, gv(s, TLP_P_PWM_MAX_HZ)) ? TLP_WHY_NONE : TLP_WHY_CARRIER;
     case TLP_P_KP_Q16:
     case TLP_P_KD_Q16:
-    case TLP_P_KI_Q16: return v <= raw_gain_max(tau, cpr) ? TLP_ST_OK : TLP_ST_RANGE;
+    case TLP_P_KI_Q16: return v <= raw_gain_max(tau, cpr) ? TLP_WHY_NONE : TLP_WHY_GAIN;
     case TLP_P_KP_UNM_RAD:
     case TLP_P_KD_UNMS_RAD:
     case TLP_P_KI_UNM_RADS: {
         /* a raw gain that saturated would read back as a smaller physical gain */
         int32_t raw = tl_gain_raw_from_phys(v, tau, cpr);
-        return (raw == 0x7FFFFFFF && tl_gain_phys_from_raw(raw, tau, cpr) < v) ? TLP_ST_RANGE : TLP_ST_OK;
+        return (raw == 0x7FFFFFFF && tl_gain_phys_from_raw(raw, tau, cpr) < v) ? TLP_WHY_GAIN : TLP_WHY_NONE;
     }
-    case TLP_P_TAU_MAX_MNM: return gains_fit(a, v, cpr) ? TLP_ST_OK : TLP_ST_RANGE;
-    case TLP_P_COUNTS_PER_REV: return gains_fit(a, tau, v) ? TLP_ST_OK : TLP_ST_RANGE;
-    default: return TLP_ST_OK;
+    case TLP_P_TAU_MAX_MNM: return gains_fit(a, v, cpr) ? TLP_WHY_NONE : TLP_WHY_GAIN;
+    case TLP_P_COUNTS_PER_REV: return gains_fit(a, tau, v) ? TLP_WHY_NONE : TLP_WHY_GAIN;
+    default: return TLP_WHY_NONE;
     }
+}
+
+/* The parameter's range, the tighten-only rule and the bounds between parameters;
+ * TLP_ST_OK if v may be stored. */
+static uint8_t param_allowed(const tl_servo_t *s, uint8_t axis, uint8_t id, int k, int32_t v, uint8_t *why)
+{
+    const tlp_param_info_t *info = &TLP_PARAM_INFO[k];
+    if (v < info->min || v > info->max)
+        return refuse(why, v < info->min ? TLP_WHY_BELOW_MIN : TLP_WHY_ABOVE_MAX, TLP_ST_RANGE);
+    if (info->tighten && tl_any_enabled(s)) {
+        int32_t cur = info->global ? s->g[k] : s->ax[axis].p[k];
+        if (info->tighten > 0 ? v < cur : v > cur)
+            return refuse(why, TLP_WHY_TIGHTEN, TLP_ST_LOOSEN);
+    }
+    if (info->global) {
+        if (id == TLP_P_PWM_MAX_HZ)
+            for (uint32_t i = 0; i < TL_AXES; i++)
+                if (!carrier_ok(s, pv(&s->ax[i], TLP_P_FDIV), v))
+                    return refuse(why, TLP_WHY_CARRIER, TLP_ST_RANGE);
+        return TLP_ST_OK;
+    }
+    uint8_t rule = axis_bound(s, &s->ax[axis], id, v);
+    return rule == TLP_WHY_NONE ? TLP_ST_OK : refuse(why, rule, TLP_ST_RANGE);
 }
 
 /* A global parameter: the new value into a copy, everything derived from it
@@ -216,16 +232,15 @@ static void set_axis(tl_servo_t *s, uint8_t axis, uint8_t id, int k, int32_t v)
     hal_irq_on();
 }
 
-uint8_t tl_param_set(tl_servo_t *s, uint8_t axis, uint8_t id, int32_t v)
+uint8_t tl_param_set(tl_servo_t *s, uint8_t axis, uint8_t id, int32_t v, uint8_t *why)
 {
-    int k = TLP_PARAM_INDEX[id];
-    if (k == IDX_NONE)
-        return TLP_ST_BAD_ARG;
+    int k;
+    uint8_t st = param_slot(axis, id, &k, why);
+    if (st != TLP_ST_OK)
+        return st;
     const tlp_param_info_t *info = &TLP_PARAM_INFO[k];
-    if ((info->global && axis != TLP_GLOBAL_AXIS) || (!info->global && axis >= TL_AXES))
-        return TLP_ST_BAD_ARG;
     hal_irq_off();
-    uint8_t st = param_allowed(s, axis, id, k, v);
+    st = param_allowed(s, axis, id, k, v, why);
     hal_irq_on();
     if (st != TLP_ST_OK)
         return st;

@@ -67,27 +67,27 @@ void tl_axes_disable(tl_servo_t *s, uint8_t mask)
 }
 
 /* May the axes in mask be enabled?  Acknowledges the SoC latch if so.  Interrupts off. */
-static uint8_t enable_allowed(tl_servo_t *s, uint8_t mask)
+static uint8_t enable_allowed(tl_servo_t *s, uint8_t mask, uint8_t *why)
 {
     uint32_t latched = tl_fold_latch(s);
     for (uint32_t i = 0; i < TL_AXES; i++)
         if ((mask & (1u << i)) && (s->ax[i].faults & (uint16_t)~TLP_FAULT_DIRECTIONAL))
-            return TLP_ST_STATE;
+            return refuse(why, TLP_WHY_FAULT, TLP_ST_STATE);
     if (hal_safety() & TL_HAL_SAFE_ESTOP_IN)
-        return TLP_ST_STATE;
+        return refuse(why, TLP_WHY_ESTOP, TLP_ST_STATE);
     /* The SoC latch (the reset-time ESTOP, or causes now recorded as faults) is
      * acknowledged here and by CLEAR_FAULT only. */
     hal_safety_ack(latched);
     if (hal_safety() & TL_HAL_SAFE_FORCED)
-        return TLP_ST_STATE;
+        return refuse(why, TLP_WHY_FORCED, TLP_ST_STATE);
     return TLP_ST_OK;
 }
 
 /* Enable the axes in mask (each holds where it is: no jump). */
-uint8_t tl_axes_enable(tl_servo_t *s, uint8_t mask)
+uint8_t tl_axes_enable(tl_servo_t *s, uint8_t mask, uint8_t *why)
 {
     hal_irq_off();
-    uint8_t st = enable_allowed(s, mask);
+    uint8_t st = enable_allowed(s, mask, why);
     if (st != TLP_ST_OK) {
         hal_irq_on();
         return st;
@@ -131,7 +131,7 @@ static uint16_t faults_present(const tl_axis_t *a, uint32_t i, uint32_t safety)
 }
 
 /* Clear the faults of the axes in mask whose cause is gone; TLP_ST_STATE if any is left. */
-uint8_t tl_axes_clear(tl_servo_t *s, uint8_t mask)
+uint8_t tl_axes_clear(tl_servo_t *s, uint8_t mask, uint8_t *why)
 {
     bool left = false;
     hal_irq_off();
@@ -152,5 +152,5 @@ uint8_t tl_axes_clear(tl_servo_t *s, uint8_t mask)
     if (!(safety & TL_HAL_SAFE_ESTOP_IN))
         hal_safety_ack(latched);
     hal_irq_on();
-    return left ? TLP_ST_STATE : TLP_ST_OK;
+    return left ? refuse(why, TLP_WHY_CAUSE, TLP_ST_STATE) : TLP_ST_OK;
 }

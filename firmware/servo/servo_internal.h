@@ -25,6 +25,13 @@ static inline int32_t wrap_add(int32_t x, int32_t y) { return (int32_t)((uint32_
 
 static inline bool axis_mask_ok(uint8_t m) { return m != 0u && (m & ~((1u << TL_AXES) - 1u)) == 0u; }
 
+/* A refusal: the rule (TLP_WHY_*, the reply's second byte) into *why, the status returned. */
+static inline uint8_t refuse(uint8_t *why, uint8_t rule, uint8_t status)
+{
+    *why = rule;
+    return status;
+}
+
 /* ---- params.c ---- */
 
 /* What an axis's parameters and the period give the control iteration. */
@@ -38,9 +45,10 @@ typedef struct {
 /* Every parameter's default, then what they give the iteration (start-up). */
 void tl_params_defaults(tl_servo_t *s);
 void tl_params_sync(tl_servo_t *s);
-uint8_t tl_param_get(const tl_servo_t *s, uint8_t axis, uint8_t id, int32_t *out);
-/* Store v if every rule allows it (TLP_ST_OK), else the status that refused it. */
-uint8_t tl_param_set(tl_servo_t *s, uint8_t axis, uint8_t id, int32_t v);
+/* The functions that may refuse return the status and put the rule (TLP_WHY_*) into *why. */
+uint8_t tl_param_get(const tl_servo_t *s, uint8_t axis, uint8_t id, int32_t *out, uint8_t *why);
+/* Store v if every rule allows it. */
+uint8_t tl_param_set(tl_servo_t *s, uint8_t axis, uint8_t id, int32_t v, uint8_t *why);
 
 /* ---- safety.c ---- */
 
@@ -48,15 +56,15 @@ void tl_axis_disable(tl_servo_t *s, uint32_t i);
 uint32_t tl_fold_latch(tl_servo_t *s);
 bool tl_any_enabled(const tl_servo_t *s);
 uint8_t tl_blocked(const tl_axis_t *a);
-uint8_t tl_axes_enable(tl_servo_t *s, uint8_t mask);
+uint8_t tl_axes_enable(tl_servo_t *s, uint8_t mask, uint8_t *why);
 void tl_axes_disable(tl_servo_t *s, uint8_t mask);
-uint8_t tl_axes_clear(tl_servo_t *s, uint8_t mask);
+uint8_t tl_axes_clear(tl_servo_t *s, uint8_t mask, uint8_t *why);
 
 /* ---- homing.c ---- */
 
 /* The final approach runs at HOME_VEL >> HOME_SLOW_SHIFT (homing.c). */
 #define HOME_SLOW_SHIFT 4
 void tl_home_tick(tl_axis_t *a, uint32_t i, uint32_t now);
-uint8_t tl_home_start(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index);
+uint8_t tl_home_start(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index, uint8_t *why);
 
 #endif

@@ -38,6 +38,10 @@ def c_header() -> str:
           f"#define TLP_MAX_WIRE {P.MAX_ENCODED + 2}u  /* 0x00 COBS 0x00 */", ""]
     for n, v in P.STATUS.items():
         L.append(f"#define TLP_ST_{n} {v}u")
+    L.append("/* the rule that refused a command: byte TLP_REPLY_WHY of its error reply */")
+    L.append("#define TLP_REPLY_WHY 1u")
+    for n, v in P.REFUSAL.items():
+        L.append(f"#define TLP_WHY_{n} {v}u")
     L.append("")
     for n, v in P.FAULT.items():
         L.append(f"#define TLP_FAULT_{n} 0x{v:04X}u")
@@ -194,6 +198,13 @@ def markdown() -> str:
          "## Status codes", "", "| code | name | meaning |", "|---|---|---|"]
     for s in P.SPEC["status"]:
         L.append(f"| {s['code']} | {s['name']} | {s['desc']} |")
+    L += ["", "## Refusals", "",
+          "A command its handler refuses is answered with two bytes: the status and `why`, the rule that "
+          "refused it (the host tool prints it). A frame refused before its command ran (length, key, seq, "
+          "MAC) gets the status alone.", "",
+          "| why | name | status | rule |", "|---|---|---|---|"]
+    for r in P.SPEC["refusal"]:
+        L.append(f"| {r['code']} | {r['name']} | {r.get('status', '')} | {r['desc']} |")
     L += ["", "## Fault flags (per axis, u16, latched)", "",
           "Each fault disables the axis when it trips. *blocks*: `enable` - the axis stays disabled until "
           "CLEAR_FAULT (refused while the cause is present); `direction` - the axis may be enabled again, "

@@ -87,13 +87,25 @@ class BoardHasNoKey(ProtocolError):
 
 
 class CommandRejected(ProtocolError):
-    def __init__(self, command: str, status: int, detail: str = "") -> None:
-        self.command, self.status = command, status
+    """The board refused a command: ``status``, and ``why``, the rule that
+    refused it (protocol.toml [[refusal]]), which the message names."""
+
+    def __init__(self, command: str, status: int, detail: str = "", why: int = P.REFUSAL["NONE"]) -> None:
+        self.command, self.status, self.why = command, status, why
         name = P.STATUS_NAME.get(status, f"status {status}")
-        msg = f"{command} refused: {name} ({STATUS_DESC.get(status, 'unknown status')})"
+        if why != P.REFUSAL["NONE"]:
+            rule = P.REFUSAL_NAME.get(why, f"rule {why}")
+            msg = f"{command} refused: {name}, {rule}: {P.REFUSAL_DESC.get(why, 'unknown rule')}"
+        else:
+            msg = f"{command} refused: {name} ({STATUS_DESC.get(status, 'unknown status')})"
         if name == "LOOSEN":
             msg += " - `torqueloop disable --all`, change it, enable again"
         super().__init__(msg + (f" {detail}" if detail else ""))
+
+    @property
+    def rule(self) -> str:
+        """The refusal's rule by name (NONE: the board named none)."""
+        return P.REFUSAL_NAME.get(self.why, "NONE")
 
 
 @dataclass
@@ -406,7 +418,7 @@ class Client:
                 raise ReplyLost(f"{name} (seq {seq}) reached the board but its reply was lost twice; "
                                 "it ran at most once - check `torqueloop status` before repeating it")
         if st != P.STATUS["OK"]:
-            raise CommandRejected(name, st)
+            raise CommandRejected(name, st, why=rep["why"])
         return rep
 
     # ---- commands ---------------------------------------------------------------
@@ -435,8 +447,8 @@ class Client:
     def set_param(self, name: str, value: int, axis: int = 0) -> int:
         p = P.PARAMS[name]
         if not p.min <= value <= p.max:
-            raise CommandRejected("SET_PARAM", P.STATUS["RANGE"],
-                                  f"{name} = {value} is outside [{p.min}, {p.max}]")
+            raise CommandRejected("SET_PARAM", P.STATUS["RANGE"], f"({name} = {value} is outside [{p.min}, {p.max}]; "
+                                  "checked before sending)", why=P.REFUSAL["BELOW_MIN" if value < p.min else "ABOVE_MAX"])
         ax = P.GLOBAL_AXIS if p.scope == "global" else axis
         return self.transact("SET_PARAM", axis=ax, param=p.id, value=value)["value"]
 
@@ -444,11 +456,11 @@ class Client:
         try:
             self.transact("ENABLE", mask=mask, enable=int(on))
         except CommandRejected as e:
-            if e.status == P.STATUS["STATE"]:
+            if e.why == P.REFUSAL["FAULT"]:
                 faults = [self.status(a)["faults"] for a in range(P.AXIS_COUNT) if mask & (1 << a)]
                 detail = "; ".join(f"axis {a}: {describe_faults(f)}"
                                    for a, f in zip([a for a in range(P.AXIS_COUNT) if mask & (1 << a)], faults))
-                raise CommandRejected("ENABLE", e.status, f"- latched faults: {detail} "
+                raise CommandRejected("ENABLE", e.status, why=e.why, detail=f"- latched faults: {detail} "
                                       "(remove the cause, then `torqueloop clear-fault`)") from None
             raise
 

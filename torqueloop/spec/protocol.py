@@ -102,6 +102,12 @@ MAX_ENCODED = MAX_PACKET + MAX_PACKET // 254 + 1
 
 STATUS: dict[str, int] = {s["name"]: s["code"] for s in SPEC["status"]}
 STATUS_NAME: dict[int, str] = {v: k for k, v in STATUS.items()}
+#: the rule that refused a command: the second byte of its error reply ('why')
+REFUSAL: dict[str, int] = {r["name"]: r["code"] for r in SPEC["refusal"]}
+REFUSAL_NAME: dict[int, str] = {v: k for k, v in REFUSAL.items()}
+REFUSAL_DESC: dict[int, str] = {r["code"]: r["desc"] for r in SPEC["refusal"]}
+#: the status each rule comes with (NONE: any)
+REFUSAL_STATUS: dict[str, int] = {r["name"]: STATUS[r["status"]] for r in SPEC["refusal"] if "status" in r}
 FAULT: dict[str, int] = {f["name"]: 1 << f["bit"] for f in SPEC["fault"]}
 #: faults that only block motion toward one end (the axis may be enabled and driven back out)
 DIRECTIONAL_FAULTS: int = sum(1 << f["bit"] for f in SPEC["fault"] if f.get("blocks") == "direction")
@@ -317,13 +323,14 @@ def request(name: str, seq: int, **fields: int) -> bytes:
 
 
 def decode_reply(frame: Frame) -> dict[str, int]:
-    """Fields of a reply frame by name; an error reply has only 'status'."""
+    """Fields of a reply frame by name; an error reply has 'status', and 'why'
+    (REFUSAL) when the command's handler refused it (REFUSAL["NONE"] otherwise)."""
     c = BY_CMD.get(frame.cmd & ~REPLY_FLAG)
     if not frame.payload:
         raise ValueError("reply without status")
     status = frame.payload[0]
     if c is None or status != STATUS["OK"]:
-        return {"status": status}
+        return {"status": status, "why": frame.payload[1] if len(frame.payload) > 1 else REFUSAL["NONE"]}
     vals = struct.unpack(c.rep_fmt, frame.payload)
     return dict(zip((n for n, _ in c.rep), vals))
 
