@@ -10,6 +10,7 @@ a real bench has and Table 2 leaves out, one switchable effect at a time
     p = load_variant("lab")                               # every effect on
     p = load_variant("lab", off=("brush_drop",))          # one effect off
     p = load_variant("lab", off=EFFECTS)                  # == load_variant("paper")
+    p = plant_of("lab-no-brush_drop").params()            # a command line's choice, parsed once
 
 An unknown name, an unknown effect or a non-physical value raises
 :class:`PlantVariantError` with one line naming the key and the rule.
@@ -153,9 +154,33 @@ def effects_of(name: str) -> tuple[str, ...]:
     return tuple(k for k, v in _effects(name).items() if v.get("enabled", True))
 
 
-def parse_plant(text: str) -> tuple[str, tuple[str, ...]]:
-    """A command-line plant choice: ``NAME`` or ``NAME-no-EFFECT[-no-EFFECT...]``
-    (``lab-no-brush_drop``), checked."""
+@dataclasses.dataclass(frozen=True)
+class PlantSpec:
+    """A plant variant with some of its effects switched off: what a study
+    passes around instead of the name (:func:`plant_of` parses and checks
+    the name once, at the edge)."""
+
+    name: str = DEFAULT_VARIANT
+    off: tuple[str, ...] = ()
+
+    @property
+    def label(self) -> str:
+        """The name a command line gives it: ``NAME[-no-EFFECT...]``."""
+        return self.name + "".join(f"-no-{e}" for e in self.off)
+
+    def params(self, tweak: dict[str, dict] | None = None) -> PlantParams:
+        return load_variant(self.name, self.off, tweak)
+
+    def without(self, effect: str) -> "PlantSpec":
+        return PlantSpec(self.name, (*self.off, effect))
+
+
+def plant_of(text: "str | PlantSpec") -> PlantSpec:
+    """A command-line plant choice, ``NAME`` or ``NAME-no-EFFECT[-no-EFFECT...]``
+    (``lab-no-brush_drop``), checked (:class:`PlantVariantError` names what is
+    unknown); a :class:`PlantSpec` is returned as it is."""
+    if isinstance(text, PlantSpec):
+        return text
     name, *offs = text.split("-no-")
     load_variant(name, offs)   # refuses an unknown name or effect
-    return name, tuple(offs)
+    return PlantSpec(name, tuple(offs))

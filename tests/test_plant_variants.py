@@ -15,7 +15,7 @@ from sim_models.bridge import Pins
 from sim_models.dyno import DynamometerBench, RopeBenchConfig, RopeDynamometer
 from sim_models.params import PlantParamError, load_params, params_from_dict, read_toml
 from sim_models.stepper import FastAxis, TwoAxisPlant
-from sim_models.variants import EFFECTS, PlantVariantError, load_variant, names, parse_plant
+from sim_models.variants import EFFECTS, PlantVariantError, load_variant, names, PlantSpec, plant_of
 
 FWD, BRAKE = Pins(1, 0, 1, 1), Pins(0, 0, 1, 1)
 ON, OFF = (1, 0, 1, 1), (0, 0, 1, 1)
@@ -148,8 +148,10 @@ def test_unknown_variant_and_effect_are_refused_in_one_line() -> None:
     with pytest.raises(PlantVariantError, match=r"unknown plant variant 'lbа'|unknown plant variant"):
         load_variant("lbа")
     with pytest.raises(PlantVariantError, match="unknown effect 'brushes'"):
-        parse_plant("lab-no-brushes")
-    assert parse_plant("lab-no-brush_drop-no-motor_friction") == ("lab", ("brush_drop", "motor_friction"))
+        plant_of("lab-no-brushes")
+    p = plant_of("lab-no-brush_drop-no-motor_friction")
+    assert p == PlantSpec("lab", ("brush_drop", "motor_friction")) and p.label == "lab-no-brush_drop-no-motor_friction"
+    assert plant_of(p) is p and p.without("gear_efficiency").label == p.label + "-no-gear_efficiency"
 
 
 @pytest.mark.parametrize("section, key, value, rule", [

@@ -558,11 +558,11 @@ def cmd_sim(ctx: Ctx) -> int:
         from torqueloop.sim.server import BoardServer
         from torqueloop.sim.simboard import SimBoard
         import sim_models.stepper  # noqa: F401  (the plant; SimBoard imports it when built)
-        from sim_models.variants import parse_plant
+        from sim_models.variants import plant_of
     except ImportError as e:   # a host-only install (pip install torqueloop[host])
         raise SimStackMissing(f"the simulated board needs the simulation stack ({e.name} is missing): "
                               f"pip install 'torqueloop[sim]'") from None
-    parse_plant(ctx.args.plant)      # an unknown variant: one line (PlantParamError is a ValueError)
+    plant_of(ctx.args.plant)      # an unknown variant: one line (PlantParamError is a ValueError)
 
     a = ctx.args
     # The simulated board is provisioned with the tool's own key (the file it names)

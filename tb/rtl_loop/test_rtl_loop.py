@@ -15,7 +15,7 @@ x settles within the 2 s.  Checks what a user of ``make run`` relies on:
   - axis x of the experiment arm settles within 2 % and close to the fast path;
   - the two arms differ, but by less than the step (the lab plant is not the paper's);
   - report.json has the documented keys.
-The full experiment is `make run` (scripts/run_experiment.py).
+The full experiment is `make run` (torqueloop-study experiment).
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sim_models.variants import PlantSpec
 from torqueloop.sim import experiment, report
 
 T_END_S = 2.0
@@ -67,7 +68,7 @@ def test_the_experiment_both_arms_short(tmp_path: Path) -> None:
     char = _characterization(tmp_path / "characterization.json")
     base = experiment.ExperimentConfig(law="P", t_end_s=T_END_S, period_us=PERIOD_US, progress=False)
     exp = experiment.ExperimentConfig(law="P", t_end_s=T_END_S, period_us=PERIOD_US, progress=False,
-                                      plant="lab", char_config=str(char))
+                                      plant=PlantSpec("lab"), char_config=str(char))
     rtl = experiment.run_rtl(exp)
     fast = experiment.run_fast(exp, rtl.carrier_start_clk)
     model = experiment.run_paper_model(base)

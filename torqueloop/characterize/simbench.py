@@ -28,6 +28,7 @@ from typing import Callable, Literal, Sequence
 
 import numpy as np
 
+from sim_models.variants import PlantSpec
 from torqueloop.flow.manifest import REPO_ROOT, core
 
 from torqueloop.spec.charconfig import Config
@@ -318,30 +319,17 @@ def run_bench(measure: Measure, out_dir: Path, motor: str, plan: SweepPlan = Swe
 # ---------------------------------------------------------------- the plant's rope dynamometer
 
 
-@dataclass(frozen=True)
-class Plant:
-    """A named plant variant with effects switched off (sim_models.variants)."""
-
-    name: str = "lab"
-    off: tuple[str, ...] = ()
-
-    @property
-    def label(self) -> str:
-        return self.name + "".join(f"-no-{e}" for e in self.off)
-
-
 class LabBench:
     """The rope dynamometer (sim_models.dyno) for each axis of a plant
     variant, its physics cached across sessions; ``measure(axis, seed)``
     gives a :data:`Measure` whose instrument noise comes from ``seed``."""
 
-    def __init__(self, plant: Plant = Plant(), config: "object | None" = None,
+    def __init__(self, plant: PlantSpec = PlantSpec("lab"), config: "object | None" = None,
                  tweak: dict[str, dict] | None = None) -> None:
         from sim_models.dyno import RopeBenchConfig, RopeDynamometer
-        from sim_models.variants import load_variant
 
         self.plant = plant
-        p = load_variant(plant.name, plant.off, tweak)
+        p = plant.params(tweak)
         cfg = config or RopeBenchConfig()
         self.config = cfg
         self.dyno = {a.name: RopeDynamometer(a, p, cfg) for a in p.axes}
@@ -370,7 +358,7 @@ class LabBench:
 def simulate_lab(out_dir: Path, bench: LabBench, axes: Sequence[str] = ("x", "z"), seed: int | None = 0,
                  wf: Waveforms | None = None, th: Thresholds = Thresholds(), quiet: bool = False) -> dict[str, MotorResult]:
     """Every axis through the simulated bench: ``out_dir/<axis>/*.csv`` as a
-    lab would hand them to ``characterize.py run``."""
+    lab would hand them to ``torqueloop-study characterize run``."""
     wf = wf or Waveforms()
     out = {}
     for a in axes:

@@ -3,9 +3,10 @@
 
     spec                               the single sources, one definition of each equation
     host   oracles  sim_models   flow  the lab tool | core oracles | the plant | EDA flows
-    sim                                co-simulation, simulated boards, the experiment
+    sim                                co-simulation, simulated boards, the experiment's runs and report
     characterize                       the characterisation method and its bench
-    cli                                the ``torqueloop`` command (the application)
+    cli   study                        the applications, side by side: the ``torqueloop`` lab tool |
+                                       the studies (``torqueloop-study``: make run, make characterize)
 
 A module may import its own layer and the layers its entry in ``ALLOWED``
 names, nothing else of ours: never upward, never sideways between the
@@ -40,6 +41,8 @@ ALLOWED: dict[str, frozenset[str]] = {
                                           "sim_models", "torqueloop.flow", "torqueloop.sim"}),
     "torqueloop.cli": frozenset({"torqueloop.spec", "torqueloop.host", "torqueloop.oracles", "sim_models",
                                  "torqueloop.flow", "torqueloop.sim", "torqueloop.characterize"}),
+    "torqueloop.study": frozenset({"torqueloop.spec", "torqueloop.host", "torqueloop.oracles", "sim_models",
+                                   "torqueloop.flow", "torqueloop.sim", "torqueloop.characterize"}),
 }
 #: modules outside every layer that any module may import
 SHARED = frozenset({"torqueloop"})          # the package's __init__ (version only)

@@ -34,7 +34,7 @@ import numpy as np
 
 from sim_models.params import PlantParams
 from sim_models.stepper import TwoAxisPlant
-from sim_models.variants import load_variant, parse_plant
+from sim_models.variants import PlantSpec
 from torqueloop.flow import firmware
 from torqueloop.flow.manifest import REPO_ROOT
 from torqueloop.host import config as hconfig
@@ -61,7 +61,7 @@ class ExperimentConfig:
     t_end_s: float = SYSTEM.t_end_s     # the paper's T
     step_rad: float = SYSTEM.step_rad   # one screw turn, 4 mm (sec. VI.B)
     period_us: int = SYSTEM.period_us   # control period: the paper's 25 ms speed sample period
-    plant: str = "paper"                # plant variant (sim_models.variants; lab-no-EFFECT ...)
+    plant: PlantSpec = PlantSpec("paper")   # plant variant, effects off (sim_models.variants.plant_of)
     char_config: str | None = None      # characterisation file, loaded as `torqueloop config load` does
     pwm_hz: tuple[float, ...] | None = None   # carriers set after the file (None: the file's, else the paper's)
     pw0_off: bool = False               # PW0 set to 0 after the file: no dead-zone compensation
@@ -77,7 +77,7 @@ class ExperimentConfig:
         return round(self.step_rad * COUNTS_PER_REV / (2 * math.pi))
 
     def plant_params(self) -> PlantParams:
-        return load_variant(*parse_plant(self.plant))
+        return self.plant.params()
 
     def loaded_settings(self) -> tuple[dict[str, int], ...]:
         """What ``config load`` of the characterisation file writes (per axis
@@ -365,7 +365,7 @@ def run_paper_model(cfg: ExperimentConfig) -> ModelRun:
                     gains=TABLE1[cfg.law])
     r = run_averaged(lc, params, TwoAxisPlant(params, seed=0))
     traj = Trajectory(r.t, r.x_meas, r.v_est, r.cmd, target_rad - r.x_meas, r.x_true)
-    return ModelRun(traj, r.wall_s, {"arm": "model", "plant": cfg.plant, "law": cfg.law, "drive": "averaged voltage",
+    return ModelRun(traj, r.wall_s, {"arm": "model", "plant": cfg.plant.label, "law": cfg.law, "drive": "averaged voltage",
                                      "gains": [asdict(g) for g in lc.gains]},
                     tuple(a.resistance_ohm for a in params.axes))
 
@@ -427,7 +427,7 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
     traj = Trajectory(t, out["pos"] * rad, out["vel"] * rad, out["cmd"], out["err"] * rad, out["true"],
                       out["q"], out["q2"])
     return ModelRun(traj, time.monotonic() - w0,
-                    {"arm": "fast path", "plant": cfg.plant, "law": cfg.law, "board": list(board),
+                    {"arm": "fast path", "plant": cfg.plant.label, "law": cfg.law, "board": list(board),
                      "carrier_start_clk": starts,
                      "pwm_hz": list(cfg.pwm_hz_actual), "implementation": "torqueloop.oracles.servo (firmware law)"},
                     tuple(a.resistance_ohm for a in params.axes))

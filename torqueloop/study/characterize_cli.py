@@ -1,13 +1,13 @@
 # SPDX-License-Identifier: MIT
-"""The characterisation command (scripts/characterize.py).
+"""The characterisation command (``torqueloop-study characterize``, ``torqueloop-study characterize``).
 
-    characterize.py run DATA_DIR [--out CONFIG] [--plots DIR] [--set NAME=VALUE ...]
-    characterize.py sim [--plant lab] [--seeds 10] [--out-dir DIR] [--source rtl|model] [--axes x z]
-                        [--no-ablation] [--no-linearity]
-    characterize.py step5 FREQ_SWEEP.csv
-    characterize.py check FILE.csv ...
-    characterize.py show CONFIG.json [--registers]
-    characterize.py export CONFIG.json --format c|verilog --out FILE
+    characterize run DATA_DIR [--out CONFIG] [--plots DIR] [--set NAME=VALUE ...]
+    characterize sim [--plant lab] [--seeds 10] [--out-dir DIR] [--source rtl|model] [--axes x z]
+                     [--no-ablation] [--no-linearity]
+    characterize step5 FREQ_SWEEP.csv
+    characterize check FILE.csv ...
+    characterize show CONFIG.json [--registers]
+    characterize export CONFIG.json --format c|verilog --out FILE
 
 ``sim`` records the sweeps on the simulated bench (the plant variant's
 motor on the rope dynamometer, driven by the RTL's pins or their documented
@@ -16,7 +16,7 @@ then does exactly what ``run`` does with them, writing
 ``DIR/characterization.json`` and the plots in ``DIR/plots``; then the
 study: the session with other instrument seeds, linearity at other
 frequencies and each plant effect off (``DIR/results.{json,md}``,
-torqueloop/characterize/study.py).
+torqueloop/study/characterization.py).
 
 ``run`` takes one folder per axis (``DATA_DIR/<axis>/*.csv``: one frequency
 sweep and any number of duty sweeps, recognised by their ``# sweep =``
@@ -35,14 +35,17 @@ import sys
 from pathlib import Path
 from typing import Sequence
 
-from torqueloop.spec.charconfig import ConfigError, load_config, register_writes, write_config
+from sim_models.params import PlantParamError
+from sim_models.variants import plant_of
+from torqueloop.characterize.conclude import EXIT_ERROR, EXIT_FAIL, EXIT_NEED_SWEEP, EXIT_OK, conclude
+from torqueloop.characterize.config import CLK_HZ, PWM_BITS, c_header, verilog_header
+from torqueloop.characterize.data import DataError, Sweep, read_sweep
+from torqueloop.characterize.method import MethodError, MotorResult, Thresholds, characterize_motor, step5_candidates
+from torqueloop.spec.charconfig import ConfigError, load_config, register_writes
 from torqueloop.spec.pwm import carrier_hz, divider_for
+from torqueloop.study.characterization import LINEARITY_FREQS_HZ, run_study
 
-from .config import CLK_HZ, PWM_BITS, axis_config, build_config, c_header, verilog_header
-from .data import DataError, Sweep, read_sweep
-from .method import MethodError, MotorResult, Thresholds, characterize_motor, step5_candidates
-
-EXIT_OK, EXIT_ERROR, EXIT_NEED_SWEEP, EXIT_FAIL = 0, 1, 2, 3
+__all__ = ["EXIT_OK", "EXIT_ERROR", "EXIT_NEED_SWEEP", "EXIT_FAIL", "main"]
 
 
 def _thresholds(sets: Sequence[str]) -> Thresholds:
@@ -81,29 +84,6 @@ def _split(files: Sequence[Path]) -> tuple[Sweep, list[Sweep]]:
     return freq[0], [s for s in sweeps if s.kind == "duty"]
 
 
-def report(name: str, r: MotorResult) -> str:
-    lines = [f"[{name}] motor {r.freq_sweep.motor!r}: tau_max = {r.step5.tau_max_nm:.4g} N m (step 2)",
-             f"[{name}] step 5: {r.step5.message}"]
-    for c in r.step5.candidates[:5]:
-        lines.append(f"[{name}]   candidate {c.freq_hz:9.4f} Hz  ({c.kind}, slope {c.slope_nm_per_hz:+.3g} N m/Hz)")
-    if len(r.step5.candidates) > 5:
-        lines.append(f"[{name}]   ... and {len(r.step5.candidates) - 5} more")
-    for a in r.attempts:
-        if a.linearity is None:
-            continue
-        lin = a.linearity
-        lines.append(f"[{name}] steps 6-7 at {lin.freq_hz:.4g} Hz ({a.duty_sweep.source if a.duty_sweep else ''}): "
-                     f"{'PASS' if lin.ok else 'FAIL'}")
-        for ch in lin.checks:
-            lines.append(f"[{name}]     {'ok  ' if ch.ok else 'FAIL'} {ch.text}")
-        if lin.pw0_pct == lin.pw0_pct:  # not NaN: a line was fitted
-            lines.append(f"[{name}]     dead zone PW0 = {lin.pw0_pct:.2f} %, PW_F = {lin.pwf_pct:.2f} %")
-    for u in r.unused_duty_sweeps:
-        lines.append(f"[{name}] note: {u} matched no candidate it was needed for")
-    lines.append(f"[{name}] {r.status}: {r.message}")
-    return "\n".join(lines)
-
-
 def cmd_run(args: argparse.Namespace) -> int:
     th = _thresholds(args.set)
     data_dir = Path(args.data_dir)
@@ -118,54 +98,16 @@ def cmd_run(args: argparse.Namespace) -> int:
     return conclude(results, data_dir, Path(args.out), args.plots, th, args.clk_hz, args.pwm_bits)
 
 
-def conclude(results: dict[str, MotorResult], data_dir: Path, out: Path, plots: str | Path | None,
-             th: Thresholds, clk_hz: int = CLK_HZ, pwm_bits: int = PWM_BITS) -> int:
-    """Steps 2-7's report per axis, the plots, and step 8: the configuration
-    file, written only if every axis passed (the exit status says why not)."""
-    worst = EXIT_OK
-    for name, r in results.items():
-        print(report(name, r), flush=True)
-        if plots:
-            from .plots import plot_result
-
-            for p in plot_result(r, plots, name):
-                print(f"[{name}] plot {p}")
-        if r.status == "need_duty_sweep":
-            worst = max(worst, EXIT_NEED_SWEEP)
-        elif r.status == "fail":
-            worst = max(worst, EXIT_FAIL)
-    if worst != EXIT_OK:
-        print("no configuration written: not every axis passed", file=sys.stderr)
-        return worst
-    axes = {n: axis_config(r, clk_hz=clk_hz, pwm_bits=pwm_bits, base_dir=data_dir) for n, r in results.items()}
-    cfg = build_config(axes, th, clk_hz=clk_hz, pwm_bits=pwm_bits)
-    write_config(out, cfg)
-    load_config(out)  # what we write must be what the readers accept
-    for n, a in cfg.axes.items():
-        print(f"[{n}] step 8: {a.pwm_freq_hz:.6g} Hz -> count_max {a.count_max} -> {a.achieved_hz:.6g} Hz "
-              f"({a.freq_error_pct:+.3f} %), PW0 {a.pw0_counts} / PW_F {a.pw_max_counts} counts of {(1 << pwm_bits) - 1}")
-    print(f"wrote {out}")
-    return EXIT_OK
-
-
 def cmd_sim(args: argparse.Namespace) -> int:
-    from sim_models.params import PlantParamError
-    from sim_models.variants import parse_plant
-
-    from .simbench import Plant
-    from .study import run_study
-
     try:
-        name, off = parse_plant(args.plant)
+        plant = plant_of(args.plant)
     except PlantParamError as e:
         print(f"error: --plant: {e}", file=sys.stderr)
         return EXIT_ERROR
     if args.seeds < 1:
         print("error: --seeds must be at least 1", file=sys.stderr)
         return EXIT_ERROR
-    from .study import LINEARITY_FREQS_HZ
-
-    return run_study(Path(args.out_dir), Plant(name, off), seeds=args.seeds, axes=args.axes,
+    return run_study(Path(args.out_dir), plant, seeds=args.seeds, axes=args.axes,
                      source=args.source, sim=args.simulator, th=_thresholds(args.set), ablation=args.ablation,
                      linearity_freqs=LINEARITY_FREQS_HZ if args.linearity else ())
 
@@ -235,7 +177,7 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="characterize", description=__doc__,
+    ap = argparse.ArgumentParser(prog="torqueloop-study characterize", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
 
