@@ -23,6 +23,7 @@ import json
 import math
 import os
 import re
+import signal
 import sys
 import time
 from pathlib import Path
@@ -798,6 +799,8 @@ def cmd_sim(ctx: Ctx) -> int:
         what = f"RTL board image (Verilator) + plant model, far below real time, {keyed}"
     else:
         board = SimBoard(build_id=a.build_id, seed=a.seed, plant=a.plant, key=key)
+        if a.switches is not None:
+            board.limit_counts = [(-a.switches, a.switches)] * P.AXIS_COUNT
         what = f"servo firmware + plant model, build id 0x{board.build_id:08x}, {keyed}"
     srv = BoardServer(board, a.host, a.port, speed=a.speed, hello=a.hello)
     print(f"simulated board on socket://{a.host}:{srv.port} ({what}); Ctrl-C stops it", flush=True)
@@ -828,6 +831,7 @@ def cmd_serve(ctx: Ctx) -> int:
     if a.host not in ("127.0.0.1", "localhost", "::1"):
         print(f"warning: listening on {a.host}: anyone who reaches this port commands the machine "
               "without a key", file=sys.stderr)
+    signal.signal(signal.SIGTERM, lambda *_: srv.stop())     # `kill` stops it as cleanly as Ctrl-C
     try:
         srv.serve_forever()
     except KeyboardInterrupt:
@@ -1035,6 +1039,9 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("--seed", type=_bounded(int, 0, 2**32 - 1, "--seed"), default=0, help="plant random seed")
     sp.add_argument("--plant", default="paper",
                     help="plant variant: paper-printed, paper or lab (lab-no-EFFECT switches one off) [paper]")
+    sp.add_argument("--switches", type=_bounded(int, 100, 2**30, "--switches"), default=None, metavar="COUNTS",
+                    help="the simulated stage's limit switches open beyond +-COUNTS from the power-up position "
+                         "[400000, about +-190 mm: homing at the default HOME_VEL takes minutes]")
     sp.add_argument("--rtl", action="store_true",
                     help="serve the RTL co-simulation (torqueloop/cosim) instead of the firmware-in-the-loop board")
     sp.set_defaults(fn=cmd_sim)

@@ -14,7 +14,8 @@ While ``move``, ``home`` or ``step-test`` runs, a live text plot of the axis
 is drawn in the terminal and, with ``--plot-file FILE``, appended to FILE.
 Line editing, history (kept in the state folder) and tab completion of the
 commands, options and parameter names come from ``readline`` when the input
-is a terminal.  Shell words: ``help``, ``liveplot on|off``, ``holds``, ``quit``.
+is a terminal.  Shell words: ``help``, ``liveplot on|off``, ``holds``, ``quit``.  The
+shell ends with the exit status of its last command, as ``sh`` does.
 """
 
 from __future__ import annotations
