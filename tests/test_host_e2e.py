@@ -108,7 +108,7 @@ def test_move_is_followed_by_the_plant(url, capsys) -> None:
     run(url, capsys, "clear-fault", "--all")
     run(url, capsys, "move", "2mm", "--enable", "--axis", "0", rc=1)     # not homed
     run(url, capsys, "home", "here", "--axis", "0")
-    res, _ = run(url, capsys, "move", "2mm", "--enable", "--wait", "6", "--axis", "0")
+    res, _ = run(url, capsys, "move", "2mm", "--enable", "--wait", "15", "--axis", "0")
     assert res["target_counts"] == 4200          # 2 mm at 4 mm and 8400 counts per turn
     assert abs(res["error_counts"]) <= 20, res
     st, _ = run(url, capsys, "status", "--axis", "0")

@@ -842,6 +842,20 @@ def cmd_serve(ctx: Ctx) -> int:
     return 0
 
 
+def cmd_characterize(ctx: Ctx) -> int:
+    """``torqueloop characterize ...``: the characterisation method's own command
+    (torqueloop/characterize/cli.py; docs/characterization.md), which a
+    host-only install runs too (``sim`` needs the simulation stack)."""
+    from torqueloop.characterize import cli as char_cli
+
+    rest = list(ctx.args.rest)
+    try:
+        return char_cli.main(rest)
+    except ImportError as e:   # `characterize sim` in a host-only install
+        raise SimStackMissing(f"characterize {rest[0] if rest else ''}: needs the simulation stack "
+                              f"({e.name} is missing): pip install 'torqueloop[sim]'") from None
+
+
 def cmd_shell(ctx: Ctx) -> int:
     from torqueloop.host.shell import Shell
 
@@ -1052,6 +1066,11 @@ def parser() -> argparse.ArgumentParser:
                     help=f"TCP port (0 = any free one) [{hserve.DEFAULT_PORT}]")
     sp.add_argument("--quiet", action="store_true", help="do not log clients coming and going")
     sp.set_defaults(fn=cmd_serve)
+    sp = sub.add_parser("characterize", add_help=False,
+                        help="the paper's characterisation method on your sweeps: run, step5, check, show, "
+                             "export (and sim, with the simulation stack); `characterize -h`")
+    sp.add_argument("rest", nargs=argparse.REMAINDER)
+    sp.set_defaults(fn=cmd_characterize)
     sp = sub.add_parser("shell", help="interactive session: the commands above, history, completion, "
                                       "a live text plot while moves run")
     sp.add_argument("--plot-file", metavar="FILE", help="also append every live-plot frame to FILE")
@@ -1069,7 +1088,12 @@ def main(argv: list[str] | None = None, *, client: Client | RemoteClient | None 
     """Run one command.  ``client``: an open session to run it on (the shell's;
     left open); ``tick``: called while a move or homing is waited for (the
     shell's live plot)."""
-    args = parser().parse_args(argv)      # a usage error exits 2 with one line
+    ap = parser()
+    args, extra = ap.parse_known_args(argv)      # a usage error exits 2 with one line
+    if extra and args.command != "characterize":
+        ap.error(f"unrecognized arguments: {' '.join(extra)}")
+    if args.command == "characterize":           # its options are its own: `characterize -h`
+        args.rest = extra + list(args.rest)
     ctx = Ctx(args)
     if client is not None:
         ctx._client, ctx.shared = client, True
