@@ -125,6 +125,28 @@ def test_bring_up_as_a_user_would(url, user_env, capsys) -> None:
     assert "not a speed" in err
 
 
+def test_hold_keeps_the_axis_enabled_until_ctrl_c(url, user_env) -> None:
+    p = _start(["-u", url, "move", "0.5rev", "--relative", "--unhomed", "--enable", "--wait", "10", "--hold"],
+               user_env)
+    try:
+        for line in p.stderr:                                # it says when it starts holding
+            if "holding axis 0" in line:
+                break
+        else:
+            pytest.fail(f"--hold never held: {p.stdout.read()}")
+        # More than twice the 500 ms link watchdog.  The board takes one client, so the check is the
+        # holder's own: it ends at once, exit 1, if the axis faults or is disabled while it holds.
+        time.sleep(1.2)
+        assert p.poll() is None, p.stderr.read()
+    finally:
+        p.send_signal(signal.SIGINT)
+        rc = p.wait(30)
+    assert rc == 0
+    st = json.loads(subprocess.run([sys.executable, "-m", "torqueloop.cli", "-u", url, "--json", "status"],
+                                   env=user_env, capture_output=True, text=True, timeout=60).stdout)["0"]
+    assert not st["enabled"] and st["fault_names"] == [], st
+
+
 def test_plot_without_a_display_refuses_in_one_line(url, user_env) -> None:
     t0 = time.monotonic()
     r = subprocess.run([sys.executable, "-m", "torqueloop.cli", "-u", url, "plot", "--duration", "2"],
@@ -136,6 +158,34 @@ def test_plot_without_a_display_refuses_in_one_line(url, user_env) -> None:
 def _start(args: list[str], env: dict[str, str]) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "torqueloop.cli", *args], env=env, text=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+
+
+def test_server_protocol_errors_are_answers_not_disconnects(url, user_env) -> None:
+    """A dashboard's malformed request gets an error line; the connection stays usable."""
+    import socket
+
+    srv = _start(["-u", url, "serve", "--port", "0", "--quiet"], user_env)
+    try:
+        addr = srv.stdout.readline().split(" on ")[1].split()[0]
+        host, port = addr.rsplit(":", 1)
+        with socket.create_connection((host, int(port)), timeout=30) as s:
+            f = s.makefile("rw")
+            hello = json.loads(f.readline())
+            assert hello["protocol"] == "torqueloop-serve" and hello["identity"]["axis_count"] == 2
+            assert hello["key_id"]                                  # keyed, yet the key itself never sent
+            for req, kind in (("not json", "BadRequest"), ('{"id": 1, "method": "nope"}', "BadRequest"),
+                              ('{"id": 2, "method": "move", "params": {"axis": 0, "target": 100}}',
+                               "CommandRejected")):          # disabled and not homed: the board refuses
+                f.write(req + "\n")
+                f.flush()
+                assert json.loads(f.readline())["error"]["kind"] == kind, req
+            f.write('{"id": 3, "method": "status", "params": {"axis": 1}}\n')
+            f.flush()
+            got = json.loads(f.readline())
+            assert got["id"] == 3 and "position" in got["result"]
+    finally:
+        srv.send_signal(signal.SIGINT)
+        srv.wait(10)
 
 
 def test_monitor_and_move_side_by_side_through_serve(url, user_env) -> None:

@@ -736,7 +736,7 @@ def cmd_upload(ctx: Ctx) -> int:
 
     image = upload.load_image(ctx.args.file, raw_ok=ctx.args.raw)   # before the link is opened
     show = None if ctx.args.json else (lambda done, total: progress(done, total, "upload"))
-    r = upload.run_upload(ctx.client, image, show, window_s=ctx.args.window)
+    r = upload.run_upload(direct_client(ctx, "upload"), image, show, window_s=ctx.args.window)
     obj = {"ok": r.ok, "message": r.message, "bytes": r.bytes, "crc32": f"0x{r.crc32:08x}",
            "old_build_id": f"0x{r.old_build_id:08x}",
            "new_build_id": None if r.new_build_id is None else f"0x{r.new_build_id:08x}",
