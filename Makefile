@@ -83,8 +83,8 @@ board-sim: $(STAMP) ## simulated board (firmware C + plant) on TCP for the torqu
 board-sim-rtl: $(STAMP) ## the same with the co-simulated RTL board image (slow: ~0.01x real time)
 	$(VENV)/bin/torqueloop sim --rtl
 
-quartus: $(STAMP) ## Quartus project for the DE0-CV in build/quartus (compiled when quartus_sh is on PATH)
-	$(PY) scripts/gen_quartus.py --project --compile
+quartus: $(STAMP) ## Quartus project for the DE0-CV in build/quartus (compiled when quartus_sh is on PATH); needs TORQUELOOP_KEY_FILE, or KEYLESS=1
+	$(PY) scripts/gen_quartus.py --project --compile $(if $(KEYLESS),--keyless)
 
 clean: ## remove build output (keeps .venv)
 	rm -rf build

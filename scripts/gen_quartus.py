@@ -28,6 +28,7 @@ from pathlib import Path
 from torqueloop.flow.board_files import load_pin_table
 from torqueloop.flow.manifest import REPO_ROOT
 from torqueloop.flow.quartus import PROJECT, products, stale, timing_verdict, write_project
+from torqueloop.spec import auth
 
 
 def compile_project(qpf: Path) -> int:
@@ -66,8 +67,16 @@ def main() -> int:
     g.add_argument("--diff", action="store_true", help="show what --update would change")
     g.add_argument("--project", action="store_true", help="create build/quartus")
     ap.add_argument("--compile", action="store_true", help="with --project: compile when quartus_sh exists")
+    ap.add_argument("--keyless", action="store_true",
+                    help="with --project: build a boot ROM without a link key (a board that refuses every move)")
     args = ap.parse_args()
     if args.project:
+        if auth.key_file_path(None) is None and not args.keyless:
+            # A long compile ending in a board that refuses every move helps nobody: stop before it.
+            print(f"[quartus] no link key: name the key file in ${auth.KEY_FILE_ENV} (`torqueloop key new FILE`; "
+                  "docs/security.md, 'Key provisioning'), or `make quartus KEYLESS=1` for a board that refuses "
+                  "motion, parameter changes and uploads", file=sys.stderr)
+            return 2
         qpf = write_project()
         if not load_pin_table().firmware:
             print("[quartus] WARNING: constraints/pins.toml [firmware] names no ROM_INIT image: the boot ROM"

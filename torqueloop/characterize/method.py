@@ -24,9 +24,32 @@ from dataclasses import asdict, dataclass, field
 from typing import Literal, Sequence
 
 import numpy as np
-from scipy import stats
 
 from .data import Sweep
+
+
+@dataclass(frozen=True)
+class LineFit:
+    """y = slope * x + intercept by least squares; ``rvalue`` is Pearson's r."""
+
+    slope: float
+    intercept: float
+    rvalue: float
+
+
+def line_fit(x: np.ndarray, y: np.ndarray) -> LineFit:
+    """The ordinary least-squares line through (x, y) with numpy alone (the
+    lab's host install has no scipy); tests/test_characterize.py checks it
+    against ``scipy.stats.linregress``."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if x.size < 2 or np.ptp(x) == 0:
+        raise MethodError("a line fit needs at least two different duty values")
+    a = np.column_stack([x, np.ones_like(x)])
+    (slope, icpt), *_ = np.linalg.lstsq(a, y, rcond=None)
+    ss_tot = float(np.sum((y - y.mean()) ** 2))
+    ss_res = float(np.sum((y - (slope * x + icpt)) ** 2))
+    r2 = 0.0 if ss_tot == 0 else max(0.0, 1.0 - ss_res / ss_tot)
+    return LineFit(float(slope), float(icpt), float(np.copysign(np.sqrt(r2), slope)))
 
 
 class MethodError(ValueError):
@@ -258,7 +281,7 @@ def steps67_linearity(duty_sweep: Sweep, tau_max: float, th: Thresholds = Thresh
         )
     k0 = int(moving[0])
     dm, tm = d[k0:], t[k0:]
-    fit = stats.linregress(dm, tm)
+    fit = line_fit(dm, tm)
     slope, icpt = float(fit.slope), float(fit.intercept)
     r2 = float(fit.rvalue) ** 2
     checks.append(Check(
@@ -287,7 +310,7 @@ def steps67_linearity(duty_sweep: Sweep, tau_max: float, th: Thresholds = Thresh
     # should sit on a line as well; a drifting or jumping current shows up
     # as deviation from that line.
     cm = cur[k0:]
-    cfit = stats.linregress(dm, cm)
+    cfit = line_fit(dm, cm)
     cscale = float(cur.max()) if cur.max() > 0 else 1.0
     cdev = float(np.max(np.abs(cm - (cfit.intercept + cfit.slope * dm))) / cscale)
     checks.append(Check(

@@ -11,7 +11,7 @@ Sources and their views:
 * ``torqueloop/spec/protocol.toml`` -> C header, docs/protocol.md (:mod:`.gen_protocol`)
 * ``constraints/pins.toml``         -> .qsf, .sdc, the board top's GPIO block, the cable
   harness of the board test wrappers (tb/de0_cv_top/de0_cv_cable.v) and docs/hardware.md's wiring
-  table (:mod:`.quartus`)
+  table (:mod:`.quartus`), the wiring diagram docs/wiring.svg (:mod:`.wiring`)
 
 ``make lint`` runs the check, so a stale generated file cannot land.
 """
@@ -28,13 +28,14 @@ from torqueloop.spec.repo import REPO_ROOT
 
 def products() -> dict[str, str]:
     """Every generated file (path from the repo root) with the text it should have."""
-    from torqueloop.flow import gen_linker, gen_protocol, gen_regmap, quartus
+    from torqueloop.flow import gen_linker, gen_protocol, gen_regmap, quartus, wiring
 
     out: dict[str, str] = {}
     out.update(gen_regmap.generate())
     out.update({path: fn() for path, fn in gen_linker.OUTPUTS.items()})
     out.update({path: fn() for path, fn in gen_protocol.OUTPUTS.items()})
     out.update({str(p.path.relative_to(REPO_ROOT)): p.text for p in quartus.products()})
+    out.update({path: fn() for path, fn in wiring.OUTPUTS.items()})
     return {rel: with_licence(rel, text) for rel, text in out.items()}
 
 
