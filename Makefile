@@ -61,9 +61,9 @@ synth: $(STAMP) ## Yosys synth_intel_alm (Cyclone V): per-core table in build/sy
 	$(PY) scripts/synth.py
 	$(PY) scripts/bench.py bench_board
 
-# make run QUICK=1: a short version (T = 2 s, a small sweep) for a first look.
+# make run QUICK=1: a short version (T = 2 s, a small sweep) for a first look; CLUSTER=tcp://HOST:8786 runs on Dask workers.
 run: $(STAMP) ## the main job: characterisation, model arm vs experiment arm (RTL in the loop), P/PD/PID, the PWM-frequency sweep -> build/report/
-	$(PY) -m torqueloop.study experiment $(if $(filter 1,$(QUICK)),--quick,)
+	$(PY) -m torqueloop.study experiment $(if $(filter 1,$(QUICK)),--quick,) $(if $(CLUSTER),--cluster $(CLUSTER),)
 
 bench: $(STAMP) ## benchmarks that print numbers (QUICK=1: shortened)
 	$(PY) scripts/bench.py $(if $(filter 1,$(QUICK)),--quick,)
