@@ -63,7 +63,7 @@ synth: $(STAMP) ## Yosys synth_intel_alm (Cyclone V): per-core table in build/sy
 
 # make run QUICK=1: a short version (T = 2 s, a small sweep) for a first look; CLUSTER=tcp://HOST:8786 runs on Dask workers.
 run: $(STAMP) ## the main job: characterisation, model arm vs experiment arm (RTL in the loop), P/PD/PID, the PWM-frequency sweep -> build/report/
-	$(PY) -m torqueloop.study experiment $(if $(filter 1,$(QUICK)),--quick,) $(if $(CLUSTER),--cluster $(CLUSTER),)
+	$(PY) -m torqueloop.study experiment $(if $(filter 1,$(QUICK)),--quick,) $(if $(CLUSTER),--cluster $(CLUSTER),) $(if $(PLANT_FILE),--experiment-plant-file $(PLANT_FILE),)
 
 bench: $(STAMP) ## benchmarks that print numbers (QUICK=1: shortened)
 	$(PY) scripts/bench.py $(if $(filter 1,$(QUICK)),--quick,)
@@ -71,7 +71,7 @@ bench: $(STAMP) ## benchmarks that print numbers (QUICK=1: shortened)
 # make characterize PLANT=paper (default lab; lab-no-EFFECT switches one off)
 PLANT ?=
 characterize: $(STAMP) ## the characterisation method (steps 1-8) on the simulated lab bench, 10 seeds, each effect off: build/characterize/
-	$(PY) -m torqueloop.study characterize sim --out-dir build/characterize $(if $(PLANT),--plant $(PLANT),)
+	$(PY) -m torqueloop.study characterize sim --out-dir build/characterize $(if $(PLANT),--plant $(PLANT),) $(if $(PLANT_FILE),--plant-file $(PLANT_FILE),)
 
 firmware: $(STAMP) ## servo firmware: build/firmware/servo/{servo.elf,.bin,_ram.hex,_rom.hex}
 	$(PY) -m torqueloop.flow.generate --check

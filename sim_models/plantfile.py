@@ -2,7 +2,7 @@
 """The plant file: a whole plant as one TOML file a person can read and edit.
 
 Layout (every key names its quantity and its SI unit; docs/plant.md lists
-them)::
+them; docs/identification.md)::
 
     [meta]       format = 1, source (the variant or file it was written from), description
     [bridge]     supply_V, r_on_ohm, ...                  BridgeParams
@@ -62,7 +62,7 @@ def export_text(p: PlantParams, source: str, description: str = "",
                 carrier_hz: float = SYSTEM.working_hz) -> str:
     """The plant file of ``p`` (``source``: the variant name or file it came
     from); the identifiable dead zones at ``carrier_hz``."""
-    lines = ["# torqueloop plant file: SI units, each key names its unit (docs/plant.md, 'The plant file').",
+    lines = ["# torqueloop plant file: SI units, each key names its unit (docs/identification.md, 'The plant file').",
              "# [identifiable.*] is what an encoder-only identification can see; it is not read back as a plant.",
              ""]
     lines += _section(META, {"format": FORMAT, "source": source, "description": description})

@@ -156,23 +156,55 @@ def effects_of(name: str) -> tuple[str, ...]:
 
 @dataclasses.dataclass(frozen=True)
 class PlantSpec:
-    """A plant variant with some of its effects switched off: what a study
-    passes around instead of the name (:func:`plant_of` parses and checks
-    the name once, at the edge)."""
+    """A plant variant with some of its effects switched off, or a plant file
+    (sim_models/plantfile.py): what a study passes around instead of the name
+    (:func:`plant_of` parses and checks the name once, at the edge;
+    :meth:`from_file` reads and checks a file once)."""
 
     name: str = DEFAULT_VARIANT
     off: tuple[str, ...] = ()
+    file: str | None = None
+    digest: str = ""          # a plant file's content digest (caches keyed by the plant see an edit)
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> "PlantSpec":
+        from sim_models.plantfile import load_plant_file
+        import hashlib
+
+        load_plant_file(path)          # refuses a bad file in one line (PlantParamError) before anything runs
+        text = Path(path).read_bytes()
+        return cls(name="file", file=str(Path(path).resolve()), digest=hashlib.sha256(text).hexdigest()[:16])
 
     @property
     def label(self) -> str:
-        """The name a command line gives it: ``NAME[-no-EFFECT...]``."""
+        """The name a command line gives it: ``NAME[-no-EFFECT...]``, or the plant file's path."""
+        if self.file is not None:
+            return f"{self.file} ({self.digest})"
         return self.name + "".join(f"-no-{e}" for e in self.off)
 
     def params(self, tweak: dict[str, dict] | None = None) -> PlantParams:
+        if self.file is not None:
+            from sim_models.plantfile import load_plant_file
+
+            if tweak:
+                raise PlantVariantError(f"{self.file}: a plant file has no effects to tweak; edit the file")
+            return load_plant_file(self.file)
         return load_variant(self.name, self.off, tweak)
 
     def without(self, effect: str) -> "PlantSpec":
+        if self.file is not None:
+            raise PlantVariantError(f"{self.file}: a plant file has no effects to switch off; edit the file")
         return PlantSpec(self.name, (*self.off, effect))
+
+
+def plant_choice(name: str | None, file: str | None, default: str = DEFAULT_VARIANT) -> PlantSpec:
+    """The plant a command line chose with ``--plant NAME`` or ``--plant-file
+    FILE`` (not both), checked once."""
+    if file is not None:
+        if name is not None:
+            raise PlantVariantError("give --plant or --plant-file, not both")
+        return PlantSpec.from_file(file)
+    return plant_of(name if name is not None else default)
 
 
 def plant_of(text: "str | PlantSpec") -> PlantSpec:

@@ -109,3 +109,23 @@ def test_the_dead_zone_at_a_carrier_is_where_the_pwm_driven_rotor_breaks_away(si
             plant.advance(1 / f - t_on, (BRAKE, BRAKE))
         w = plant.motor_speed(0)
         assert (abs(w) > 1.0) == moves, (factor, w)
+
+
+def test_the_cli_exports_a_variant_and_a_plant_file_runs_the_simulated_board(tmp_path, capsys):
+    from torqueloop import cli
+    from torqueloop.sim.simboard import SimBoard
+    from sim_models.variants import PlantSpec, plant_choice
+
+    f = tmp_path / "my.toml"
+    assert cli.main(["plant", "export", "lab", "--out", str(f)]) == 0
+    assert "wrote" in capsys.readouterr().err
+    spec = plant_choice(None, str(f))
+    assert spec.params() == load_variant("lab") and spec.file == str(f.resolve())
+    assert SimBoard(plant=spec).plant.params == load_variant("lab")
+    assert cli.main(["plant", "export", "nolab"]) == 2
+    assert cli.main(["plant", "export", "--plant-file", str(tmp_path / "missing.toml")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and "unknown plant variant 'nolab'" in err[0] and "missing.toml: cannot read" in err[1]
+    with pytest.raises(PlantParamError):
+        plant_choice("lab", str(f))                      # not both
+    assert PlantSpec.from_file(f).label.startswith(str(f.resolve()))

@@ -687,11 +687,11 @@ def cmd_sim(ctx: Ctx) -> int:
         from torqueloop.sim.server import BoardServer
         from torqueloop.sim.simboard import SimBoard
         import sim_models.stepper  # noqa: F401  (the plant; SimBoard imports it when built)
-        from sim_models.variants import plant_of
+        from sim_models.variants import plant_choice
     except ImportError as e:   # a host-only install (pip install torqueloop[host])
         raise SimStackMissing(f"the simulated board needs the simulation stack ({e.name} is missing): "
                               f"pip install 'torqueloop[sim]'") from None
-    plant_of(ctx.args.plant)      # an unknown variant: one line (PlantParamError is a ValueError)
+    plant = plant_choice(ctx.args.plant, ctx.args.plant_file)   # a bad name or file: one line (a ValueError)
 
     a = ctx.args
     # The simulated board is provisioned with the tool's own key (the file it names)
@@ -703,10 +703,10 @@ def cmd_sim(ctx: Ctx) -> int:
     if a.rtl:
         from torqueloop.sim.rtlboard import RtlBoard
 
-        board: Any = RtlBoard(seed=a.seed, plant=a.plant, key=key)
+        board: Any = RtlBoard(seed=a.seed, plant=plant, key=key)
         what = f"RTL board image (Verilator) + plant model, far below real time, {keyed}"
     else:
-        board = SimBoard(build_id=a.build_id, seed=a.seed, plant=a.plant, key=key)
+        board = SimBoard(build_id=a.build_id, seed=a.seed, plant=plant, key=key)
         if a.switches is not None:
             board.limit_counts = [(-a.switches, a.switches)] * P.AXIS_COUNT
         what = f"servo firmware + plant model, build id 0x{board.build_id:08x}, {keyed}"
@@ -762,6 +762,31 @@ def cmd_characterize(ctx: Ctx) -> int:
     except ImportError as e:   # `characterize sim` in a host-only install
         raise SimStackMissing(f"characterize {rest[0] if rest else ''}: needs the simulation stack "
                               f"({e.name} is missing): pip install 'torqueloop[sim]'") from None
+
+
+def cmd_plant(ctx: Ctx) -> int:
+    """``torqueloop plant export``: a plant variant or plant file as a plant
+    file, with what an encoder-only identification can see of each axis
+    (sim_models/plantfile.py; docs/identification.md).  Needs no board."""
+    from sim_models.params import PlantParamError
+    from sim_models.plantfile import export_text
+    from sim_models.variants import describe, plant_choice
+
+    a = ctx.args
+    try:
+        plant = plant_choice(a.variant, a.plant_file)
+    except PlantParamError as e:
+        raise BadValue(str(e)) from None
+    carrier = a.pwm_freq
+    if not (math.isfinite(carrier) and 0 < carrier <= P.SYSTEM.bridge_max_hz):
+        raise BadValue(f"--pwm-freq {carrier:g} Hz: give a carrier in (0, {P.SYSTEM.bridge_max_hz}] Hz")
+    text = export_text(plant.params(), plant.label, "" if plant.file else describe(plant.name), carrier)
+    if a.out:
+        Path(a.out).write_text(text)
+        print(f"wrote {a.out} (plant {plant.label}, identifiable dead zones at {carrier:g} Hz)", file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+    return 0
 
 
 def cmd_shell(ctx: Ctx) -> int:
@@ -949,6 +974,14 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("action", choices=["new", "id"])
     sp.add_argument("file", nargs="?")
     sp.set_defaults(fn=cmd_key)
+    sp = sub.add_parser("plant", help="plant files: `plant export VARIANT > my.toml` (docs/identification.md)")
+    sp.add_argument("action", choices=["export"])
+    sp.add_argument("variant", nargs="?", default=None, help="plant variant: paper-printed, paper, lab, ... [paper]")
+    sp.add_argument("--plant-file", default=None, metavar="FILE", help="re-export a plant file (fresh identifiable part)")
+    sp.add_argument("--pwm-freq", type=float, default=float(P.SYSTEM.working_hz), metavar="HZ",
+                    help=f"the carrier the identifiable dead zones are given at [{P.SYSTEM.working_hz}]")
+    sp.add_argument("--out", default=None, metavar="FILE", help="write here instead of to stdout")
+    sp.set_defaults(fn=cmd_plant)
     sp = sub.add_parser("sim", help="run the simulated board on a local TCP port (with the --key-file key)")
     sp.add_argument("--host", default="127.0.0.1")
     sp.add_argument("--port", type=_bounded(int, 0, 65535, "--port"), default=2000,
@@ -959,8 +992,10 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("--build-id", type=_bounded(lambda t: int(t, 0), 0, 0xFFFF_FFFF, "--build-id"),
                     default=0x51B0_0001, help="build id the board reports [0x51b00001]")
     sp.add_argument("--seed", type=_bounded(int, 0, 2**32 - 1, "--seed"), default=0, help="plant random seed")
-    sp.add_argument("--plant", default="paper",
+    sp.add_argument("--plant", default=None,
                     help="plant variant: paper-printed, paper or lab (lab-no-EFFECT switches one off) [paper]")
+    sp.add_argument("--plant-file", default=None, metavar="FILE",
+                    help="a plant file instead of a variant (`torqueloop plant export`, `torqueloop identify`)")
     sp.add_argument("--switches", type=_bounded(int, 100, 2**30, "--switches"), default=None, metavar="COUNTS",
                     help="the simulated stage's limit switches open beyond +-COUNTS from the power-up position "
                          "[400000, about +-190 mm: homing at the default HOME_VEL takes minutes]")

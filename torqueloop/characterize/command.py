@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from sim_models.params import PlantParamError
-from sim_models.variants import plant_of
+from sim_models.variants import plant_choice
 from torqueloop.characterize.conclude import EXIT_ERROR, EXIT_FAIL, EXIT_NEED_SWEEP, EXIT_OK, conclude
 from torqueloop.characterize.config import CLK_HZ, PWM_BITS, c_header, verilog_header
 from torqueloop.characterize.data import DataError, Sweep, read_sweep
@@ -114,7 +114,7 @@ def _no_sim(args: argparse.Namespace) -> int:
 def check_sim_args(args: argparse.Namespace) -> int | None:
     """The ``sim`` arguments checked (an exit status if bad, else None)."""
     try:
-        plant = plant_of(args.plant)
+        plant = plant_choice(args.plant, args.plant_file, default="lab")
     except PlantParamError as e:
         print(f"error: --plant: {e}", file=sys.stderr)
         return EXIT_ERROR
@@ -211,9 +211,10 @@ def main(argv: Sequence[str] | None = None, sim: SimRunner | None = None,
     p.set_defaults(fn=cmd_run)
     p = sub.add_parser("sim", help="the whole method on the simulated bench (no hardware), and the study around it")
     p.add_argument("--out-dir", default="build/characterize")
-    p.add_argument("--plant", default="lab",
+    p.add_argument("--plant", default=None,
                    help="plant variant: paper-printed, paper or lab; lab-no-EFFECT[-no-EFFECT] switches "
                         "lab effects off (sim_models/params/variants.toml) [lab]")
+    p.add_argument("--plant-file", default=None, metavar="FILE", help="a plant file instead of a variant")
     p.add_argument("--seeds", type=int, default=10, help="sessions with different instrument noise [10]")
     p.add_argument("--no-ablation", dest="ablation", action="store_false",
                    help="skip the runs with each plant effect off")
