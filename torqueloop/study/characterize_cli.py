@@ -38,14 +38,21 @@ from typing import Sequence
 from sim_models.params import PlantParamError
 from sim_models.variants import plant_of
 from torqueloop.characterize.conclude import EXIT_ERROR, EXIT_FAIL, EXIT_NEED_SWEEP, EXIT_OK, conclude
-from torqueloop.characterize.config import CLK_HZ, PWM_BITS, c_header, verilog_header
+from torqueloop.characterize.config import CLK_HZ, PWM_BITS
 from torqueloop.characterize.data import DataError, Sweep, read_sweep
+from torqueloop.flow.gen_charconfig import c_header, verilog_header
 from torqueloop.characterize.method import MethodError, MotorResult, Thresholds, characterize_motor, step5_candidates
 from torqueloop.spec.charconfig import ConfigError, load_config, register_writes
 from torqueloop.spec.pwm import carrier_hz, divider_for
 from torqueloop.study.characterization import LINEARITY_FREQS_HZ, run_study
 
 __all__ = ["EXIT_OK", "EXIT_ERROR", "EXIT_NEED_SWEEP", "EXIT_FAIL", "main"]
+
+
+def _error(message: object) -> int:
+    """One line on stderr; the exit status of bad input."""
+    print(message, file=sys.stderr)
+    return EXIT_ERROR
 
 
 def _thresholds(sets: Sequence[str]) -> Thresholds:
@@ -93,8 +100,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             fs, ds = _split(files)
             results[name] = characterize_motor(fs, ds, th)
         except (DataError, MethodError) as e:
-            print(f"[{name}] error: {e}", file=sys.stderr)
-            return EXIT_ERROR
+            return _error(f"[{name}] error: {e}")
     return conclude(results, data_dir, Path(args.out), args.plots, th, args.clk_hz, args.pwm_bits)
 
 
@@ -102,11 +108,9 @@ def cmd_sim(args: argparse.Namespace) -> int:
     try:
         plant = plant_of(args.plant)
     except PlantParamError as e:
-        print(f"error: --plant: {e}", file=sys.stderr)
-        return EXIT_ERROR
+        return _error(f"error: --plant: {e}")
     if args.seeds < 1:
-        print("error: --seeds must be at least 1", file=sys.stderr)
-        return EXIT_ERROR
+        return _error("error: --seeds must be at least 1")
     return run_study(Path(args.out_dir), plant, seeds=args.seeds, axes=args.axes,
                      source=args.source, sim=args.simulator, th=_thresholds(args.set), ablation=args.ablation,
                      linearity_freqs=LINEARITY_FREQS_HZ if args.linearity else ())
@@ -118,8 +122,7 @@ def cmd_step5(args: argparse.Namespace) -> int:
         fs = read_sweep(args.freq_sweep)
         s5 = step5_candidates(fs, th)
     except (DataError, MethodError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return EXIT_ERROR
+        return _error(f"error: {e}")
     print(f"tau_max = {s5.tau_max_nm:.4g} N m, target {s5.target_nm:.4g} N m: {s5.message}")
     for i, c in enumerate(s5.candidates, 1):
         cm = divider_for(c.freq_hz, args.clk_hz, args.pwm_bits)
@@ -137,8 +140,7 @@ def cmd_check(args: argparse.Namespace) -> int:
             extra = f"at {s.freq_hz:g} Hz" if s.kind == "duty" else f"tau_max {s.stall_torque_nm:.4g} N m"
             print(f"{f}: ok, {s.kind} sweep, {len(s.x)} points, {extra}")
         except DataError as e:
-            print(f"error: {e}", file=sys.stderr)
-            rc = EXIT_ERROR
+            rc = _error(f"error: {e}")
     return rc
 
 
@@ -146,8 +148,7 @@ def cmd_show(args: argparse.Namespace) -> int:
     try:
         cfg = load_config(args.config)
     except ConfigError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return EXIT_ERROR
+        return _error(f"error: {e}")
     print(f"{args.config}: schema v{cfg.schema_version}, clk {cfg.clk_hz} Hz, {cfg.pwm_bits}-bit PWM")
     for n, a in cfg.axes.items():
         print(f"  {n}: {a.pwm_freq_hz:g} Hz, count_max {a.count_max} ({a.achieved_hz:.6g} Hz, {a.freq_error_pct:+.3f} %), "
@@ -157,8 +158,7 @@ def cmd_show(args: argparse.Namespace) -> int:
             for reg, addr, val in register_writes(cfg):
                 print(f"  write {reg:<16} 0x{addr:08X} = {val}")
         except ConfigError as e:
-            print(f"error: {e}", file=sys.stderr)
-            return EXIT_ERROR
+            return _error(f"error: {e}")
     return EXIT_OK
 
 
@@ -167,8 +167,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         cfg = load_config(args.config)
         text = (c_header if args.format == "c" else verilog_header)(cfg, Path(args.config).name)
     except ConfigError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return EXIT_ERROR
+        return _error(f"error: {e}")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text)
