@@ -40,12 +40,12 @@ sim: $(STAMP) ## all cocotb test benches on every applicable simulator
 	$(PY) -m pytest tb $(PYTEST_K) $(XDIST)
 
 lint: $(STAMP) ## Verilator -Wall, GHDL --std=08, Yosys synth check, VHDL/Verilog equivalence, SAT properties, slang strict front end, Quartus-safety rules, board constraints, generated files, import layers
-	$(PY) scripts/lint.py
-	$(PY) -m torqueloop.flow.strict
-	$(PY) -m torqueloop.flow.hdl_rules
-	$(PY) scripts/check_constraints.py
-	$(PY) -m torqueloop.flow.generate --check
-	$(PY) -m torqueloop.flow.layers
+	$(PY) -m torqueloop.flow lint
+	$(PY) -m torqueloop.flow strict
+	$(PY) -m torqueloop.flow hdl-rules
+	$(PY) -m torqueloop.flow constraints
+	$(PY) -m torqueloop.flow gen --check
+	$(PY) -m torqueloop.flow layers
 
 unit: $(STAMP) ## Python unit tests (plant, reference models, tools)
 	$(PY) -m pytest tests $(PYTEST_K) $(XDIST)
@@ -74,8 +74,8 @@ characterize: $(STAMP) ## the characterisation method (steps 1-8) on the simulat
 	$(PY) -m torqueloop.study characterize sim --out-dir build/characterize $(if $(PLANT),--plant $(PLANT),) $(if $(PLANT_FILE),--plant-file $(PLANT_FILE),)
 
 firmware: $(STAMP) ## servo firmware: build/firmware/servo/{servo.elf,.bin,_ram.hex,_rom.hex}
-	$(PY) -m torqueloop.flow.generate --check
-	$(PY) -m torqueloop.flow.firmware
+	$(PY) -m torqueloop.flow gen --check
+	$(PY) -m torqueloop.flow firmware
 
 board-sim: $(STAMP) ## simulated board (firmware C + plant) on TCP for the torqueloop host tool
 	$(VENV)/bin/torqueloop sim
@@ -84,7 +84,7 @@ board-sim-rtl: $(STAMP) ## the same with the co-simulated RTL board image (slow:
 	$(VENV)/bin/torqueloop sim --rtl
 
 quartus: $(STAMP) ## Quartus project for the DE0-CV in build/quartus (compiled when quartus_sh is on PATH); needs TORQUELOOP_KEY_FILE, or KEYLESS=1
-	$(PY) scripts/gen_quartus.py --project --compile $(if $(KEYLESS),--keyless)
+	$(PY) -m torqueloop.flow quartus --compile $(if $(KEYLESS),--keyless)
 
 clean: ## remove build output (keeps .venv)
 	rm -rf build

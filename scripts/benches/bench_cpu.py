@@ -74,10 +74,8 @@ def logic_depth(netlist: Path, skip_prefix: str | None = None) -> int:
 
 
 def main() -> int:
-    from bench import tb_module   # scripts/bench.py, which runs this (importing needs no simulator)
+    from torqueloop.flow.cpu_progs import PROGS, build
 
-    cpu_progs = tb_module("cpu", "cpu_progs")
-    PROGS, build = cpu_progs.PROGS, cpu_progs.build
     elf = build("bench", [PROGS / "bench.c"], tag="bench", opt="-O2")
     out = run_elf(elf)
     m = re.search(r"cycles=(\d+) instructions=(\d+) cpi=([\d.]+)", out)

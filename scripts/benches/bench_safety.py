@@ -6,7 +6,7 @@ no longer switch (firmware faults: the axis disabled, its bridge braked or
 coasting) - and, where the hardware acts, to all four IBT-2 inputs low.
 
 The whole board image (rtl/board/de0_cv_top.v: CPU, SoC, drive interlock,
-e-stop gate) runs on the native Verilator harness (torqueloop/sim/native)
+e-stop gate) runs on the native Verilator harness (torqueloop/sim/harness/harness.cpp)
 with the real servo firmware, started by the boot-ROM stub that arms the
 hardware watchdog as the boot ROM does; the host talks the link protocol on
 the UART pins.  Axis 0 holds a step of 300 counts at a 24.4 kHz carrier

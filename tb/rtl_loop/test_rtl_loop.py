@@ -144,13 +144,13 @@ class _Recorder:
         return data, cycles
 
 
-def _pin_trace(variant) -> _Recorder:
+def _pin_trace(harness) -> _Recorder:
     from sim_models.stepper import TwoAxisPlant
     from torqueloop.sim import native
     from torqueloop.spec import auth
     from torqueloop.sim.pins import PlantOnPins
     img = experiment.firmware_image()
-    board = _Recorder(native.NativeBoard.create(img.rom_hex, img.ram_hex, variant=variant))
+    board = _Recorder(native.NativeBoard.create(img.rom_hex, img.ram_hex, harness=harness))
     try:
         bridge = PlantOnPins(TwoAxisPlant(seed=0), board)
         link, _ = experiment.power_up(board, bridge, host_nonce=bytes(auth.NONCE_BYTES))   # the same bytes in both builds

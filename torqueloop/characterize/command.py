@@ -42,13 +42,20 @@ from typing import Callable, Sequence
 from sim_models.params import PlantParamError
 from sim_models.variants import plant_choice
 from torqueloop.characterize.conclude import EXIT_ERROR, EXIT_FAIL, EXIT_NEED_SWEEP, EXIT_OK, conclude
-from torqueloop.characterize.config import CLK_HZ, PWM_BITS, c_header, verilog_header
+from torqueloop.characterize.config import CLK_HZ, PWM_BITS
 from torqueloop.characterize.data import DataError, Sweep, read_sweep
+from torqueloop.flow.gen_charconfig import c_header, verilog_header
 from torqueloop.characterize.method import MethodError, MotorResult, Thresholds, characterize_motor, step5_candidates
 from torqueloop.spec.charconfig import ConfigError, load_config, register_writes
 from torqueloop.spec.pwm import carrier_hz, divider_for
 
 __all__ = ["EXIT_OK", "EXIT_ERROR", "EXIT_NEED_SWEEP", "EXIT_FAIL", "main"]
+
+
+def _error(message: object) -> int:
+    """One line on stderr; the exit status of bad input."""
+    print(message, file=sys.stderr)
+    return EXIT_ERROR
 
 
 def _thresholds(sets: Sequence[str]) -> Thresholds:
@@ -96,8 +103,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             fs, ds = _split(files)
             results[name] = characterize_motor(fs, ds, th)
         except (DataError, MethodError) as e:
-            print(f"[{name}] error: {e}", file=sys.stderr)
-            return EXIT_ERROR
+            return _error(f"[{name}] error: {e}")
     return conclude(results, data_dir, Path(args.out), args.plots, th, args.clk_hz, args.pwm_bits)
 
 
@@ -116,11 +122,9 @@ def check_sim_args(args: argparse.Namespace) -> int | None:
     try:
         plant = plant_choice(args.plant, args.plant_file, default="lab")
     except PlantParamError as e:
-        print(f"error: --plant: {e}", file=sys.stderr)
-        return EXIT_ERROR
+        return _error(f"error: --plant: {e}")
     if args.seeds < 1:
-        print("error: --seeds must be at least 1", file=sys.stderr)
-        return EXIT_ERROR
+        return _error("error: --seeds must be at least 1")
     args.plant = plant
     args.thresholds = _thresholds(args.set)
     return None
@@ -132,8 +136,7 @@ def cmd_step5(args: argparse.Namespace) -> int:
         fs = read_sweep(args.freq_sweep)
         s5 = step5_candidates(fs, th)
     except (DataError, MethodError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return EXIT_ERROR
+        return _error(f"error: {e}")
     print(f"tau_max = {s5.tau_max_nm:.4g} N m, target {s5.target_nm:.4g} N m: {s5.message}")
     for i, c in enumerate(s5.candidates, 1):
         cm = divider_for(c.freq_hz, args.clk_hz, args.pwm_bits)
@@ -151,8 +154,7 @@ def cmd_check(args: argparse.Namespace) -> int:
             extra = f"at {s.freq_hz:g} Hz" if s.kind == "duty" else f"tau_max {s.stall_torque_nm:.4g} N m"
             print(f"{f}: ok, {s.kind} sweep, {len(s.x)} points, {extra}")
         except DataError as e:
-            print(f"error: {e}", file=sys.stderr)
-            rc = EXIT_ERROR
+            rc = _error(f"error: {e}")
     return rc
 
 
@@ -160,8 +162,7 @@ def cmd_show(args: argparse.Namespace) -> int:
     try:
         cfg = load_config(args.config)
     except ConfigError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return EXIT_ERROR
+        return _error(f"error: {e}")
     print(f"{args.config}: schema v{cfg.schema_version}, clk {cfg.clk_hz} Hz, {cfg.pwm_bits}-bit PWM")
     for n, a in cfg.axes.items():
         print(f"  {n}: {a.pwm_freq_hz:g} Hz, count_max {a.count_max} ({a.achieved_hz:.6g} Hz, {a.freq_error_pct:+.3f} %), "
@@ -171,8 +172,7 @@ def cmd_show(args: argparse.Namespace) -> int:
             for reg, addr, val in register_writes(cfg):
                 print(f"  write {reg:<16} 0x{addr:08X} = {val}")
         except ConfigError as e:
-            print(f"error: {e}", file=sys.stderr)
-            return EXIT_ERROR
+            return _error(f"error: {e}")
     return EXIT_OK
 
 
@@ -181,8 +181,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         cfg = load_config(args.config)
         text = (c_header if args.format == "c" else verilog_header)(cfg, Path(args.config).name)
     except ConfigError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return EXIT_ERROR
+        return _error(f"error: {e}")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text)

@@ -27,8 +27,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field, replace
-from pathlib import Path
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -53,6 +52,24 @@ COUNTS_PER_REV = SYSTEM.counts_per_turn
 #: the paper's tau_max (twice tau_max/2 of sec. VI.A), milli N m: the torque at full PWM command
 TAU_MAX_MNM = tuple(a.tau_max_mnm for a in SYSTEM.axes)
 BOARD_KEYS = ("FDIV", "PW0", "PWMAX", "TAU_MAX_MNM")
+AXES = (0, 1)                 # x, z: every run drives both
+BOTH_AXES = 0b11              # the axis mask of ENABLE and CLEAR_FAULT for both
+
+
+@dataclass(frozen=True)
+class HarnessTiming:
+    """What the harness waits for on the board image, named once."""
+
+    reset_clk: int = 20             # clocks in reset, arm switch down
+    arm_delay_clk: int = 40_000     # out of reset with the switch down, before it rises (0.8 ms)
+    settle_ms: int = 30             # after configuring: past a deadline of the previous control period
+    sample_poll_clk: int = 2_000    # the step waits for a fresh sample in strides of this
+    loop_poll_clk: int = 20_000     # run_fast_loop's stride between link polls
+    link_timeout_ms: int = 2_000    # LINK_TIMEOUT_MS of a run (the heartbeat feeds it every heartbeat_s)
+    follow_limit_turns: int = 10    # FOLLOW_LIMIT in screw turns: axis z overshoots by most of a turn
+
+
+TIMING = HarnessTiming()
 
 
 @dataclass(frozen=True)
@@ -91,8 +108,8 @@ class ExperimentConfig:
 
     def overrides(self) -> tuple[dict[str, int], ...]:
         """What the user sets after loading (``torqueloop set pwm_freq F``, ``set pw0 0``)."""
-        out: list[dict[str, int]] = [{}, {}]
-        for ax in (0, 1):
+        out: list[dict[str, int]] = [{} for _ in AXES]
+        for ax in AXES:
             if self.pwm_hz is not None:
                 out[ax]["FDIV"] = divider_for(self.pwm_hz[ax])
             if self.pw0_off:
@@ -174,8 +191,8 @@ def configure(link: Client, cfg: ExperimentConfig) -> list[dict[str, int]]:
         for k, v in o.items():
             link.set_param(k, v, ax)
     link.set_param("PERIOD_US", cfg.period_us)
-    link.set_param("LINK_TIMEOUT_MS", 2000)
-    for ax in (0, 1):
+    link.set_param("LINK_TIMEOUT_MS", TIMING.link_timeout_ms)
+    for ax in AXES:
         g = TABLE1[cfg.law][ax]
         link.set_param("LAW", LAWS[cfg.law], ax)
         link.set_param("COUNTS_PER_REV", COUNTS_PER_REV, ax)
@@ -185,8 +202,8 @@ def configure(link: Client, cfg: ExperimentConfig) -> list[dict[str, int]]:
         link.set_param("CMD_LIMIT", SYSTEM.pwm_full, ax)
         link.set_param("VEL_MODE", 0, ax)          # the paper's filtered Euler difference
         link.set_param("BRAKE", int(cfg.brake), ax)
-        link.set_param("FOLLOW_LIMIT", 10 * COUNTS_PER_REV, ax)   # axis z overshoots by most of a turn
-    return [{k: link.get_param(k, ax) for k in BOARD_KEYS} for ax in (0, 1)]
+        link.set_param("FOLLOW_LIMIT", TIMING.follow_limit_turns * COUNTS_PER_REV, ax)
+    return [{k: link.get_param(k, ax) for k in BOARD_KEYS} for ax in AXES]
 
 
 def power_up(board, bridge: PlantOnPins, host_nonce: bytes | None = None) -> tuple[Client, dict[str, int]]:
@@ -196,9 +213,9 @@ def power_up(board, bridge: PlantOnPins, host_nonce: bytes | None = None) -> tup
     the host tool's client on the board's UART and IDENTIFY's reply.  ``host_nonce``: fixed, for runs that must
     repeat byte for byte."""
     board.set_board(0, 1, 0)
-    bridge.run_to(20)
+    bridge.run_to(TIMING.reset_clk)
     board.set_board(1, 1, 0)
-    bridge.run_to(40_000)
+    bridge.run_to(TIMING.arm_delay_clk)
     board.set_board(1, 1, 1)
     link = sim_client(SimTransport(board.uart_send, board.uart_recv, lambda n: bridge.run_to(board.cycle + n),
                                    lambda: board.cycle), auth.TEST_KEY)
@@ -223,25 +240,25 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
             link.set_param("BAUD_DIV", cfg.baud_div)   # replied at the old rate
             board.set_uart_div(cfg.baud_div + 1)
         settings = configure(link, cfg)
-        # Changing PERIOD_US used to trip the SoC watchdog (the next tick stayed
-        # at the old period's deadline); the firmware now restarts its tick.
-        # Still wait past an old deadline and record anything latched, so a
-        # regression shows in report.json and fails the rtl_loop test.
-        link.transport.advance(30 * CLK_HZ // 1000)
-        config_faults = [link.status(ax)["faults"] for ax in (0, 1)]
+        # Wait past a deadline of the previous control period and record
+        # anything latched: a firmware that kept its tick at the old period's
+        # deadline after PERIOD_US changes would trip the SoC watchdog here,
+        # which shows in report.json and fails the rtl_loop test.
+        link.transport.advance(TIMING.settle_ms * CLK_HZ // 1000)
+        config_faults = [link.status(ax)["faults"] for ax in AXES]
         if any(config_faults):
-            link.clear_fault(3)
+            link.clear_fault(BOTH_AXES)
         link.set_telemetry(1)
-        link.enable(3)
+        link.enable(BOTH_AXES)
         # step both axes in the same control period: send both MOVEs right after a sample
         n_tel = len(link.telemetry_queue)
         while len(link.telemetry_queue) == n_tel:
-            link.transport.advance(2_000)
+            link.transport.advance(TIMING.sample_poll_clk)
             link.poll()
         target = cfg.target_counts
         # the paper's step from rest, relative to where the stage was at power-up: UNHOMED
         bridge.watch(board.cycle)       # the first drive edges give the carriers' phase at the step
-        seqs = [link.post("MOVE", axis=ax, mode=tp.MOVE_UNHOMED, target=target) for ax in (0, 1)]
+        seqs = [link.post("MOVE", axis=ax, mode=tp.MOVE_UNHOMED, target=target) for ax in AXES]
         for s in seqs:
             r = link.wait(s)
             if r["status"] != tp.STATUS["OK"]:
@@ -310,7 +327,7 @@ def _assemble(cfg: ExperimentConfig, link: Client, trace: list[tuple], target: i
     rad = 2 * math.pi / COUNTS_PER_REV
     cols: dict[str, list[np.ndarray]] = {k: [] for k in ("pos", "vel", "cmd", "err", "true", "q", "q2")}
     start, tts, k0s = [], [], []
-    for a in (0, 1):
+    for a in AXES:
         k0 = next((i for i, f in enumerate(tel) if f.axes[a]["error"] == target - f.axes[a]["position"]), None)
         if k0 is None:
             raise RuntimeError(f"no telemetry frame of axis {a} shows an iteration that used the step's target")
@@ -395,7 +412,7 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
     starts = [s or 0 for s in carrier_start_clk] or [0, 0]
     channels = [PwmChannel(PwmSetting(**st), off_phase=safe, first_start=s) for st, s in zip(setting, starts)]
     axes = []
-    for ax in (0, 1):
+    for ax in AXES:
         g = TABLE1[cfg.law][ax]
         raw = [tp.gain_raw_from_phys(round(k * 1e6), board[ax]["TAU_MAX_MNM"], COUNTS_PER_REV) if k else 0
                for k in (g.kp, g.kd, g.ki)]
@@ -409,7 +426,7 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
     for k in range(n):
         ts = k * period
         run_until(plant, channels, (k - 1) * period if k else 0, ts)
-        for a in (0, 1):
+        for a in AXES:
             if k == 0:
                 axes[a].move(cfg.target_counts, False)
             pos = plant.count(a)
@@ -475,26 +492,26 @@ def run_fast_loop(period_us: int = 50, seconds: float = 0.5, law: str = "PID", b
         link.set_param("PERIOD_US", period_us)
         # the run sends nothing that feeds the link watchdog for `seconds`
         link.set_param("LINK_TIMEOUT_MS", max(500, round(seconds * 2000)))
-        for ax in (0, 1):
+        for ax in AXES:
             g = TABLE1[law][ax]
             link.set_param("LAW", LAWS[law], ax)
             link.set_param("KP_UNM_RAD", round(g.kp * 1e6), ax)
             link.set_param("KD_UNMS_RAD", round(g.kd * 1e6), ax)
             link.set_param("KI_UNM_RADS", round(g.ki * 1e6), ax)
             link.set_param("VEL_MODE", 1, ax)
-        link.enable(3)
-        start = [link.status(ax)["position"] for ax in (0, 1)]
-        for ax in (0, 1):
+        link.enable(BOTH_AXES)
+        start = [link.status(ax)["position"] for ax in AXES]
+        for ax in AXES:
             link.move(ax, start[ax] + travel_counts * (1 - 2 * ax), trapezoid=move_mode == 1, unhomed=True)
         link.set_telemetry(telemetry_every)
         n0 = len(link.telemetry_queue)
         t_end = board.cycle + round(seconds * CLK_HZ)
         while board.cycle < t_end:
-            link.transport.advance(min(20_000, t_end - board.cycle))
+            link.transport.advance(min(TIMING.loop_poll_clk, t_end - board.cycle))
             link.poll()
         frames = telemetry(link)[n0:]
         link.set_telemetry(0)
-        st = [link.status(ax) for ax in (0, 1)]
+        st = [link.status(ax) for ax in AXES]
         cnt = link.counters()
         cycles = board.cycle
     finally:
