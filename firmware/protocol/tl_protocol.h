@@ -59,6 +59,35 @@
 #define TLP_WHY_NO_SWITCHES 20u
 #define TLP_WHY_NOT_HOMED 21u
 #define TLP_WHY_CAUSE 22u
+/* the status a rule comes with (a constant rule folds to a constant) */
+static inline uint8_t tlp_why_status(uint8_t why)
+{
+    switch (why) {
+    case TLP_WHY_AXIS: return TLP_ST_BAD_ARG;
+    case TLP_WHY_PARAM: return TLP_ST_BAD_ARG;
+    case TLP_WHY_SCOPE: return TLP_ST_BAD_ARG;
+    case TLP_WHY_CHOICE: return TLP_ST_BAD_ARG;
+    case TLP_WHY_BELOW_MIN: return TLP_ST_RANGE;
+    case TLP_WHY_ABOVE_MAX: return TLP_ST_RANGE;
+    case TLP_WHY_SOFT_ORDER: return TLP_ST_RANGE;
+    case TLP_WHY_PW_ORDER: return TLP_ST_RANGE;
+    case TLP_WHY_CARRIER: return TLP_ST_RANGE;
+    case TLP_WHY_GAIN: return TLP_ST_RANGE;
+    case TLP_WHY_TIGHTEN: return TLP_ST_LOOSEN;
+    case TLP_WHY_OUTSIDE_SOFT: return TLP_ST_RANGE;
+    case TLP_WHY_LIMIT: return TLP_ST_RANGE;
+    case TLP_WHY_FOLLOW: return TLP_ST_RANGE;
+    case TLP_WHY_DISABLED: return TLP_ST_STATE;
+    case TLP_WHY_HOMING: return TLP_ST_STATE;
+    case TLP_WHY_FAULT: return TLP_ST_STATE;
+    case TLP_WHY_ESTOP: return TLP_ST_STATE;
+    case TLP_WHY_FORCED: return TLP_ST_STATE;
+    case TLP_WHY_NO_SWITCHES: return TLP_ST_STATE;
+    case TLP_WHY_NOT_HOMED: return TLP_ST_NOT_HOMED;
+    case TLP_WHY_CAUSE: return TLP_ST_STATE;
+    default: return TLP_ST_OK;
+    }
+}
 
 #define TLP_FAULT_ESTOP 0x0001u
 #define TLP_FAULT_BRIDGE 0x0002u

@@ -78,9 +78,9 @@ TL_FOR_SIZE static uint8_t cmd_enable(tl_servo_t *s, const uint8_t *q, uint8_t *
     (void)rep;
     uint8_t mask = q[TLP_ENABLE_REQ_MASK], on = q[TLP_ENABLE_REQ_ENABLE];
     if (!axis_mask_ok(mask))
-        return refuse(why, TLP_WHY_AXIS, TLP_ST_BAD_ARG);
+        return refuse(why, TLP_WHY_AXIS);
     if (on > 1u)
-        return refuse(why, TLP_WHY_CHOICE, TLP_ST_BAD_ARG);
+        return refuse(why, TLP_WHY_CHOICE);
     if (!on) {
         tl_axes_disable(s, mask);
         return TLP_ST_OK;
@@ -94,24 +94,24 @@ static uint8_t cmd_move(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *
     uint8_t axis = q[TLP_MOVE_REQ_AXIS], mode = q[TLP_MOVE_REQ_MODE];
     int32_t target = (int32_t)tl_get_u32(&q[TLP_MOVE_REQ_TARGET]);
     if (axis >= TL_AXES)
-        return refuse(why, TLP_WHY_AXIS, TLP_ST_BAD_ARG);
+        return refuse(why, TLP_WHY_AXIS);
     if (mode & (uint8_t)~(TLP_MOVE_TRAPEZOID | TLP_MOVE_UNHOMED))
-        return refuse(why, TLP_WHY_CHOICE, TLP_ST_BAD_ARG);
+        return refuse(why, TLP_WHY_CHOICE);
     tl_axis_t *a = &s->ax[axis];
     if (!a->enabled)
-        return refuse(why, TLP_WHY_DISABLED, TLP_ST_STATE);
+        return refuse(why, TLP_WHY_DISABLED);
     if (a->home == TLP_HOME_STATE_HOMING)
-        return refuse(why, TLP_WHY_HOMING, TLP_ST_STATE);
+        return refuse(why, TLP_WHY_HOMING);
     if (a->home != TLP_HOME_STATE_HOMED && !(mode & TLP_MOVE_UNHOMED))
-        return refuse(why, TLP_WHY_NOT_HOMED, TLP_ST_NOT_HOMED);
+        return refuse(why, TLP_WHY_NOT_HOMED);
     if (target < pv(a, TLP_P_SOFT_MIN) || target > pv(a, TLP_P_SOFT_MAX))
-        return refuse(why, TLP_WHY_OUTSIDE_SOFT, TLP_ST_RANGE);
+        return refuse(why, TLP_WHY_OUTSIDE_SOFT);
     uint8_t b = tl_blocked(a);
     if (((b & TLP_LIMIT_NEG) && target < a->pos) || ((b & TLP_LIMIT_POS) && target > a->pos))
-        return refuse(why, TLP_WHY_LIMIT, TLP_ST_RANGE);
+        return refuse(why, TLP_WHY_LIMIT);
     int64_t d = (int64_t)target - a->pos;
     if (!(mode & TLP_MOVE_TRAPEZOID) && (d > pv(a, TLP_P_FOLLOW_LIMIT) || -d > pv(a, TLP_P_FOLLOW_LIMIT)))
-        return refuse(why, TLP_WHY_FOLLOW, TLP_ST_RANGE);   /* the following error would trip at once */
+        return refuse(why, TLP_WHY_FOLLOW);   /* the following error would trip at once */
     hal_irq_off();
     tl_ctl_move(&a->c, target, (mode & TLP_MOVE_TRAPEZOID) != 0u);
     hal_irq_on();
@@ -124,7 +124,7 @@ TL_FOR_SIZE static uint8_t cmd_stop(tl_servo_t *s, const uint8_t *q, uint8_t *re
     (void)rep;
     uint8_t m = q[TLP_STOP_REQ_MASK];
     if (!axis_mask_ok(m))
-        return refuse(why, TLP_WHY_AXIS, TLP_ST_BAD_ARG);
+        return refuse(why, TLP_WHY_AXIS);
     hal_irq_off();
     for (uint32_t i = 0; i < TL_AXES; i++)
         if (m & (1u << i)) {
@@ -140,7 +140,7 @@ TL_FOR_SIZE static uint8_t cmd_status(tl_servo_t *s, const uint8_t *q, uint8_t *
 {
     uint8_t axis = q[TLP_STATUS_REQ_AXIS];
     if (axis >= TL_AXES)
-        return refuse(why, TLP_WHY_AXIS, TLP_ST_BAD_ARG);
+        return refuse(why, TLP_WHY_AXIS);
     const tl_axis_t *a = &s->ax[axis];
     rep[TLP_STATUS_REP_ENABLED] = a->enabled;
     tl_put_u16(&rep[TLP_STATUS_REP_FAULTS], a->faults);
@@ -174,7 +174,7 @@ TL_FOR_SIZE static uint8_t cmd_clear_fault(tl_servo_t *s, const uint8_t *q, uint
 {
     uint8_t mask = q[TLP_CLEAR_FAULT_REQ_MASK];
     if (!axis_mask_ok(mask))
-        return refuse(why, TLP_WHY_AXIS, TLP_ST_BAD_ARG);
+        return refuse(why, TLP_WHY_AXIS);
     uint8_t st = tl_axes_clear(s, mask, why);
     tl_put_u16(&rep[TLP_CLEAR_FAULT_REP_FAULTS0], s->ax[0].faults);
     tl_put_u16(&rep[TLP_CLEAR_FAULT_REP_FAULTS1], s->ax[1].faults);
@@ -186,7 +186,7 @@ TL_FOR_SIZE static uint8_t cmd_bootloader(tl_servo_t *s, const uint8_t *q, uint8
 {
     (void)rep;
     if (tl_get_u32(&q[TLP_BOOTLOADER_REQ_MAGIC]) != TLP_BOOTLOADER_MAGIC)
-        return refuse(why, TLP_WHY_CHOICE, TLP_ST_BAD_ARG);
+        return refuse(why, TLP_WHY_CHOICE);
     tl_axes_disable(s, (uint8_t)((1u << TL_AXES) - 1u));
     s->bootloader_req = true;
     return TLP_ST_OK;

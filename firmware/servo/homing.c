@@ -76,12 +76,12 @@ void tl_home_tick(tl_axis_t *a, uint32_t i, uint32_t now)
 uint8_t tl_home_start(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index, uint8_t *why)
 {
     if (axis >= TL_AXES)
-        return refuse(why, TLP_WHY_AXIS, TLP_ST_BAD_ARG);
+        return refuse(why, TLP_WHY_AXIS);
     if (mode > TLP_HOME_MODE_HERE || index > 1u)
-        return refuse(why, TLP_WHY_CHOICE, TLP_ST_BAD_ARG);
+        return refuse(why, TLP_WHY_CHOICE);
     tl_axis_t *a = &s->ax[axis];
     if (a->home == TLP_HOME_STATE_HOMING)
-        return refuse(why, TLP_WHY_HOMING, TLP_ST_STATE);
+        return refuse(why, TLP_WHY_HOMING);
     hal_irq_off();
     if (mode == TLP_HOME_MODE_HERE) {
         tl_enc_sample_t e;
@@ -93,8 +93,8 @@ uint8_t tl_home_start(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index, 
     }
     if (!a->enabled || a->faults || !pv(a, TLP_P_LIMIT_SW)) {
         hal_irq_on();
-        return refuse(why, !a->enabled ? TLP_WHY_DISABLED : (a->faults ? TLP_WHY_FAULT : TLP_WHY_NO_SWITCHES),
-                      TLP_ST_STATE);
+        return refuse(why, !a->enabled ? TLP_WHY_DISABLED
+                           : (a->faults ? TLP_WHY_FAULT : TLP_WHY_NO_SWITCHES));
     }
     a->home = TLP_HOME_STATE_HOMING;
     a->home_phase = HOME_SEEK;

@@ -87,10 +87,9 @@ static uint8_t param_slot(uint8_t axis, uint8_t id, int *k, uint8_t *why)
 {
     *k = TLP_PARAM_INDEX[id];
     if (*k == IDX_NONE)
-        return refuse(why, TLP_WHY_PARAM, TLP_ST_BAD_ARG);
+        return refuse(why, TLP_WHY_PARAM);
     if (TLP_PARAM_INFO[*k].global ? axis != TLP_GLOBAL_AXIS : axis >= TL_AXES)
-        return refuse(why, axis == TLP_GLOBAL_AXIS || TLP_PARAM_INFO[*k].global ? TLP_WHY_SCOPE : TLP_WHY_AXIS,
-                      TLP_ST_BAD_ARG);
+        return refuse(why, axis == TLP_GLOBAL_AXIS || TLP_PARAM_INFO[*k].global ? TLP_WHY_SCOPE : TLP_WHY_AXIS);
     return TLP_ST_OK;
 }
 
@@ -163,21 +162,21 @@ static uint8_t param_allowed(const tl_servo_t *s, uint8_t axis, uint8_t id, int 
 {
     const tlp_param_info_t *info = &TLP_PARAM_INFO[k];
     if (v < info->min || v > info->max)
-        return refuse(why, v < info->min ? TLP_WHY_BELOW_MIN : TLP_WHY_ABOVE_MAX, TLP_ST_RANGE);
+        return refuse(why, v < info->min ? TLP_WHY_BELOW_MIN : TLP_WHY_ABOVE_MAX);
     if (info->tighten && tl_any_enabled(s)) {
         int32_t cur = info->global ? s->g[k] : s->ax[axis].p[k];
         if (info->tighten > 0 ? v < cur : v > cur)
-            return refuse(why, TLP_WHY_TIGHTEN, TLP_ST_LOOSEN);
+            return refuse(why, TLP_WHY_TIGHTEN);
     }
     if (info->global) {
         if (id == TLP_P_PWM_MAX_HZ)
             for (uint32_t i = 0; i < TL_AXES; i++)
                 if (!carrier_ok(s, pv(&s->ax[i], TLP_P_FDIV), v))
-                    return refuse(why, TLP_WHY_CARRIER, TLP_ST_RANGE);
+                    return refuse(why, TLP_WHY_CARRIER);
         return TLP_ST_OK;
     }
     uint8_t rule = axis_bound(s, &s->ax[axis], id, v);
-    return rule == TLP_WHY_NONE ? TLP_ST_OK : refuse(why, rule, TLP_ST_RANGE);
+    return rule == TLP_WHY_NONE ? TLP_ST_OK : refuse(why, rule);
 }
 
 /* A global parameter: the new value into a copy, everything derived from it

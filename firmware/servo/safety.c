@@ -72,14 +72,14 @@ static uint8_t enable_allowed(tl_servo_t *s, uint8_t mask, uint8_t *why)
     uint32_t latched = tl_fold_latch(s);
     for (uint32_t i = 0; i < TL_AXES; i++)
         if ((mask & (1u << i)) && (s->ax[i].faults & (uint16_t)~TLP_FAULT_DIRECTIONAL))
-            return refuse(why, TLP_WHY_FAULT, TLP_ST_STATE);
+            return refuse(why, TLP_WHY_FAULT);
     if (hal_safety() & TL_HAL_SAFE_ESTOP_IN)
-        return refuse(why, TLP_WHY_ESTOP, TLP_ST_STATE);
+        return refuse(why, TLP_WHY_ESTOP);
     /* The SoC latch (the reset-time ESTOP, or causes now recorded as faults) is
      * acknowledged here and by CLEAR_FAULT only. */
     hal_safety_ack(latched);
     if (hal_safety() & TL_HAL_SAFE_FORCED)
-        return refuse(why, TLP_WHY_FORCED, TLP_ST_STATE);
+        return refuse(why, TLP_WHY_FORCED);
     return TLP_ST_OK;
 }
 
@@ -152,5 +152,5 @@ uint8_t tl_axes_clear(tl_servo_t *s, uint8_t mask, uint8_t *why)
     if (!(safety & TL_HAL_SAFE_ESTOP_IN))
         hal_safety_ack(latched);
     hal_irq_on();
-    return left ? refuse(why, TLP_WHY_CAUSE, TLP_ST_STATE) : TLP_ST_OK;
+    return left ? refuse(why, TLP_WHY_CAUSE) : TLP_ST_OK;
 }

@@ -25,11 +25,12 @@ static inline int32_t wrap_add(int32_t x, int32_t y) { return (int32_t)((uint32_
 
 static inline bool axis_mask_ok(uint8_t m) { return m != 0u && (m & ~((1u << TL_AXES) - 1u)) == 0u; }
 
-/* A refusal: the rule (TLP_WHY_*, the reply's second byte) into *why, the status returned. */
-static inline uint8_t refuse(uint8_t *why, uint8_t rule, uint8_t status)
+/* A refusal: the rule (TLP_WHY_*, the reply's second byte) into *why; returns the
+ * status protocol.toml gives that rule. */
+static inline uint8_t refuse(uint8_t *why, uint8_t rule)
 {
     *why = rule;
-    return status;
+    return tlp_why_status(rule);
 }
 
 /* ---- params.c ---- */

@@ -42,7 +42,10 @@ def c_header() -> str:
     L.append("#define TLP_REPLY_WHY 1u")
     for n, v in P.REFUSAL.items():
         L.append(f"#define TLP_WHY_{n} {v}u")
-    L.append("")
+    L += ["/* the status a rule comes with (a constant rule folds to a constant) */",
+          "static inline uint8_t tlp_why_status(uint8_t why)", "{", "    switch (why) {"]
+    L += [f"    case TLP_WHY_{n}: return TLP_ST_{P.STATUS_NAME[st]};" for n, st in P.REFUSAL_STATUS.items()]
+    L += ["    default: return TLP_ST_OK;", "    }", "}", ""]
     for n, v in P.FAULT.items():
         L.append(f"#define TLP_FAULT_{n} 0x{v:04X}u")
     L.append("/* faults that only block motion toward their end: ENABLE is allowed with them latched */")
