@@ -214,13 +214,14 @@ def cmd_get(ctx: Ctx) -> int:
 
 def cmd_set(ctx: Ctx) -> int:
     a = ctx.args
-    units.to_raw(a.name, a.value, nearest=a.nearest)   # a bad value is refused before the link is opened
+    units.to_raw(a.name, a.value, nearest=True)   # a bad value is refused before the link is opened
     ctx.require_key("SET_PARAM")
     clk = (ctx.client.identity or {}).get("clk_hz", units.CLK_HZ)
     fr = units.FRIENDLY.get(a.name.lower())
     mech = ctx.mech(a.axis) if fr is not None and fr.dim is not None else None
-    param, raw = units.to_raw(a.name, a.value, clk, mech, a.nearest)
-    _check_pair(ctx, param, raw, a.axis, clk)
+    param, raw = units.to_raw(a.name, a.value, clk, mech, nearest=True)
+    _check_pair(ctx, param, raw, a.axis, clk)        # the bridge's ceiling first: the stronger reason
+    units.to_raw(a.name, a.value, clk, mech, a.nearest)   # then a carrier too far from the request
     if param == "BAUD_DIV":
         print("warning: the board changes its baud rate after this reply; reconnect with --baud",
               file=sys.stderr)
