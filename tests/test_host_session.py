@@ -126,8 +126,8 @@ def test_bring_up_as_a_user_would(url, user_env, capsys) -> None:
 
 
 def test_hold_keeps_the_axis_enabled_until_ctrl_c(url, user_env) -> None:
-    p = _start(["-u", url, "move", "0.5rev", "--relative", "--unhomed", "--enable", "--wait", "15", "--tolerance", "40", "--hold"],
-               user_env)
+    p = _start(["-u", url, "move", "0.5rev", "--relative", "--unhomed", "--enable", "--wait", "15",
+                "--tolerance", "40", "--hold"], user_env)
     try:
         for line in p.stderr:                                # it says when it starts holding
             if "holding axis 0" in line:

@@ -439,9 +439,9 @@ def cmd_home(ctx: Ctx) -> int:
             raise ProtocolError(f"axis {a.axis} is disabled: homing to a switch moves it; "
                                 f"`torqueloop home {a.mode} --enable` enables it for the homing")
     if a.enable and not st["enabled"]:
-        if st["faults"] & ~P.DIRECTIONAL_FAULTS:
-            raise ProtocolError(f"axis {a.axis} has latched faults: "
-                                f"{describe_faults(st['faults'] & ~P.DIRECTIONAL_FAULTS)}; `torqueloop clear-fault` first")
+        if blocking := st["faults"] & ~P.DIRECTIONAL_FAULTS:
+            raise ProtocolError(f"axis {a.axis} has latched faults: {describe_faults(blocking)}; "
+                                "`torqueloop clear-fault` first")
         c.enable(1 << a.axis, True)
     try:
         c.home(a.axis, a.mode, a.index)
