@@ -234,7 +234,7 @@ def cmd_get(ctx: Ctx) -> int:
 
 def cmd_set(ctx: Ctx) -> int:
     a = ctx.args
-    units.to_raw(a.name, a.value, nearest=a.nearest)   # a bad value is refused before the link is opened
+    units.to_raw(a.name, a.value, nearest=True)   # a bad value is refused before the link is opened
     ctx.require_key("SET_PARAM")
     clk = (ctx.client.identity or {}).get("clk_hz", units.CLK_HZ)
     fr = units.FRIENDLY.get(a.name.lower())
@@ -298,22 +298,33 @@ def _hold(ctx: Ctx, axis: int) -> int:
     return rc
 
 
+SETTLE_HOLD_S = 0.3   # "settled": the profile done and the position within the tolerance this long
+
+
 def _wait_settled(ctx: Ctx, axis: int, limit_s: float, tol: int, start: int, target: int
                   ) -> tuple[dict[str, int], bool]:
-    """Poll until the axis has settled within ``tol`` counts of its set-point
-    or ``limit_s`` has passed, feeding the link watchdog; (status, settled)."""
+    """Poll until the axis has settled - its profile done and its position
+    within ``tol`` counts of the set-point for SETTLE_HOLD_S, as a settling
+    time is defined - or ``limit_s`` has passed, feeding the link watchdog;
+    (status, settled)."""
     c = ctx.client
     t0 = time.monotonic()
     span = abs(target - start)
     shown = False
+    inside_since: float | None = None
     try:
         while True:
             s = c.status(axis)
+            now = time.monotonic()
             if s["faults"]:
                 raise ProtocolError(f"axis {axis} faulted during the move: {describe_faults(s['faults'])}")
-            if not s["moving"] and abs(s["setpoint"] - s["position"]) <= tol and abs(s["velocity_q8"]) < 256 * 50:
-                return s, True
-            if time.monotonic() - t0 > limit_s:
+            if not s["moving"] and abs(s["setpoint"] - s["position"]) <= tol:
+                inside_since = now if inside_since is None else inside_since
+                if now - inside_since >= SETTLE_HOLD_S:
+                    return s, True
+            else:
+                inside_since = None
+            if now - t0 > limit_s:
                 return s, False
             if not ctx.args.json and span:      # how much of the way it has come, not of the wait
                 progress(span - min(span, abs(target - s["position"])), span, f"axis {axis} moving")
@@ -379,9 +390,9 @@ def cmd_home(ctx: Ctx) -> int:
             raise ProtocolError(f"axis {a.axis} is disabled: homing to a switch moves it; "
                                 f"`torqueloop home {a.mode} --enable` enables it for the homing")
     if a.enable and not st["enabled"]:
-        if st["faults"] & ~P.DIRECTIONAL_FAULTS:
-            raise ProtocolError(f"axis {a.axis} has latched faults: "
-                                f"{describe_faults(st['faults'] & ~P.DIRECTIONAL_FAULTS)}; `torqueloop clear-fault` first")
+        if blocking := st["faults"] & ~P.DIRECTIONAL_FAULTS:
+            raise ProtocolError(f"axis {a.axis} has latched faults: {describe_faults(blocking)}; "
+                                "`torqueloop clear-fault` first")
         c.enable(1 << a.axis, True)
     try:
         c.home(a.axis, a.mode, a.index)
@@ -904,7 +915,7 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("--hold", action="store_true",
                     help="afterwards keep the axis enabled, sending heartbeats, until Ctrl-C (then disable)")
     sp.add_argument("--tolerance", type=_bounded(int, 0, 2**31 - 1, "--tolerance"), default=20,
-                    help="settled within this many counts [20]")
+                    help="settled: within this many counts of the target for 0.3 s [20]")
     sp.set_defaults(fn=cmd_move)
     sp = sub.add_parser("home", help="home an axis: to its negative or positive limit switch, or here")
     sp.add_argument("mode", nargs="?", default="neg", choices=list(P.HOME_MODES),

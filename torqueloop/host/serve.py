@@ -29,8 +29,8 @@ Methods (params in brackets): ``identify``, ``status`` [axis],
 mode, index], ``heartbeat``, ``stop`` [mask], ``clear_fault`` [mask],
 ``counters``, ``stats``, ``holds``, ``subscribe`` [every], ``unsubscribe``.
 
-Holding an axis: a client that enables an axis, moves it or homes it
-holds it.  While any client holds an axis the server sends HEARTBEATs
+Holding an axis: a client that enables an axis, moves it or homes it to
+a switch holds it.  While any client holds an axis the server sends HEARTBEATs
 (the link watchdog stays quiet however long a person takes between
 commands); disabling an axis releases it; when the last client holding an
 axis goes away (its process ended, its connection dropped) the server
@@ -316,7 +316,8 @@ class SessionServer:
 
     def m_home(self, conn: _Conn, axis: int, mode: str, index: bool = False) -> None:
         self._run(lambda: self.client.home(axis, mode, bool(index)))
-        self._hold(conn, 1 << axis)
+        if mode != "here":               # homing to a switch moves the axis: this client now holds it
+            self._hold(conn, 1 << axis)
 
     def m_heartbeat(self, conn: _Conn) -> None:
         self._run(self.client.heartbeat)

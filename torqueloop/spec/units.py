@@ -35,7 +35,7 @@ INT32_MIN, INT32_MAX = -(1 << 31), (1 << 31) - 1
 POSITION_UNITS = ("counts", "mm", "rev", "rad", "deg")
 #: the largest relative difference between a requested and a stored carrier that `set pwm_freq` accepts
 #: without --nearest
-PWM_FREQ_TOL = 0.01
+PWM_FREQ_TOL = 0.02
 
 
 class BadValue(ValueError):
