@@ -101,11 +101,14 @@ class RopeBenchConfig:
     window_s: float = 0.1                     # the gauge's and ammeter's averaging window (10 Hz display)
     # How long the lab waits before it writes a reading down: "fixed" waits
     # settle_s; "converged" watches the gauge window by window and reads once
-    # the mean force of ``converge_windows`` successive windows has changed by
-    # less than ``converge_frac`` of the motor's stall force from one window
-    # to the next, or gives up after ``max_settle_s`` (the trace says so).
+    # the window mean has changed by less than ``converge_frac`` of the
+    # motor's stall force against the window ``converge_span_s`` earlier, for
+    # ``converge_windows`` windows in a row, or gives up after
+    # ``max_settle_s`` (the trace says so).  Comparing across a span, not
+    # neighbouring windows, catches a slow creep that each window hides.
     settle_rule: str = "fixed"
-    converge_frac: float = 0.0005
+    converge_frac: float = 0.001
+    converge_span_s: float = 1.0
     converge_windows: int = 3
     max_settle_s: float = 20.0
     gauge: GaugeConfig = field(default_factory=GaugeConfig)
@@ -250,14 +253,15 @@ class RopeDynamometer:
             raise ValueError(f"settle_rule {cfg.settle_rule!r}: 'fixed' or 'converged'")
         tol = cfg.converge_frac * self.stall_force_N()
         n_max = max(1, math.ceil(cfg.max_settle_s / period_s))
-        held, quiet, last = 0, 0, None
+        span = max(1, round(cfg.converge_span_s / (n_win * period_s)))
+        held, quiet, means = 0, 0, []
         while held < n_max:
             q0 = fa.x[ax.PHI_S]
             periods(n_win)
             held += n_win
-            mean = (fa.x[ax.PHI_S] - q0) / (n_win * period_s)
-            quiet = quiet + 1 if last is not None and abs(mean - last) < tol else 0
-            last = mean
+            means.append((fa.x[ax.PHI_S] - q0) / (n_win * period_s))
+            ok = len(means) > span and abs(means[-1] - means[-1 - span]) < tol
+            quiet = quiet + 1 if ok else 0
             if quiet >= cfg.converge_windows:
                 return held, True
         return held, False

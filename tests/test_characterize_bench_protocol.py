@@ -69,18 +69,18 @@ def test_rope_config_refuses_a_bad_settle() -> None:
 def test_a_converged_reading_waits_out_the_wind_up_a_fixed_settle_cuts_short() -> None:
     """lab-2025, motor x at 1.1 kHz, 50 %: the 0.3 s settle reads the rope
     still winding up; the converged rule holds longer (and says how long),
-    and its reading agrees with a long fixed settle to within the few window
-    changes its criterion allows."""
+    and its reading agrees with a long fixed settle to within twice its
+    criterion (0.1 % of the stall force across 1 s)."""
     p = load_variant("lab-2025")
     a = p.axes[0]
     n = divider_for(1111.0, CLK_HZ, PWM_BITS)
     w = model_waveform(n, (full_scale(PWM_BITS) + 1) // 2)
     read = {}
-    for settle in (0.3, "converged", 3.0):
+    for settle in (0.3, "converged", 4.0):
         d = RopeDynamometer(a, p, rope_config(settle))
         read[settle] = d.trace(w.segments, w.period_s)
     stall = d.stall_force_N()
     conv = read["converged"]
-    assert conv.converged and 0.5 < conv.settle_s < 3.0, conv
-    assert read[3.0].force_mean_N - read[0.3].force_mean_N > 0.01 * stall
-    assert abs(conv.force_mean_N - read[3.0].force_mean_N) < 0.005 * stall
+    assert conv.converged and 1.0 < conv.settle_s < 4.0, conv
+    assert read[4.0].force_mean_N - read[0.3].force_mean_N > 0.01 * stall
+    assert abs(conv.force_mean_N - read[4.0].force_mean_N) < 0.002 * stall
