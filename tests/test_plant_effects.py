@@ -147,6 +147,31 @@ def test_brush_law_tends_to_the_hard_drop_as_the_knee_closes() -> None:
     assert errs[0] > errs[1] > errs[2] and errs[2] < 2e-3, errs
 
 
+def test_brush_law_fast_stepper_matches_the_radau_reference() -> None:
+    """The brush regions are modes like any other: a 1 kHz PWM with brake and
+    coast off-phases (the current crosses the knee and, coasting, stops at
+    zero) through the fast stepper and scipy's Radau agree to 1e-6."""
+    from sim_models.reference import simulate
+
+    p = only("brush_law")
+    a = p.axes[0].replace(table_coulomb_N=0.0)
+    sched = []
+    for k in range(20):
+        sched += [(k * 1e-3, FWD), (k * 1e-3 + (0.3 + 0.02 * k) * 1e-3, Pins(0, 0, 0, 0) if k % 2 else BRAKE)]
+    t_end = 0.02
+    _, xr, n_ref = simulate(a, p.bridge, sched, t_end)
+    fa = FastAxis(a, p, 0)
+    xf = [fa.x.copy()]
+    for (t0, pins), t1 in zip(sched, [t for t, _ in sched[1:]] + [t_end]):
+        fa.set_pins(pins)
+        fa.advance(t1 - t0, [])
+        xf.append(fa.x.copy())
+    xf = np.array(xf)
+    assert n_ref >= 20 and fa.events >= 20
+    for k in (ax.I_, ax.PHI_M, ax.W_M):
+        assert np.abs(xf[:, k] - xr[:, k]).max() <= 1e-6 * np.abs(xr[:, k]).max(), k
+
+
 # ---------------------------------------------------------------- winding R(T)
 
 def test_winding_heats_as_its_first_order_model() -> None:
