@@ -73,14 +73,14 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
     if (a->enabled && (a->faults & (uint16_t)~TLP_FAULT_DIRECTIONAL))
         tl_axis_disable(s, i);
     bool homing = a->home == TLP_HOME_STATE_HOMING;
-    if (homing)
+    if (__builtin_expect(homing, 0))   /* homing.c, a call: keep the path of an axis under control straight */
         tl_home_tick(a, i, e.now);
     int32_t cmd = tl_ctl_step_inline(&a->c, &a->ctl, a->pos, e.edge_time, e.now, e.interval, a->enabled);
     if (!a->enabled) {
         cmd = 0;
     } else {
         /* blocked(a): the soft-limit sides from the checks, unless homing moved the position */
-        uint8_t b = homing ? tl_blocked(a) : blocked_with(a, out);
+        uint8_t b = blocked_with(a, homing ? soft_side(a) : out);
         if (((b & TLP_LIMIT_NEG) && cmd < 0) || ((b & TLP_LIMIT_POS) && cmd > 0))
             cmd = 0;
     }

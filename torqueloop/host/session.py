@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 """What the host tool does with the board beyond one command: a move that
-enables its axis for the move, and a telemetry capture that keeps the link
-watchdog fed.  The host asks the board: a refusal comes back with the rule
+enables its axis for the move, waiting for a move or a homing to end, and a
+telemetry capture, the waits and the capture feeding the link watchdog.  The host asks the board: a refusal comes back with the rule
 that refused it (``CommandRejected.why``, protocol.toml [[refusal]]), so the
 host keeps no copy of the firmware's rules, with one exception: MOVE's rule
 (:func:`move_refusal`) is applied before an axis is enabled for a move, so
@@ -17,10 +17,12 @@ from typing import Callable
 
 from torqueloop.spec import protocol as P
 
-from .client import Client, CommandRejected, ProtocolError
+from .client import Client, CommandRejected, ProtocolError, describe_faults
 
 HOMING, HOMED = (next(k for k, v in P.HOME_STATE.items() if v == s) for s in ("homing", "homed"))
-#: how often a capture sends a HEARTBEAT (the firmware's link watchdog: LINK_TIMEOUT_MS >= 10 ms, default 0.5 s)
+#: at rest: slower than this (counts/s x 256)
+SETTLED_Q8 = 256 * 50
+#: how often a capture or a wait sends a HEARTBEAT (the firmware's link watchdog: LINK_TIMEOUT_MS >= 10 ms, default 0.5 s)
 KEEPALIVE_S = 0.15
 
 
