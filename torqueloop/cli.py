@@ -52,7 +52,8 @@ DEFAULT_URL = "socket://127.0.0.1:2000"
 REFUSAL_HINT = {
     "DISABLED": "add --enable: the command enables the axis itself and keeps the link watchdog fed",
     "FAULT": "`torqueloop status` names the fault; remove its cause, then `torqueloop clear-fault`",
-    "NOT_HOMED": "`torqueloop home neg|pos|here` first, or --unhomed to move relative to where it was at power-up",
+    "NOT_HOMED": "`torqueloop home neg --enable` (or pos; `home here` without switches) first, or --unhomed to "
+                 "move relative to where it was at power-up",
     "FOLLOW": "use --trapezoid, a smaller step, or raise follow_limit",
     "LIMIT": "only moves away from that end",
     "CARRIER": "lower pwm_freq (a larger FDIV), or raise PWM_MAX_HZ within the bridge's rating",
