@@ -17,7 +17,7 @@ from typing import Callable
 
 from torqueloop.spec import protocol as P
 
-from .client import Client, CommandRejected, ProtocolError, describe_faults
+from .client import Client, CommandRejected, ProtocolError
 
 HOMING, HOMED = (next(k for k, v in P.HOME_STATE.items() if v == s) for s in ("homing", "homed"))
 #: at rest: slower than this (counts/s x 256)
