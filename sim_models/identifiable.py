@@ -37,6 +37,15 @@ breaks away and sticks again within each period, and what counts as
 "moves" is then the threshold of the test (the characterisation's
 business, not this closed form's).
 
+The ``lab`` plant's further effects: the continuous brush law (ohmic below
+its knee current) enters V_f and the breakaway exactly; the bridge's
+switching times (each output pulse shorter than its input by
+t_on - t_off, pulses under the minimum dropped) are seen at the pins' duty
+as V_s (t_on - t_off) f more friction voltage and a floor on the dead zone;
+the winding's heating (R(T)) is left out: these are the cold winding's
+numbers, which a brief identification sees.  Gear backlash changes none of
+them (it is invisible in steady motion and to the motor-side encoder).
+
 The friction at the motor shaft T_f collects the rotor's Coulomb friction
 and the table's friction and gravity reflected through the screw (R_n) and
 the gear: a load the motor drives costs T_out / (xi G) (efficiency xi); a
@@ -81,6 +90,17 @@ class Identifiable:
         return {k: float(getattr(self, k)) for k in self.__dataclass_fields__}
 
 
+def brush_volts(c: AxisConsts, i: float) -> float:
+    """The brushes' drop at current ``i`` (signed): the hard drop V_b sgn(i),
+    or, with the continuous law (knee current ``ib`` > 0), ohmic V_b i / i_k
+    below the knee and V_b beyond it (axis.rhs)."""
+    if i == 0.0:
+        return 0.0
+    if c.ib > 0.0 and abs(i) < c.ib:
+        return c.vb * i / c.ib
+    return math.copysign(c.vb, i)
+
+
 def _motor_load(c: AxisConsts, direction: int, table_force_N: float) -> float:
     """Torque the motor must supply (signed, positive direction) to move the
     table steadily in ``direction`` against ``table_force_N`` of friction,
@@ -103,10 +123,20 @@ def rigid_inertia_at_motor(c: AxisConsts) -> float:
 
 def peak_current(c: AxisConsts, supply_v: float, duty: float, carrier_hz: float) -> float:
     """The largest armature current of a stalled rotor's periodic steady state
-    at ``duty`` (fraction) and ``carrier_hz`` (the module docstring)."""
-    tau_e = c.L / c.R
+    at ``duty`` (fraction) and ``carrier_hz`` (the module docstring).  With the
+    continuous brush law the brushes are a resistance V_b / i_k while the
+    peak stays below the knee, else a constant drop (the peak's region)."""
+    if c.ib > 0.0:
+        ohmic = _peak(c.L, c.R + c.vb / c.ib, 0.0, supply_v, duty, carrier_hz)
+        if ohmic < c.ib:
+            return ohmic
+    return _peak(c.L, c.R, c.vb, supply_v, duty, carrier_hz)
+
+
+def _peak(l_h: float, r: float, vb: float, supply_v: float, duty: float, carrier_hz: float) -> float:
+    tau_e = l_h / r
     t_on, t_off = duty / carrier_hz, (1.0 - duty) / carrier_hz
-    i_on, i_b = (supply_v - c.vb) / c.R, c.vb / c.R
+    i_on, i_b = (supply_v - vb) / r, vb / r
     a_on, a_off = math.exp(-t_on / tau_e), math.exp(-t_off / tau_e)
     # continuous conduction: i_min = (i_max + i_b) a_off - i_b, i_max = i_on + (i_min - i_on) a_on
     i_min = ((i_on * (1 - a_on) + i_b) * a_off - i_b) / (1 - a_on * a_off)
@@ -121,7 +151,8 @@ def breakaway_duty(c: AxisConsts, supply_v: float, hold_n_m: float, carrier_hz: 
     if hold_n_m <= 0:
         return 0.0
     if carrier_hz is None:
-        return min(1.0, (c.vb + c.R * hold_n_m / c.kt) / supply_v)
+        i = hold_n_m / c.kt
+        return min(1.0, (brush_volts(c, i) + c.R * i) / supply_v)
     lo, hi = 0.0, 1.0
     if c.kt * peak_current(c, supply_v, hi, carrier_hz) <= hold_n_m:
         return 1.0
@@ -141,13 +172,23 @@ def identifiable(a: AxisParams, bridge: BridgeParams, carrier_hz: float | None =
     # sliding: the rotor's Coulomb and the table's Coulomb friction
     t_pos = c.tc_m + _motor_load(c, +1, c.fc)
     t_neg = -c.tc_m + _motor_load(c, -1, c.fc)
-    vf_pos = c.vb * math.copysign(1.0, t_pos) + c.R * t_pos / c.kt
-    vf_neg = -(c.vb * math.copysign(1.0, t_neg) + c.R * t_neg / c.kt)
+    vf_pos = brush_volts(c, t_pos / c.kt) + c.R * t_pos / c.kt
+    vf_neg = -(brush_volts(c, t_neg / c.kt) + c.R * t_neg / c.kt)
     # breakaway from rest: the rotor's static friction (the table's static limit is its Coulomb force)
     s_pos = max(c.ts_m, c.tc_m) + _motor_load(c, +1, c.fc)
     s_neg = -max(c.ts_m, c.tc_m) + _motor_load(c, -1, c.fc)
     dz_pos = breakaway_duty(c, bridge.supply_V, s_pos, carrier_hz)
     dz_neg = breakaway_duty(c, bridge.supply_V, -s_neg, carrier_hz)
+    if bridge.timing_in_plant and carrier_hz is not None:
+        # the bridge's output pulse is its input's less (t_on - t_off), and a pulse whose output
+        # would be shorter than min_pulse is dropped: at the pins' duty (what the encoder-only
+        # identification sets) the friction eats V_s (t_on - t_off) f more, and nothing moves
+        # below (min_pulse + t_on - t_off) f
+        lag = (bridge.turn_on_delay_s - bridge.turn_off_delay_s) * carrier_hz
+        floor = (bridge.min_pulse_s + bridge.turn_on_delay_s - bridge.turn_off_delay_s) * carrier_hz
+        vf_pos += bridge.supply_V * lag
+        vf_neg += bridge.supply_V * lag
+        dz_pos, dz_neg = (min(1.0, max(floor, d + lag)) for d in (dz_pos, dz_neg))
     return Identifiable(
         speed_gain_rad_per_s_per_v=k_gain,
         time_constant_s=tau,
