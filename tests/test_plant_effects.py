@@ -6,7 +6,6 @@ limit, and ``lab`` with all of them off against ``lab-2025``, bit for bit
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 import pytest
