@@ -314,6 +314,34 @@ def test_no_answer_names_the_likely_cause(capsys) -> None:
     assert rc == 3 and "data mode" in err
 
 
+def test_a_refused_connection_exits_3_in_one_line(capsys) -> None:
+    import socket
+
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()                       # nothing listens there: the connection is refused
+    capsys.readouterr()
+    rc = cli.main(["-u", f"socket://127.0.0.1:{port}", "info"])
+    err = capsys.readouterr().err
+    assert rc == 3 and "cannot open" in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+def test_output_cut_short_by_its_reader_is_no_error(url) -> None:
+    """`torqueloop info | head -1`, head gone before the tool writes: no broken-pipe message, exit 0."""
+    import subprocess
+    import sys
+
+    r, w = os.pipe()
+    os.close(r)                     # the reader has gone (head -1 after its line)
+    try:
+        p = subprocess.run([sys.executable, "-m", "torqueloop.cli", "-u", url, "info"], stdout=w,
+                           stderr=subprocess.PIPE, text=True, timeout=60)
+    finally:
+        os.close(w)
+    assert p.returncode == 0 and p.stderr == "", p.stderr
+
+
 BAD_VALUES = [
     ("set", "kp", "inf"), ("set", "kp", "nan"), ("set", "kp", "1e400"), ("set", "kp", "-1"), ("set", "kp", "1e30"),
     ("set", "kp", "abc"), ("set", "KP_Q16", "1.5"), ("set", "KP_Q16", "99999999999"), ("set", "law", "7"),
@@ -404,7 +432,7 @@ def test_a_busy_board_is_reported_as_busy(url, capsys) -> None:
         holder.sendall(b"\x00")
         import time
         time.sleep(0.2)
-        _, err = run(url, capsys, "info", rc=1)
+        _, err = run(url, capsys, "info", rc=3)         # docs/host.md: a refused connection is no answer
     finally:
         holder.close()
     assert "busy" in err and "another client" in err and "reset by peer" not in err.split("(")[0]

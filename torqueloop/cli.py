@@ -11,7 +11,8 @@ the file ``--key-file`` or ``$TORQUELOOP_KEY_FILE`` names (never the command
 line itself; docs/security.md).  Every command can print ``--json`` for
 scripts.  Exit status: 0 done, 1 refused by the board, a fault during the
 command, or a missing, unreadable or wrong key, 2 bad input (refused before
-anything was sent, one line, never a traceback), 3 no answer.
+anything was sent, one line, never a traceback), 3 no answer (nothing
+listening, the connection refused or closed, no reply).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from torqueloop.host import analysis
 from torqueloop.spec import units
 from torqueloop.spec.pwm import carrier_hz
 from torqueloop.host import config as hconfig
-from torqueloop.host.client import Client, NoAnswer, ProtocolError, decode_faults, describe_faults, key_missing
+from torqueloop.host.client import Client, LinkClosed, NoAnswer, ProtocolError, decode_faults, describe_faults, key_missing
 from torqueloop.host.transport import DEFAULT_BAUD, LinkOpenError, open_link
 from torqueloop.host.upload import ImageRefused
 from torqueloop.spec.units import BadValue
@@ -860,18 +861,41 @@ def parser() -> argparse.ArgumentParser:
 EXIT_REFUSED, EXIT_BAD_INPUT, EXIT_NO_ANSWER = 1, 2, 3
 
 
+def _stdout_closed() -> bool:
+    """True if stdout's reader has gone (a pipe with no reader polls as an
+    error); stdout then points at /dev/null, so the interpreter's last flush
+    does not report the broken pipe again."""
+    import select
+
+    try:
+        fd = sys.stdout.fileno()
+        p = select.poll()
+        p.register(fd, select.POLLOUT)
+        gone = any(ev & (select.POLLERR | select.POLLHUP) for _, ev in p.poll(0))
+    except (OSError, ValueError, AttributeError):
+        return False
+    if gone:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), fd)
+    return gone
+
+
 def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)      # a usage error exits 2 with one line
     ctx = Ctx(args)
     try:
         return args.fn(ctx)
-    except NoAnswer as e:
+    except BrokenPipeError as e:
+        if not _stdout_closed():
+            print(f"torqueloop: {e}", file=sys.stderr)
+            return EXIT_REFUSED
+        return 0      # the reader stopped early (`info | head -1`): what it read was printed
+    except (NoAnswer, LinkOpenError, LinkClosed) as e:
         print(f"torqueloop: {e}", file=sys.stderr)
         return EXIT_NO_ANSWER
     except (BadValue, hconfig.HostConfigError, ImageRefused) as e:
         print(f"torqueloop: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except (ProtocolError, LinkOpenError, SimStackMissing, ValueError, OSError) as e:
+    except (ProtocolError, SimStackMissing, ValueError, OSError) as e:
         print(f"torqueloop: {e}", file=sys.stderr)
         return EXIT_REFUSED
     finally:

@@ -42,6 +42,8 @@ from .transport import Link, LinkInfo
 READ_ONLY = frozenset({"IDENTIFY", "GET_PARAM", "STATUS", "COUNTERS"})
 #: a lost reply to these is harmless to repeat with a fresh seq
 REPEATABLE = READ_ONLY | {"HEARTBEAT"}
+#: how often one command is sent again with a fresh seq after REPLAY before the tool gives up
+REPLAY_ROUNDS = 3
 AUTH_STATUSES = frozenset({P.STATUS["AUTH"], P.STATUS["NO_SESSION"], P.STATUS["NO_KEY"]})
 #: sent without a MAC even with a key: reads and the telemetry rate (a MAC costs the board's
 #: main loop ~0.6 ms, which can delay a telemetry record at short control periods) and SESSION itself
@@ -333,34 +335,44 @@ class Client:
                     raise self._board_has_no_key(name) from None
                 if e.status not in (P.STATUS["NO_SESSION"], P.STATUS["AUTH"]) or attempt:
                     if e.status == P.STATUS["AUTH"]:
-                        raise self._auth_failed() from None
+                        # The session was opened just now and the board's proof showed it
+                        # holds our key: the key is right, another SESSION ended ours.
+                        raise CommandRejected(name, e.status, "- twice, although the board proved it holds "
+                                              "this key: another host opened a session on the board in "
+                                              "between (someone else is on the link; docs/security.md)"
+                                              ) from None
                     raise
         raise AssertionError("unreachable")
 
     def _transact(self, name: str, fields: dict, session: auth.Session | None) -> dict[str, int]:
-        seq = self._next_seq()
-        rep, attempt = self._exchange(name, seq, fields, session)
-        st = rep["status"]
-        if st == P.STATUS["REPLAY"]:
+        """One command with a fresh seq.  REPLAY to a first copy means it did
+        not run (the board's seq was moved on: another host, or frames
+        injected into the link): resynchronise and send it again, at most
+        REPLAY_ROUNDS times.  REPLAY to a retransmission means the first copy
+        may have run and only its reply was lost."""
+        for _ in range(REPLAY_ROUNDS):
+            seq = self._next_seq()
+            rep, attempt = self._exchange(name, seq, fields, session)
+            st = rep["status"]
+            if st != P.STATUS["REPLAY"]:
+                if st != P.STATUS["OK"]:
+                    raise CommandRejected(name, st)
+                return rep
             if attempt == 0:
-                # Another host (or an earlier session) moved the board's seq on.
                 self.stats.resyncs += 1
                 self.connect()
-                seq = self._next_seq()
-                rep, attempt = self._exchange(name, seq, fields, session)
-                st = rep["status"]
-            if st == P.STATUS["REPLAY"]:
-                # The first copy was accepted and executed; its reply was lost.
-                if name in REPEATABLE:
-                    return self.transact(name, **fields)
-                if name == "SET_PARAM":
-                    got = self.transact("GET_PARAM", axis=fields["axis"], param=fields["param"])
-                    return {"status": 0, "value": got["value"]}
-                raise ReplyLost(f"{name} (seq {seq}) reached the board but its reply was lost twice; "
-                                "it ran at most once - check `torqueloop status` before repeating it")
-        if st != P.STATUS["OK"]:
-            raise CommandRejected(name, st)
-        return rep
+                continue
+            if name in REPEATABLE:
+                continue                       # harmless to ask again with a fresh seq
+            if name == "SET_PARAM":
+                got = self._transact("GET_PARAM", {"axis": fields["axis"], "param": fields["param"]}, None)
+                return {"status": 0, "value": got["value"]}
+            raise ReplyLost(f"{name} (seq {seq}) reached the board but its reply was lost; "
+                            "it ran at most once - check `torqueloop status` before repeating it")
+        raise CommandRejected(name, P.STATUS["REPLAY"],
+                              f"- refused as a replay {REPLAY_ROUNDS} times, so it did not run: something else "
+                              "on the link keeps moving the board's sequence number ahead (another host, or "
+                              "frames injected into this link; docs/security.md)")
 
     # ---- commands ---------------------------------------------------------------
     def connect(self) -> dict[str, int]:
