@@ -22,7 +22,10 @@ the level their reference models define:
 
 UART bytes reach the firmware when they arrive and its replies leave at
 once (115200 baud adds under 7 ms to a 70-byte frame; the host's timeouts
-are 0.5 s).  The board is a byte pipe (:class:`BytePipe`): ``write`` /
+are 0.5 s).  The cycle counter the firmware reads (``hal_cycles``, mcycle
+on the board) is the simulated clock, one character time apart for the
+bytes of one write, and every firmware start begins from cleared RAM (crt0's
+.bss): the session nonces are drawn as the board draws them.  The board is a byte pipe (:class:`BytePipe`): ``write`` /
 ``read`` bytes and ``advance`` time; :mod:`.server` puts any byte pipe on a
 TCP port, so the RTL co-simulation can take this one's place.
 """
@@ -145,7 +148,7 @@ class SimBoard:
         if self.boot is not None:
             self.boot.rx(data, self.tick)
         else:
-            self._lib.sb_rx(data, ctypes.c_uint32(len(data)))
+            self._lib.sb_rx(ctypes.c_uint32(self.tick & 0xFFFFFFFF), data, ctypes.c_uint32(len(data)))
             self._load_drives()
 
     def read(self) -> bytes:
