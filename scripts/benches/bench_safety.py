@@ -183,10 +183,10 @@ def main() -> int:
     s = Bench(rom, ram)
     s.drive_axis0()
     t0 = s.b.cycle
-    s.b.set_board(1, 1, 1, fault_n=0b10)
+    s.b.set_board(1, 1, 1, fault=0b01)         # axis 0's comparator releases its line (or the wire breaks)
     pwm, every = s.stop_time(t0, DRIVE0, also=ALL0)
-    record("bridge fault, PWM pins", "fault_n pin low", pwm, 5, "RPWM/LPWM low (SoC latch)")
-    record("bridge fault, all 4 inputs", "fault_n pin low", every, 260, "interlock disarmed")
+    record("bridge fault, PWM pins", "fault pin high or open", pwm, 5, "RPWM/LPWM low (SoC latch)")
+    record("bridge fault, all 4 inputs", "fault pin high or open", every, 260, "interlock disarmed")
     s.close()
 
     # Following error: the encoder slips 600 counts back (FOLLOW_LIMIT 500)
