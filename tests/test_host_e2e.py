@@ -107,6 +107,9 @@ def test_move_is_followed_by_the_plant(url, capsys) -> None:
     run(url, capsys, "disable", "--all")
     run(url, capsys, "clear-fault", "--all")
     run(url, capsys, "move", "2mm", "--enable", "--axis", "0", rc=1)     # not homed
+    _, err = run(url, capsys, "home", "here", "--axis", "0", rc=1)       # the simulated stage has switches
+    assert "LIMIT_SW 1" in err and "home neg" in err
+    run(url, capsys, "set", "limit_sw", "0", "--axis", "0")
     run(url, capsys, "home", "here", "--axis", "0")
     res, _ = run(url, capsys, "move", "2mm", "--enable", "--wait", "6", "--axis", "0")
     assert res["target_counts"] == 4200          # 2 mm at 4 mm and 8400 counts per turn
@@ -413,6 +416,7 @@ def test_get_reads_back_what_set_wrote_at_every_gain(url, capsys) -> None:
 def test_a_refused_move_does_not_leave_the_axis_enabled(url, capsys) -> None:
     run(url, capsys, "disable", "--all")
     run(url, capsys, "clear-fault", "--all")
+    run(url, capsys, "set", "limit_sw", "0", "--axis", "0")
     run(url, capsys, "home", "here", "--axis", "0")
     got, _ = run(url, capsys, "get", "soft_max")
     _, err = run(url, capsys, "move", str(got["soft_max"]["value"] + 1), "--enable", "--trapezoid", rc=2)
@@ -439,6 +443,8 @@ def test_a_busy_board_is_reported_as_busy(url, capsys) -> None:
 
 
 def test_key_errors_are_one_line_and_stopping_needs_no_key(url, keyfile, capsys, tmp_path, monkeypatch) -> None:
+    run(url, capsys, "disable", "--all")
+    run(url, capsys, "set", "limit_sw", "0", "--axis", "0")
     run(url, capsys, "home", "here", "--axis", "0")   # homed: only the key can refuse the moves below
     # no key at all: refused by the tool before anything is sent; reading, stop and disable work
     monkeypatch.delenv(auth.KEY_FILE_ENV)

@@ -70,8 +70,9 @@ def test_the_host_only_client_drives_a_simulated_board(host_env: Path) -> None:
         # each call below is a new process: on a loaded machine more than the
         # default 0.5 s link watchdog can pass between `enable` and `move`
         call("set", "link_timeout", "10")
+        call("set", "limit_sw", "0", "--axis", "0")
+        call("home", "here", "--axis", "0")      # homing starts with every axis disabled
         call("enable", "--axis", "0")
-        call("home", "here", "--axis", "0")
         call("move", "1000", "--axis", "0")
         st = call("status", "--axis", "0")
         assert "0" in st

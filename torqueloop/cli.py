@@ -345,12 +345,16 @@ def cmd_home(ctx: Ctx) -> int:
     a = ctx.args
     ctx.require_key("HOME")
     c = ctx.client
-    st = c.status(a.axis)
-    if a.mode != "here":
-        if not st["enabled"]:
-            raise ProtocolError(f"axis {a.axis} is disabled: homing to a switch moves it (`torqueloop enable`)")
-        if not c.get_param("LIMIT_SW", a.axis):
-            raise ProtocolError(f"axis {a.axis} has no limit switches (LIMIT_SW 0): `torqueloop home here`")
+    enabled = [ax for ax in range(P.AXIS_COUNT) if c.status(ax)["enabled"]]
+    if enabled:
+        raise ProtocolError(f"axes {enabled} enabled: homing moves the soft-limit window, so it starts with every "
+                            "axis disabled (`torqueloop disable --all`); homing to a switch enables its axis itself")
+    switches = c.get_param("LIMIT_SW", a.axis)
+    if a.mode != "here" and not switches:
+        raise ProtocolError(f"axis {a.axis} has no limit switches (LIMIT_SW 0): `torqueloop home here`")
+    if a.mode == "here" and switches:
+        raise ProtocolError(f"axis {a.axis} has limit switches (LIMIT_SW 1): its home is a switch (`torqueloop home "
+                            f"neg` or `pos`); without switches `torqueloop set limit_sw 0 --axis {a.axis}` first")
     c.home(a.axis, a.mode, a.index)
     t0 = time.monotonic()
     while a.mode != "here" and time.monotonic() - t0 < a.wait:

@@ -20,6 +20,7 @@
 #include "servo.h"
 
 #include "control_step.h"
+#include "enc_check.h"
 #include "hal.h"
 
 #define IDX_NONE (-1)
@@ -50,6 +51,7 @@ typedef struct {
     tl_ctl_derived_t d;
     uint32_t stall_limit_ticks;   /* STALL_MS in periods, rounded up */
     int64_t home_step_q16;        /* HOME_VEL per period, q16 counts */
+    tl_enc_cfg_t enc;             /* encoder plausibility */
 } axis_cfg_t;
 
 #define PI(id) TLP_PARAM_INDEX[id]
@@ -73,6 +75,7 @@ TL_FOR_SIZE static void axis_cfg(const int32_t *p, uint32_t period_us, uint32_t 
     out->home_step_q16 = (int64_t)((uint64_t)(uint32_t)p[PI(TLP_P_HOME_VEL)] * period_us * 1024u / 15625u);
     if (out->home_step_q16 < (1 << HOME_SLOW_SHIFT))
         out->home_step_q16 = 1 << HOME_SLOW_SHIFT;
+    enc_check_derive(&out->enc, p[PI(TLP_P_ENC_CPS)], p[PI(TLP_P_ENC_TAU_MS)], period_us);
 }
 
 /* Hand a configuration to the control iteration: copies, for a critical section. */
@@ -83,6 +86,7 @@ static void commit_axis(tl_servo_t *s, uint32_t i, const axis_cfg_t *cfg)
     tl_ctl_apply(&a->c, &cfg->d);
     a->stall_limit_ticks = cfg->stall_limit_ticks;
     a->home_step_q16 = cfg->home_step_q16;
+    a->enc = cfg->enc;
     hal_pwm_config(i, (uint32_t)pv(a, TLP_P_FDIV), (uint32_t)pv(a, TLP_P_PW0), (uint32_t)pv(a, TLP_P_PWMAX));
     hal_limit_block(i, pv(a, TLP_P_LIMIT_SW) != 0);
 }
@@ -175,6 +179,7 @@ static void home_finish(tl_axis_t *a, int32_t ref, uint32_t now)
     a->offset = wrap_add(a->offset, delta);
     a->pos = wrap_add(a->pos, delta);
     a->stall_dir = 0;
+    enc_check_reset(a);
     tl_ctl_reset(&a->c, a->pos, now);
     a->home = TLP_HOME_STATE_HOMED;
 }
@@ -222,6 +227,7 @@ TL_FOR_SIZE void tl_servo_init(tl_servo_t *s)
         a->recover = 0;
         a->home = TLP_HOME_STATE_NOT_HOMED;
         a->stall_dir = 0;
+        enc_check_reset(a);
         tl_ctl_reset(&a->c, e.pos, e.now);
     }
     sync_all(s);
@@ -336,7 +342,7 @@ static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, 
         if (o & (uint8_t)~a->recover)
             f |= TLP_FAULT_SOFT_LIMIT;
     }
-    return f | stall_check(a);
+    return f | stall_check(a) | enc_check(a, pv(a, TLP_P_ENC_CMD0), pv(a, TLP_P_ENC_SLACK));
 }
 
 /* Sides toward which the axis must not be driven: a latched limit fault, a
@@ -530,6 +536,8 @@ static uint8_t param_allowed(const tl_servo_t *s, uint8_t axis, uint8_t id, int 
         if (info->tighten > 0 ? v < cur : v > cur)
             return TLP_ST_LOOSEN;
     }
+    if (id == TLP_P_HOME_POS && any_enabled(s) && v != s->ax[axis].p[k])
+        return TLP_ST_LOOSEN;   /* the next homing would move the soft-limit window */
     if (info->global) {
         if (id == TLP_P_PWM_MAX_HZ)
             for (uint32_t i = 0; i < TL_AXES; i++)
@@ -665,6 +673,7 @@ static uint8_t do_enable(tl_servo_t *s, uint8_t mask, uint8_t on)
         tl_ctl_reset(&a->c, a->pos, e.now);   /* set-point = where it is: no jump */
         a->recover = soft_side(a);
         a->stall_dir = 0;
+        enc_check_reset(a);
         a->cmd = 0;
         a->enabled = true;
         hal_pwm_cmd(i, 0);
@@ -740,8 +749,19 @@ static uint8_t do_home(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index)
     if (axis >= TL_AXES || mode > TLP_HOME_MODE_HERE || index > 1u)
         return TLP_ST_BAD_ARG;
     tl_axis_t *a = &s->ax[axis];
-    if (a->home == TLP_HOME_STATE_HOMING)
+    /* Homing moves the soft-limit window (absolute from then on), so, like
+     * loosening a limit, it starts only with every axis disabled; with limit
+     * switches the home is the switch, not wherever the axis stands.  Homing
+     * to a switch then enables its axis itself. */
+    if (any_enabled(s) || (mode == TLP_HOME_MODE_HERE && pv(a, TLP_P_LIMIT_SW)))
         return TLP_ST_STATE;
+    if (mode != TLP_HOME_MODE_HERE) {
+        if (a->faults || !pv(a, TLP_P_LIMIT_SW))
+            return TLP_ST_STATE;
+        uint8_t st = do_enable(s, (uint8_t)(1u << axis), 1u);
+        if (st != TLP_ST_OK)
+            return st;
+    }
     hal_irq_off();
     if (mode == TLP_HOME_MODE_HERE) {
         tl_enc_sample_t e;
@@ -750,10 +770,6 @@ static uint8_t do_home(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index)
         home_finish(a, a->pos, e.now);
         hal_irq_on();
         return TLP_ST_OK;
-    }
-    if (!a->enabled || a->faults || !pv(a, TLP_P_LIMIT_SW)) {
-        hal_irq_on();
-        return TLP_ST_STATE;
     }
     a->home = TLP_HOME_STATE_HOMING;
     a->home_phase = HOME_SEEK;
@@ -802,20 +818,26 @@ TL_FOR_SIZE static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
         return;
     }
     bool seq_checked = f->cmd != TLP_CMD_IDENTIFY && f->cmd != TLP_CMD_SESSION;
-    if (seq_checked && !tl_seq_is_new(&s->seq, f->seq)) {
+    bool fresh = !seq_checked || tl_seq_is_new(&s->seq, f->seq);
+    bool stopping = tl_auth_stopping(f->cmd, f->payload);   /* runs whatever its seq and MAC */
+    if (!fresh && !stopping) {
         sat_inc(&s->cnt.replay);
         send_status(s, tx, f->seq, rc, TLP_ST_REPLAY);
         return;
     }
-    if (tag) {
+    if (tag && fresh) {
         uint8_t ast = tl_auth_verify(&s->auth, f);   /* outside the control interrupt: ~29 000 cycles */
-        if (ast != TLP_ST_OK) {
+        if (ast != TLP_ST_OK && !stopping) {
             sat_inc(ast == TLP_ST_REPLAY ? &s->cnt.replay : &s->cnt.auth);
             send_status(s, tx, f->seq, rc, ast);
             return;
         }
+        if (ast != TLP_ST_OK)
+            tag = 0;   /* a stop all the same, but it shows no one in control */
+    } else {
+        tag = 0;
     }
-    if (seq_checked)
+    if (seq_checked && fresh)
         tl_seq_accept(&s->seq, f->seq);
     sat_inc(&s->cnt.frames_ok);
     const uint8_t *q = f->payload;

@@ -100,7 +100,9 @@ class Bench:
         self.set(P.GLOBAL_AXIS, "LINK_TIMEOUT_MS", 60_000)
         if kp_q16 is not None:
             self.set(0, "KP_Q16", kp_q16)
+        self.set(0, "LIMIT_SW", 0)           # home here: only without switches (then back on)
         self.link.call("HOME", axis=0, mode=P.HOME_MODES["here"], index=0)
+        self.set(0, "LIMIT_SW", 1)
         self.link.call("ENABLE", mask=1, enable=1)
         self.link.call("MOVE", axis=0, mode=0, target=300)
         self.run(3 * PERIOD_US * CLK // 1_000_000)

@@ -49,7 +49,7 @@ REPO = Path(__file__).resolve().parents[2]
 FW = REPO / "firmware"
 SOURCES = [Path(__file__).with_name("simboard_hal.c"), FW / "servo" / "servo.c",
            FW / "servo" / "control.c", FW / "protocol" / "tl_link.c", *AUTH_SOURCES]
-HEADERS = [FW / "servo" / "servo.h", FW / "servo" / "control.h", FW / "servo" / "hal.h",
+HEADERS = [FW / "servo" / "servo.h", FW / "servo" / "control.h", FW / "servo" / "hal.h", FW / "servo" / "enc_check.h",
            FW / "protocol" / "tl_link.h", FW / "protocol" / "tl_protocol.h", FW / "protocol" / "tl_auth.h",
            FW / "crypto" / "tl_sha256.h", FW / "crypto" / "tl_keyslot.h"]
 BUILD = REPO / "build" / "host"
@@ -60,6 +60,8 @@ DEFAULT_BUILD_ID = 0x51B0_0001
 #: end's above the second (about +-190 mm of a 4 mm lead).
 LIMIT_COUNTS = (-400_000, 400_000)
 LIM_NEG, LIM_POS = 0x01, 0x02
+#: an undercounting encoder passes one count of this many (set_encoder_fault)
+UNDERCOUNT = 50
 
 
 class BytePipe(Protocol):
@@ -120,7 +122,8 @@ class SimBoard:
         self._txbuf = ctypes.create_string_buffer(16384)
         self._drive = (ctypes.c_int32 * 7)()
         self.bridge_fault = [False, False]
-        #: per axis None, "frozen" (the count stops where it is) or "reversed" (counts the wrong way)
+        #: per axis None, "frozen" (the count stops where it is), "reversed" (counts the wrong way) or
+        #: "undercounting" (one count of every UNDERCOUNT arrives)
         self.encoder_fault: list[str | None] = [None, None]
         self._fault_ref = [0, 0]
         self.limit_counts = [LIMIT_COUNTS, LIMIT_COUNTS]
@@ -211,8 +214,9 @@ class SimBoard:
 
     def set_encoder_fault(self, axis: int, kind: str | None) -> None:
         """Freeze the encoder's count where it is, make it count the wrong way
-        from here (a swapped A/B pair), or (None) heal it."""
-        if kind not in (None, "frozen", "reversed"):
+        from here (a swapped A/B pair), lose all but one count of UNDERCOUNT
+        from here (a dirty disc, a marginal signal), or (None) heal it."""
+        if kind not in (None, "frozen", "reversed", "undercounting"):
             raise ValueError(f"encoder fault {kind!r}")
         self._fault_ref[axis] = self.plant.count(axis)
         self.encoder_fault[axis] = kind
@@ -221,6 +225,8 @@ class SimBoard:
         """The count the decoder reports (the plant's, unless a fault is injected)."""
         c, ref = self.plant.count(axis), self._fault_ref[axis]
         kind = self.encoder_fault[axis]
+        if kind == "undercounting":
+            return ref + (c - ref) // UNDERCOUNT
         return ref if kind == "frozen" else (2 * ref - c if kind == "reversed" else c)
 
     def limits(self, axis: int) -> int:
