@@ -53,7 +53,7 @@ static inline __attribute__((always_inline)) uint16_t enc_check(tl_axis_t *a, in
         a->enc_dir = dir;
         a->enc_ref = a->pos;
         a->enc_exp_q24 = 0;
-        a->enc_vlo_q8 = dir > 0 ? (int64_t)a->c.vel_q8 : -(int64_t)a->c.vel_q8;
+        a->enc_vlo_q8 = dir * (int64_t)a->c.vel_q8;
         return 0;
     }
     int64_t v_ss = (int64_t)((dir > 0 ? cmd : -cmd) - cmd0) * a->enc.k_q8;

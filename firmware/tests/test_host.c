@@ -4,14 +4,15 @@
  * authentication (on the fake HAL).  Run by tests/test_firmware_host.py.
  *
  *   host_tests unit [seed]   run every test; prints the seed and the counts
- *   host_tests ctl           line-driven control.c, compared with
- *                            torqueloop/oracles/servo.py by the Python test */
+ *   host_tests ctl           line-driven control.c and enc_check.h, compared
+ *                            with torqueloop/oracles/servo.py by the Python test */
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "control.h"
+#include "enc_check.h"
 #include "hal_fake.h"
 #include "servo.h"
 #include "tl_link.h"
@@ -1044,6 +1045,8 @@ static void test_profile(void)
 
 static int ctl_main(void)
 {
+    static tl_axis_t ea;   /* enc_check's state and inputs */
+    int32_t enc_cmd0 = 0, enc_slack = 0;
     tl_ctl_params_t p = {0};
     tl_ctl_t c;
     memset(&c, 0, sizeof c);
@@ -1078,6 +1081,20 @@ static int ctl_main(void)
             printf("%" PRId32 " %" PRId32 "\n", tl_gain_raw_from_phys((int32_t)a[0], (int32_t)a[1], (int32_t)a[2]),
                    tl_gain_phys_from_raw((int32_t)a[3], (int32_t)a[1], (int32_t)a[2]));
             break;
+        case 'E':   /* encoder plausibility: cmd0 cps tau_ms slack period_us */
+            enc_check_derive(&ea.enc, (int32_t)a[1], (int32_t)a[2], (uint32_t)a[4]);
+            enc_check_reset(&ea);
+            enc_cmd0 = (int32_t)a[0];
+            enc_slack = (int32_t)a[3];
+            break;
+        case 'e': { /* one period: cmd pos vel_q8 */
+            ea.cmd = (int32_t)a[0];
+            ea.pos = (int32_t)a[1];
+            ea.c.vel_q8 = (int32_t)a[2];
+            uint16_t f = enc_check(&ea, enc_cmd0, enc_slack);
+            printf("%d %" PRId64 " %" PRId64 "\n", f != 0, ea.enc_vlo_q8, ea.enc_exp_q24);
+            break;
+        }
         default: break;
         }
     }
