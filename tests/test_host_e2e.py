@@ -108,7 +108,7 @@ def test_move_is_followed_by_the_plant(url, capsys) -> None:
     run(url, capsys, "clear-fault", "--all")
     run(url, capsys, "move", "2mm", "--enable", "--axis", "0", rc=1)     # not homed
     _, err = run(url, capsys, "home", "here", "--axis", "0", rc=1)       # the simulated stage has switches
-    assert "LIMIT_SW 1" in err and "home neg" in err
+    assert "HAS_SWITCHES" in err and "home neg" in err
     run(url, capsys, "set", "limit_sw", "0", "--axis", "0")
     run(url, capsys, "home", "here", "--axis", "0")
     res, _ = run(url, capsys, "move", "2mm", "--enable", "--wait", "6", "--axis", "0")

@@ -57,7 +57,15 @@ uint8_t tl_auth_session(tl_auth_t *a, const uint8_t host_nonce[TLP_AUTH_NONCE_BY
  * (torqueloop/spec/auth.py, stopping). */
 static inline bool tl_auth_stopping(uint8_t cmd, const uint8_t *payload)
 {
-    return cmd < 32u && ((TLP_LINK_FEED_MASK >> cmd) & 1u) && !tlp_needs_key(cmd, payload);
+    uint8_t flags = 0;
+    switch (cmd) {
+#define TL_AUTH_FLAGS(code, handler, req_len, rep_len, f) \
+    case code: flags = (uint8_t)(f); break;
+        TLP_COMMAND_TABLE(TL_AUTH_FLAGS)
+#undef TL_AUTH_FLAGS
+    default: break;
+    }
+    return (flags & TLP_CF_FEEDS_LINK) != 0u && !tlp_needs_key(cmd, payload);
 }
 /* Status for a command that needs the key but came without a MAC. */
 static inline uint8_t tl_auth_missing(const tl_auth_t *a) { return a->have_key ? TLP_ST_AUTH : TLP_ST_NO_KEY; }
