@@ -209,3 +209,36 @@ def test_a_board_without_a_key_refuses_motion_and_says_why() -> None:
     assert alice("STOP", mask=1) == P.STATUS["OK"] and alice("ENABLE", mask=1, enable=0) == P.STATUS["OK"]
     run(board, 0.5)
     assert abs(board.plant.count(0) - x0) <= 2 and not board.drive(0)["on"]
+
+
+def _nonce_after(board: SimBoard, delay_s: float, host_nonce: bytes) -> bytes:
+    """Restart the firmware now, wait ``delay_s`` (less than a control period), open a session."""
+    board.restart(FACTORY)
+    end = board.t + delay_s
+    while board.t < end:
+        board.advance(end - board.t)
+    board.write(P.request("SESSION", 0, host_nonce=host_nonce))
+    return Speaker(board).reply(P.COMMANDS["SESSION"].cmd)["board_nonce"]
+
+
+def test_the_simulated_board_draws_nonces_as_the_board_does(board: SimBoard) -> None:
+    """The firmware's generator is fed the cycle counter at every byte and at
+    SESSION, and starts from cleared RAM at every start.  On the simulated
+    board the counter is the simulated clock, running between bytes, and
+    nothing survives a restart - so what a test learns here about fresh
+    nonces holds for the board."""
+    hn = bytes(range(16))
+    period = P.PARAMS["PERIOD_US"].default * 1e-6
+    # two restarts within one control period, the same host nonce: different board nonces
+    n1 = _nonce_after(board, 0.001, hn)
+    n2 = _nonce_after(board, 0.001, hn)
+    assert 2 * 0.001 < period and n1 != n2, "a restart within a control period repeated the nonce"
+    # the counter runs between bytes: the same bytes a character later draw another nonce ...
+    t0 = board.t
+    late = _nonce_after(board, 0.0011, hn)
+    # ... and only the moment counts, as on the board: nothing of the last run stirs the next
+    fresh = SimBoard(build_id=FACTORY, key=KEY)
+    while fresh.t < t0:
+        fresh.advance(t0 - fresh.t)
+    assert _nonce_after(fresh, 0.0011, hn) == late
+    assert _nonce_after(fresh, 0.001, hn) != late

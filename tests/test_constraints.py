@@ -71,7 +71,7 @@ def test_every_ibt2_encoder_and_uart_signal_has_a_pin(table):
     nets = {g.net for g in table.gpio}
     for axis in (0, 1):
         for n in ("ibt2_rpwm_pin", "ibt2_lpwm_pin", "ibt2_r_en_pin", "ibt2_l_en_pin",
-                  "ibt2_fault_n_pin", "enc_a_pin", "enc_b_pin", "enc_z_pin"):
+                  "ibt2_fault_pin", "enc_a_pin", "enc_b_pin", "enc_z_pin"):
             assert f"{n}[{axis}]" in nets
     assert {"uart_rx_pin", "uart_tx_pin", "uart_cts_n_pin", "uart_rts_n_pin"} <= nets
     # An input a user may leave unconnected must read its idle level, not float.
@@ -149,9 +149,20 @@ def test_firmware_images_become_string_parameters_in_the_quartus_top(table, pins
     assert s.parameters == {}
     assert s.globals["TOP_LEVEL_ENTITY"] == [table.board.quartus_top]
     text = board.gen_quartus_top(with_fw)
-    assert f'{table.board.top} #(.ROM_INIT("../fw/boot.hex")) u_top' in text
+    params = "".join(f", .{n}({v})" for n, v in table.top_parameters)
+    assert f'{table.board.top} #(.ROM_INIT("../fw/boot.hex"){params}) u_top' in text
     for p in table.ports:
         assert re.search(rf"\b{p.name}\b", text), p.name
+
+
+def test_bridge_fault_inputs_are_declared_wired_by_default(table):
+    """An open bridge-fault line reads as a fault (weak pull-up, active-high
+    fault) on every axis the build declares wired, and the default build
+    declares both (docs/hardware.md, IS pins)."""
+    assert dict(table.top_parameters)["BRIDGE_FAULT_WIRED"] == 0b11
+    faults = [g for g in table.gpio if g.net.startswith("ibt2_fault_pin[")]
+    assert len(faults) == 2 and all(g.pull_up and g.dir == "in" for g in faults)
+    assert ".BRIDGE_FAULT_WIRED(3)" in board.gen_quartus_top(table)
 
 
 def test_sdc_check(table):

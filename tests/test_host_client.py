@@ -51,6 +51,7 @@ class DocBoard:
         self.nonces: tuple[bytes, bytes] | None = None    # (host, board) of the open session
         self.auth_seqs: list[int] = []                     # authenticated seqs of this session
         self.enabled = True
+        self.stops = 0
 
     def _tag_ok(self, f: P.Frame) -> bool:
         """docs/security.md: HMAC-SHA-256(key, 'TLCF' | board nonce | host nonce | seq cmd len | payload)[:16]."""
@@ -96,14 +97,15 @@ class DocBoard:
             if not tagged and (st := self._auth(c, f, False, args)) is not None:
                 out += P.encode_frame(f.seq, rc, bytes([st]))
                 continue
-            if c.name not in ("IDENTIFY", "SESSION"):
-                if not self._new(f.seq):
-                    out += P.encode_frame(f.seq, rc, bytes([P.STATUS["REPLAY"]]))
-                    continue
-            if tagged and (st := self._auth(c, f, True, args)) is not None:
+            stop = auth.stopping(c.name, args)       # runs whatever its seq
+            fresh = c.name in ("IDENTIFY", "SESSION") or self._new(f.seq)
+            if not fresh and not stop:
+                out += P.encode_frame(f.seq, rc, bytes([P.STATUS["REPLAY"]]))
+                continue
+            if tagged and fresh and (st := self._auth(c, f, True, args)) is not None and not stop:
                 out += P.encode_frame(f.seq, rc, bytes([st]))
                 continue
-            if c.name not in ("IDENTIFY", "SESSION"):
+            if c.name not in ("IDENTIFY", "SESSION") and fresh:
                 self.last, self.any = f.seq, True
             if c.name == "SESSION":
                 if self.key is None:
@@ -114,6 +116,9 @@ class DocBoard:
                 rep = b"\x00" + bn + hmac.new(self.key, b"TLSP" + args["host_nonce"] + bn, hashlib.sha256).digest()[:16]
             elif c.name == "ENABLE":
                 self.enabled = bool(args["enable"])
+                rep = b"\x00"
+            elif c.name == "STOP":
+                self.stops += 1
                 rep = b"\x00"
             elif c.name == "IDENTIFY":
                 rep = struct.pack(c.rep_fmt, 0, P.PROTO_VERSION, 0x100, 0xB11D, 2, self.last, 50_000_000)
@@ -486,3 +491,89 @@ def test_random_lossy_link_never_runs_a_command_twice() -> None:
     assert len({d for d in others if d[1] == set_cmd}) == 60, f"seed {seed}"
     # the channel really was lossy, and the board noticed the damage
     assert c.stats.retries > 0 and cnt["crc"] + cnt["framing"] > 0, f"seed {seed}"
+
+
+# ---- frames injected into the operator's link ----------------------------------------
+
+class InjectingLink(ScriptedLink):
+    """Someone who can write into the operator's stream (docs/security.md: a
+    WPA2-PSK insider, a tap on the UART) puts ``inject(board)`` in front of
+    each of the tool's frames; the board's answers to it reach the tool too."""
+
+    def __init__(self, board: DocBoard, clock: FakeClock, inject) -> None:
+        super().__init__(board, clock)
+        self.inject = inject
+
+    def write(self, data: bytes) -> int:
+        self.pending += self.board.receive(self.inject(self.board))
+        return super().write(data)
+
+
+def seq_ahead(board: DocBoard) -> bytes:
+    """A STATUS 0x4000 ahead of the board's last seq: open, so it needs no key."""
+    return P.request("STATUS", (board.last + 0x4000) & 0xFFFF, axis=0)
+
+
+def injected(inject, key: bytes | None = KEY) -> tuple[Client, InjectingLink, DocBoard]:
+    clock, board = FakeClock(), DocBoard()
+    link = InjectingLink(board, clock, inject)
+    return Client(link, LinkInfo("socket://fake:2000", "tcp", 115200), timeout=0.5, retries=3, clock=clock,
+                  key=key, key_source="test.key"), link, board
+
+
+@pytest.mark.parametrize("key", [KEY, None], ids=["with-mac", "without-key"])
+def test_injected_seqs_cannot_block_stop_or_disable(key: bytes | None) -> None:
+    c, link, board = injected(seq_ahead, key)
+    c.connect()
+    c.stop(3)
+    c.enable(3, False)
+    assert board.stops == 1 and not board.enabled
+
+
+def test_a_command_refused_as_a_replay_is_named_so_and_never_reached_the_board() -> None:
+    c, link, board = injected(seq_ahead)
+    c.connect()
+    with pytest.raises(CommandRejected, match="MOVE refused: REPLAY .*refused as a replay 3 times, so it did not "
+                                              "run.*injected") as e:
+        c.move(0, 10)
+    assert "reached the board" not in str(e.value) and board.moves == []
+    assert c.stats.resyncs == 2                      # three tries, a resync before each retry
+
+
+@pytest.mark.parametrize("name", ["STATUS", "MOVE"])
+def test_a_board_that_always_answers_replay_gives_one_clear_error(name: str) -> None:
+    """Every copy answered REPLAY (retransmissions included): bounded, one line, no RecursionError."""
+    class Replayer(DocBoard):
+        def receive(self, data: bytes) -> bytes:
+            out = b""
+            for f in self.dec.feed(data):
+                if isinstance(f, P.Frame) and P.BY_CMD[f.cmd].name not in ("IDENTIFY", "SESSION"):
+                    out += P.encode_frame(f.seq, f.cmd | P.REPLY_FLAG, bytes([P.STATUS["REPLAY"]]))
+                elif isinstance(f, P.Frame):
+                    self.dec = P.FrameDecoder()
+                    return DocBoard.receive(self, data)
+            return out
+
+    # every first copy's reply is lost, so each REPLAY answers a retransmission
+    c, link, board, _ = make(["drop_reply", "ok"] * 40, Replayer())
+    c.connect()
+    with pytest.raises((CommandRejected, ReplyLost)) as e:
+        c.move(0, 1) if name == "MOVE" else c.status(0)
+    assert "\n" not in str(e.value) and len(link.writes) < 20
+    assert isinstance(e.value, ReplyLost)            # the first copies did reach the board
+    assert ("replies of 4 tries were lost" if name == "STATUS" else "ran at most once") in str(e.value)
+
+
+def test_a_strangers_session_is_not_called_a_wrong_key() -> None:
+    """Another host opens a SESSION before each of our frames: our MAC never
+    verifies, but the board's proof did - the key is right."""
+    def stranger(board: DocBoard) -> bytes:
+        return P.request("SESSION", 0, host_nonce=os.urandom(16))
+
+    c, link, board = injected(stranger)
+    c.connect()
+    with pytest.raises(CommandRejected, match="another host opened a session") as e:
+        c.move(0, 10)
+    assert not isinstance(e.value, AuthFailed) and "another key" not in str(e.value) and board.moves == []
+    c.stop(1)                                            # stopping still works (without the MAC)
+    assert board.stops == 1

@@ -107,6 +107,9 @@ def test_move_is_followed_by_the_plant(url, capsys) -> None:
     run(url, capsys, "disable", "--all")
     run(url, capsys, "clear-fault", "--all")
     run(url, capsys, "move", "2mm", "--enable", "--axis", "0", rc=1)     # not homed
+    _, err = run(url, capsys, "home", "here", "--axis", "0", rc=1)       # the simulated stage has switches
+    assert "HAS_SWITCHES" in err and "home neg" in err
+    run(url, capsys, "set", "limit_sw", "0", "--axis", "0")
     run(url, capsys, "home", "here", "--axis", "0")
     # P control with the paper's gain stops within some tens of counts (stiction): settled within 40
     res, _ = run(url, capsys, "move", "2mm", "--enable", "--wait", "15", "--tolerance", "40", "--axis", "0")
@@ -316,6 +319,34 @@ def test_no_answer_names_the_likely_cause(capsys) -> None:
     assert rc == 3 and "data mode" in err
 
 
+def test_a_refused_connection_exits_3_in_one_line(capsys) -> None:
+    import socket
+
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()                       # nothing listens there: the connection is refused
+    capsys.readouterr()
+    rc = cli.main(["-u", f"socket://127.0.0.1:{port}", "info"])
+    err = capsys.readouterr().err
+    assert rc == 3 and "cannot open" in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+def test_output_cut_short_by_its_reader_is_no_error(url) -> None:
+    """`torqueloop info | head -1`, head gone before the tool writes: no broken-pipe message, exit 0."""
+    import subprocess
+    import sys
+
+    r, w = os.pipe()
+    os.close(r)                     # the reader has gone (head -1 after its line)
+    try:
+        p = subprocess.run([sys.executable, "-m", "torqueloop.cli", "-u", url, "info"], stdout=w,
+                           stderr=subprocess.PIPE, text=True, timeout=60)
+    finally:
+        os.close(w)
+    assert p.returncode == 0 and p.stderr == "", p.stderr
+
+
 BAD_VALUES = [
     ("set", "kp", "inf"), ("set", "kp", "nan"), ("set", "kp", "1e400"), ("set", "kp", "-1"), ("set", "kp", "1e30"),
     ("set", "kp", "abc"), ("set", "KP_Q16", "1.5"), ("set", "KP_Q16", "99999999999"), ("set", "law", "7"),
@@ -389,6 +420,7 @@ def test_get_reads_back_what_set_wrote_at_every_gain(url, capsys) -> None:
 def test_a_refused_move_does_not_leave_the_axis_enabled(url, capsys) -> None:
     run(url, capsys, "disable", "--all")
     run(url, capsys, "clear-fault", "--all")
+    run(url, capsys, "set", "limit_sw", "0", "--axis", "0")
     run(url, capsys, "home", "here", "--axis", "0")
     got, _ = run(url, capsys, "get", "soft_max")
     _, err = run(url, capsys, "move", str(got["soft_max"]["value"] + 1), "--enable", "--trapezoid", rc=2)
@@ -408,13 +440,15 @@ def test_a_busy_board_is_reported_as_busy(url, capsys) -> None:
         holder.sendall(b"\x00")
         import time
         time.sleep(0.2)
-        _, err = run(url, capsys, "info", rc=1)
+        _, err = run(url, capsys, "info", rc=3)         # docs/host.md: a refused connection is no answer
     finally:
         holder.close()
     assert "busy" in err and "another client" in err and "reset by peer" not in err.split("(")[0]
 
 
 def test_key_errors_are_one_line_and_stopping_needs_no_key(url, keyfile, capsys, tmp_path, monkeypatch) -> None:
+    run(url, capsys, "disable", "--all")
+    run(url, capsys, "set", "limit_sw", "0", "--axis", "0")
     run(url, capsys, "home", "here", "--axis", "0")   # homed: only the key can refuse the moves below
     # no key at all: refused by the tool before anything is sent; reading, stop and disable work
     monkeypatch.delenv(auth.KEY_FILE_ENV)

@@ -70,7 +70,8 @@ def test_the_host_only_client_drives_a_simulated_board(host_env: Path) -> None:
         call("set", "pwm_freq", "1000", "--axis", "0")
         assert abs(call("get", "pwm_freq", "--axis", "0")["pwm_freq"]["value"] - 1000) < 10
         # a move that enables the axis itself and ends disabled: no watchdog to outrun between processes
-        call("home", "here", "--axis", "0")
+        call("set", "limit_sw", "0", "--axis", "0")
+        call("home", "here", "--axis", "0")      # homing starts with every axis disabled
         moved = call("move", "1000", "--axis", "0", "--enable", "--wait", "10")
         assert moved["settled"] is True and moved["disabled"] is True
         st = call("status", "--axis", "0")

@@ -55,13 +55,13 @@ def _enabled(c: Client) -> None:
 
 
 def _homed(c: Client) -> None:
+    c.set_param("LIMIT_SW", 0, 0)       # home here: only on an axis without switches
     c.home(0, "here")
     c.enable(1)
 
 
 def _homing(c: Client) -> None:
-    c.enable(1)
-    c.home(0, "neg")
+    c.home(0, "neg")                    # from disabled: homing to a switch enables its axis
 
 
 def _tight(c: Client) -> None:
@@ -140,14 +140,19 @@ def test_a_refusal_names_its_rule() -> None:
         c.set_param("PW0", 801, 0)
     assert (P.STATUS_NAME[e.value.status], e.value.rule) == ("RANGE", "PW_ORDER")
     assert "PW0 would be above PWMAX" in str(e.value)
-    with pytest.raises(CommandRejected) as e:
-        c.home(0, "neg")                                   # disabled
-    assert e.value.rule == "DISABLED"
-    c.set_param("LIMIT_SW", 0, 0)
     c.enable(1)
+    with pytest.raises(CommandRejected) as e:
+        c.home(0, "neg")                                   # homing moves the soft-limit window
+    assert e.value.rule == "AXES_ENABLED"
+    c.enable(1, False)
+    with pytest.raises(CommandRejected) as e:
+        c.home(0, "here")                                  # the home of an axis with switches is a switch
+    assert e.value.rule == "HAS_SWITCHES"
+    c.set_param("LIMIT_SW", 0, 0)
     with pytest.raises(CommandRejected) as e:
         c.home(0, "neg")
     assert e.value.rule == "NO_SWITCHES"
+    c.enable(1)
     with pytest.raises(CommandRejected) as e:
         c.set_param("FOLLOW_LIMIT", P.PARAMS["FOLLOW_LIMIT"].default + 1, 0)   # looser while enabled
     assert (P.STATUS_NAME[e.value.status], e.value.rule) == ("LOOSEN", "TIGHTEN")

@@ -15,7 +15,8 @@ Every command can print ``--json`` for scripts.  Exit status: 0 done, 1
 refused by the board in its state, a fault during the command, or a missing,
 unreadable or wrong key, 2 bad input (a value refused before anything was
 sent or by the board's rules, one line naming the rule, never a traceback),
-3 no answer.
+3 no answer (nothing listening, the
+connection refused or closed, no reply).
 """
 
 from __future__ import annotations
@@ -38,8 +39,8 @@ from torqueloop.host import analysis
 from torqueloop.spec import units
 from torqueloop.spec.pwm import carrier_hz
 from torqueloop.host import config as hconfig
-from torqueloop.host.client import (Client, CommandRejected, NoAnswer, ProtocolError, decode_faults, describe_faults,
-                                    key_missing)
+from torqueloop.host.client import (Client, CommandRejected, LinkClosed, NoAnswer, ProtocolError, decode_faults,
+                                    describe_faults, key_missing)
 from torqueloop.host import serve as hserve
 from torqueloop.host.remote import RemoteClient
 from torqueloop.host.session import HOMED, HOMING, KEEPALIVE_S, Session
@@ -52,7 +53,7 @@ DEFAULT_URL = "socket://127.0.0.1:2000"
 REFUSAL_HINT = {
     "DISABLED": "add --enable: the command enables the axis itself and keeps the link watchdog fed",
     "FAULT": "`torqueloop status` names the fault; remove its cause, then `torqueloop clear-fault`",
-    "NOT_HOMED": "`torqueloop home neg --enable` (or pos; `home here` without switches) first, or --unhomed to "
+    "NOT_HOMED": "`torqueloop home neg` (or pos; `home here` without switches) first, or --unhomed to "
                  "move relative to where it was at power-up",
     "FOLLOW": "use --trapezoid, a smaller step, or raise follow_limit",
     "LIMIT": "only moves away from that end",
@@ -61,6 +62,9 @@ REFUSAL_HINT = {
     "PW_ORDER": "set the other end first",
     "SOFT_ORDER": "set the other end first",
     "NO_SWITCHES": "`torqueloop home here`",
+    "AXES_ENABLED": "`torqueloop disable --all` first",
+    "HAS_SWITCHES": "`torqueloop home neg` or `pos`; without switches `torqueloop set limit_sw 0` first",
+    "HOME_POS_FROZEN": "`torqueloop disable --all` first",
     "CAUSE": "`torqueloop status` shows what is still present",
 }
 
@@ -271,7 +275,7 @@ def cmd_enable(ctx: Ctx, on: bool) -> int:
         print(f"note: an enabled axis stays enabled only while a host keeps commanding it: the board "
               f"disables it after {timeout} ms without a command (LINK fault), and a `torqueloop serve` "
               "disables it when this command ends. To move, `move TARGET --enable --wait S` and "
-              "`home neg --enable` enable the axis themselves and disable it when done; "
+              "`home neg` enable the axis themselves and disable it when done; "
               "`torqueloop shell` keeps it enabled between commands", file=sys.stderr)
     return 0
 
@@ -385,21 +389,9 @@ def cmd_home(ctx: Ctx) -> int:
     a = ctx.args
     ctx.require_key("HOME")
     c = ctx.client
-    st = c.status(a.axis)
-    if a.mode != "here":
-        if not st["enabled"] and not a.enable:
-            raise ProtocolError(f"axis {a.axis} is disabled: homing to a switch moves it; "
-                                f"`torqueloop home {a.mode} --enable` enables it for the homing")
-    if a.enable and not st["enabled"]:
-        if blocking := st["faults"] & ~P.DIRECTIONAL_FAULTS:
-            raise ProtocolError(f"axis {a.axis} has latched faults: {describe_faults(blocking)}; "
-                                "`torqueloop clear-fault` first")
-        c.enable(1 << a.axis, True)
-    try:
-        c.home(a.axis, a.mode, a.index)
-    except ProtocolError:
-        c.enable(1 << a.axis, False)
-        raise
+    # Homing moves the soft-limit window, so the board takes it only with every axis disabled,
+    # and homing to a switch enables its axis itself (docs/safety.md); --enable is that default.
+    c.home(a.axis, a.mode, a.index)
     t0 = time.monotonic()
     while a.mode != "here" and time.monotonic() - t0 < a.wait:
         st = c.status(a.axis)
@@ -924,7 +916,7 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("--index", action="store_true", help="after the switch, go on to the next encoder index pulse")
     sp.add_argument("--wait", type=_bounded(float, 0, 86400, "--wait"), default=60.0, metavar="S",
                     help="wait up to S seconds for homing to finish, keeping the link alive [60]")
-    sp.add_argument("--enable", action="store_true", help="enable the axis for the homing (disabled at the end)")
+    sp.add_argument("--enable", action="store_true", help="accepted for scripts; homing to a switch enables its axis itself (every axis disabled first) and disables it at the end")
     sp.add_argument("--hold", action="store_true",
                     help="afterwards keep the axis enabled, sending heartbeats, until Ctrl-C (then disable)")
     axis_opts(sp, False)
@@ -1040,6 +1032,24 @@ EXIT_REFUSED, EXIT_BAD_INPUT, EXIT_NO_ANSWER = 1, 2, 3
 BAD_INPUT_STATUSES = frozenset({P.STATUS["BAD_ARG"], P.STATUS["RANGE"]})
 
 
+def _stdout_closed() -> bool:
+    """True if stdout's reader has gone (a pipe with no reader polls as an
+    error); stdout then points at /dev/null, so the interpreter's last flush
+    does not report the broken pipe again."""
+    import select
+
+    try:
+        fd = sys.stdout.fileno()
+        p = select.poll()
+        p.register(fd, select.POLLOUT)
+        gone = any(ev & (select.POLLERR | select.POLLHUP) for _, ev in p.poll(0))
+    except (OSError, ValueError, AttributeError):
+        return False
+    if gone:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), fd)
+    return gone
+
+
 def main(argv: list[str] | None = None, *, client: Client | RemoteClient | None = None,
          tick: Callable[[], None] | None = None) -> int:
     """Run one command.  ``client``: an open session to run it on (the shell's;
@@ -1057,7 +1067,12 @@ def main(argv: list[str] | None = None, *, client: Client | RemoteClient | None 
     ctx.tick = tick or (lambda: None)
     try:
         return args.fn(ctx)
-    except NoAnswer as e:
+    except BrokenPipeError as e:
+        if not _stdout_closed():
+            print(f"torqueloop: {e}", file=sys.stderr)
+            return EXIT_REFUSED
+        return 0      # the reader stopped early (`info | head -1`): what it read was printed
+    except (NoAnswer, LinkOpenError, LinkClosed) as e:
         print(f"torqueloop: {e}", file=sys.stderr)
         return EXIT_NO_ANSWER
     except CommandRejected as e:
@@ -1067,7 +1082,7 @@ def main(argv: list[str] | None = None, *, client: Client | RemoteClient | None 
     except (BadValue, hconfig.HostConfigError, ImageRefused) as e:
         print(f"torqueloop: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except (ProtocolError, LinkOpenError, SimStackMissing, ValueError, OSError) as e:
+    except (ProtocolError, SimStackMissing, ValueError, OSError) as e:
         print(f"torqueloop: {e}", file=sys.stderr)
         return EXIT_REFUSED
     finally:

@@ -50,6 +50,23 @@ static inline void tl_auth_stir(tl_auth_t *a, uint32_t cycles) { a->stir = a->st
 /* SESSION: TLP_ST_OK with the board's nonce and proof, or TLP_ST_NO_KEY. */
 uint8_t tl_auth_session(tl_auth_t *a, const uint8_t host_nonce[TLP_AUTH_NONCE_BYTES], uint32_t cycles,
                         uint8_t board_nonce[TLP_AUTH_NONCE_BYTES], uint8_t proof[TLP_AUTH_TAG_BYTES]);
+/* A command that shows the host in control yet needs no key can only take
+ * motion away: STOP and disabling.  It runs whatever its seq (and whatever
+ * its MAC), so frames injected into the link cannot block a stop; only a
+ * fresh one with a verified MAC feeds the link watchdog
+ * (torqueloop/spec/auth.py, stopping). */
+static inline bool tl_auth_stopping(uint8_t cmd, const uint8_t *payload)
+{
+    uint8_t flags = 0;
+    switch (cmd) {
+#define TL_AUTH_FLAGS(code, handler, req_len, rep_len, f) \
+    case code: flags = (uint8_t)(f); break;
+        TLP_COMMAND_TABLE(TL_AUTH_FLAGS)
+#undef TL_AUTH_FLAGS
+    default: break;
+    }
+    return (flags & TLP_CF_FEEDS_LINK) != 0u && !tlp_needs_key(cmd, payload);
+}
 /* Status for a command that needs the key but came without a MAC. */
 static inline uint8_t tl_auth_missing(const tl_auth_t *a) { return a->have_key ? TLP_ST_AUTH : TLP_ST_NO_KEY; }
 /* A frame whose payload ends with a MAC: TLP_ST_OK (and the session moves on

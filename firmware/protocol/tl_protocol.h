@@ -59,6 +59,9 @@
 #define TLP_WHY_NO_SWITCHES 20u
 #define TLP_WHY_NOT_HOMED 21u
 #define TLP_WHY_CAUSE 22u
+#define TLP_WHY_AXES_ENABLED 23u
+#define TLP_WHY_HAS_SWITCHES 24u
+#define TLP_WHY_HOME_POS_FROZEN 25u
 /* the status a rule comes with (a constant rule folds to a constant) */
 static inline uint8_t tlp_why_status(uint8_t why)
 {
@@ -85,6 +88,9 @@ static inline uint8_t tlp_why_status(uint8_t why)
     case TLP_WHY_NO_SWITCHES: return TLP_ST_STATE;
     case TLP_WHY_NOT_HOMED: return TLP_ST_NOT_HOMED;
     case TLP_WHY_CAUSE: return TLP_ST_STATE;
+    case TLP_WHY_AXES_ENABLED: return TLP_ST_STATE;
+    case TLP_WHY_HAS_SWITCHES: return TLP_ST_STATE;
+    case TLP_WHY_HOME_POS_FROZEN: return TLP_ST_LOOSEN;
     default: return TLP_ST_OK;
     }
 }
@@ -320,6 +326,10 @@ static inline int tlp_needs_key(uint8_t cmd, const uint8_t *payload)
 #define TLP_P_LIMIT_SW 24u
 #define TLP_P_HOME_VEL 25u
 #define TLP_P_HOME_POS 26u
+#define TLP_P_ENC_CMD0 27u
+#define TLP_P_ENC_CPS 28u
+#define TLP_P_ENC_TAU_MS 29u
+#define TLP_P_ENC_SLACK 30u
 #define TLP_P_PERIOD_US 64u
 #define TLP_P_LINK_TIMEOUT_MS 65u
 #define TLP_P_BAUD_DIV 66u
@@ -329,7 +339,7 @@ static inline int tlp_needs_key(uint8_t cmd, const uint8_t *payload)
 /* dflt[axis]: a global parameter's default is dflt[0]; tighten: +1 / -1 = while an axis is
    enabled the value may only rise / fall (a safety limit), 0 = free */
 typedef struct { uint8_t id; uint8_t global; int8_t tighten; int32_t min; int32_t max; int32_t dflt[TLP_AXIS_COUNT]; } tlp_param_info_t;
-#define TLP_PARAM_COUNT 31u
+#define TLP_PARAM_COUNT 35u
 static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {
     {0u, 0u, 0, 0L, 3L, {1L, 1L}},  /* LAW */
     {1u, 0u, 0, 0L, 2147483647L, {17134L, 23145L}},  /* KP_Q16 */
@@ -358,6 +368,10 @@ static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {
     {24u, 0u, 1, 0L, 1L, {1L, 1L}},  /* LIMIT_SW */
     {25u, 0u, 0, 1L, 1000000L, {2100L, 2100L}},  /* HOME_VEL */
     {26u, 0u, 0, (-2147483647L), 2147483647L, {0L, 0L}},  /* HOME_POS */
+    {27u, 0u, -1, 0L, 1023L, {64L, 64L}},  /* ENC_CMD0 */
+    {28u, 0u, 1, 1L, 10000000L, {23416L, 17338L}},  /* ENC_CPS */
+    {29u, 0u, -1, 1L, 60000L, {600L, 1600L}},  /* ENC_TAU_MS */
+    {30u, 0u, -1, 1L, 1000000L, {64L, 64L}},  /* ENC_SLACK */
     {64u, 1u, 0, 50L, 25000L, {25000L, 25000L}},  /* PERIOD_US */
     {65u, 1u, -1, 10L, 60000L, {500L, 500L}},  /* LINK_TIMEOUT_MS */
     {66u, 1u, 0, 15L, 65535L, {433L, 433L}},  /* BAUD_DIV */
@@ -366,10 +380,10 @@ static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {
 /* parameter id -> index into TLP_PARAM_INFO, -1: no such parameter */
 static const int8_t TLP_PARAM_INDEX[256] = {
      0,  1,  2,  3,  4,  5,  6,  7,  8,  9, 10, 11, 12, 13, 14, 15,
-    16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, -1, -1, -1, -1, -1,
+    16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, -1,
     -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
     -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
-    27, 28, 29, 30, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
+    31, 32, 33, 34, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
     -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
     -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
     -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,

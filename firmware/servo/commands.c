@@ -240,7 +240,9 @@ TL_FOR_SIZE static void send_status(tl_servo_t *s, tl_tx_fn tx, uint16_t seq, ui
 
 /* The checks before a command runs, in order: its length (with or without a
  * MAC), the key it needs, a new seq (for a sequence-checked command), the MAC;
- * each refusal counted.  *tagged: a MAC came with it (verified on TLP_ST_OK). */
+ * each refusal counted.  *tagged: a MAC came with it and verified with a new
+ * seq (what shows the host in control).  STOP and disabling run whatever their
+ * seq and MAC (tl_auth_stopping): injected frames cannot block a stop. */
 TL_FOR_SIZE static uint8_t admit(tl_servo_t *s, const tl_frame_t *f, const cmd_row_t *c, bool *tagged)
 {
     *tagged = f->len == c->req_len + TLP_AUTH_TAG_BYTES;   /* a MAC follows the payload */
@@ -253,18 +255,23 @@ TL_FOR_SIZE static uint8_t admit(tl_servo_t *s, const tl_frame_t *f, const cmd_r
         return tl_auth_missing(&s->auth);
     }
     bool checked = (c->flags & TLP_CF_SEQ_CHECKED) != 0u;
-    if (checked && !tl_seq_is_new(&s->seq, f->seq)) {
+    bool fresh = !checked || tl_seq_is_new(&s->seq, f->seq);
+    bool stopping = tl_auth_stopping(f->cmd, f->payload);
+    if (!fresh && !stopping) {
         sat_inc(&s->cnt.replay);
         return TLP_ST_REPLAY;
     }
-    if (*tagged) {
+    if (*tagged && fresh) {
         uint8_t ast = tl_auth_verify(&s->auth, f);   /* outside the control interrupt: ~29 000 cycles */
-        if (ast != TLP_ST_OK) {
+        if (ast != TLP_ST_OK && !stopping) {
             sat_inc(ast == TLP_ST_REPLAY ? &s->cnt.replay : &s->cnt.auth);
             return ast;
         }
+        *tagged = ast == TLP_ST_OK;   /* a stop all the same, but it shows no one in control */
+    } else {
+        *tagged = false;
     }
-    if (checked)
+    if (checked && fresh)
         tl_seq_accept(&s->seq, f->seq);
     sat_inc(&s->cnt.frames_ok);
     return TLP_ST_OK;

@@ -17,6 +17,7 @@ static void home_finish(tl_axis_t *a, int32_t ref, uint32_t now)
     a->offset = wrap_add(a->offset, delta);
     a->pos = wrap_add(a->pos, delta);
     a->stall_dir = 0;
+    enc_check_reset(a);
     tl_ctl_reset(&a->c, a->pos, now);
     a->home = TLP_HOME_STATE_HOMED;
 }
@@ -82,6 +83,21 @@ uint8_t tl_home_start(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index, 
     tl_axis_t *a = &s->ax[axis];
     if (a->home == TLP_HOME_STATE_HOMING)
         return refuse(why, TLP_WHY_HOMING);
+    /* Homing moves the soft-limit window (absolute from then on), so, like
+     * loosening a limit, it starts only with every axis disabled; with limit
+     * switches the home is the switch, not wherever the axis stands.  Homing
+     * to a switch then enables its axis itself. */
+    if (tl_any_enabled(s))
+        return refuse(why, TLP_WHY_AXES_ENABLED);
+    if (mode == TLP_HOME_MODE_HERE && pv(a, TLP_P_LIMIT_SW))
+        return refuse(why, TLP_WHY_HAS_SWITCHES);
+    if (mode != TLP_HOME_MODE_HERE) {
+        if (a->faults || !pv(a, TLP_P_LIMIT_SW))
+            return refuse(why, a->faults ? TLP_WHY_FAULT : TLP_WHY_NO_SWITCHES);
+        uint8_t st = tl_axes_enable(s, (uint8_t)(1u << axis), why);
+        if (st != TLP_ST_OK)
+            return st;
+    }
     hal_irq_off();
     if (mode == TLP_HOME_MODE_HERE) {
         tl_enc_sample_t e;
@@ -90,11 +106,6 @@ uint8_t tl_home_start(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index, 
         home_finish(a, a->pos, e.now);
         hal_irq_on();
         return TLP_ST_OK;
-    }
-    if (!a->enabled || a->faults || !pv(a, TLP_P_LIMIT_SW)) {
-        hal_irq_on();
-        return refuse(why, !a->enabled ? TLP_WHY_DISABLED
-                           : (a->faults ? TLP_WHY_FAULT : TLP_WHY_NO_SWITCHES));
     }
     a->home = TLP_HOME_STATE_HOMING;
     a->home_phase = HOME_SEEK;

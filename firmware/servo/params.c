@@ -48,6 +48,7 @@ TL_FOR_SIZE static void axis_cfg(const int32_t *p, uint32_t period_us, uint32_t 
     out->home_step_q16 = (int64_t)((uint64_t)(uint32_t)p[PI(TLP_P_HOME_VEL)] * period_us * 1024u / 15625u);
     if (out->home_step_q16 < (1 << HOME_SLOW_SHIFT))
         out->home_step_q16 = 1 << HOME_SLOW_SHIFT;
+    enc_check_derive(&out->enc, p[PI(TLP_P_ENC_CPS)], p[PI(TLP_P_ENC_TAU_MS)], period_us);
 }
 
 /* Hand a configuration to the control iteration: copies, for a critical section. */
@@ -58,6 +59,7 @@ static void commit_axis(tl_servo_t *s, uint32_t i, const tl_axis_cfg_t *cfg)
     tl_ctl_apply(&a->c, &cfg->d);
     a->stall_limit_ticks = cfg->stall_limit_ticks;
     a->home_step_q16 = cfg->home_step_q16;
+    a->enc = cfg->enc;
     hal_pwm_config(i, (uint32_t)pv(a, TLP_P_FDIV), (uint32_t)pv(a, TLP_P_PW0), (uint32_t)pv(a, TLP_P_PWMAX));
     hal_limit_block(i, pv(a, TLP_P_LIMIT_SW) != 0);
 }
@@ -168,6 +170,8 @@ static uint8_t param_allowed(const tl_servo_t *s, uint8_t axis, uint8_t id, int 
         if (info->tighten > 0 ? v < cur : v > cur)
             return refuse(why, TLP_WHY_TIGHTEN);
     }
+    if (id == TLP_P_HOME_POS && tl_any_enabled(s) && v != s->ax[axis].p[k])
+        return refuse(why, TLP_WHY_HOME_POS_FROZEN);   /* the next homing would move the soft-limit window */
     if (info->global) {
         if (id == TLP_P_PWM_MAX_HZ)
             for (uint32_t i = 0; i < TL_AXES; i++)

@@ -102,6 +102,7 @@ uint8_t tl_axes_enable(tl_servo_t *s, uint8_t mask, uint8_t *why)
         tl_ctl_reset(&a->c, a->pos, e.now);   /* set-point = where it is: no jump */
         a->recover = soft_side(a);
         a->stall_dir = 0;
+        enc_check_reset(a);
         a->cmd = 0;
         a->enabled = true;
         hal_pwm_cmd(i, 0);

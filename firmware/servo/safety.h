@@ -130,7 +130,7 @@ static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, 
         if (o & (uint8_t)~a->recover)
             f |= TLP_FAULT_SOFT_LIMIT;
     }
-    return f | stall_check(a);
+    return f | stall_check(a) | enc_check(a, pv(a, TLP_P_ENC_CMD0), pv(a, TLP_P_ENC_SLACK));
 }
 
 /* Sides toward which the axis must not be driven: a latched limit fault, a

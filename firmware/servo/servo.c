@@ -39,6 +39,7 @@ TL_FOR_SIZE void tl_servo_init(tl_servo_t *s)
         a->recover = 0;
         a->home = TLP_HOME_STATE_NOT_HOMED;
         a->stall_dir = 0;
+        enc_check_reset(a);
         tl_ctl_reset(&a->c, e.pos, e.now);
     }
     tl_params_sync(s);

@@ -17,6 +17,13 @@
 
 #define TL_AXES TLP_AXIS_COUNT   /* the protocol's axis count (torqueloop/spec/system.toml) */
 
+/* Encoder plausibility constants (enc_check.h), derived from the parameters. */
+typedef struct {
+    int32_t k_q8;                 /* half the model's speed per command step above ENC_CMD0, counts/s q8 */
+    int32_t alpha_q16;            /* period / ENC_TAU_MS, q16, at most 1 */
+    int32_t dt_q16;               /* the period, s q16 */
+} tl_enc_cfg_t;
+
 typedef struct {
     int32_t p[TLP_PARAM_COUNT];   /* raw parameter values, indexed like TLP_PARAM_INFO */
     tl_ctl_params_t ctl;          /* control view of the same values */
@@ -40,6 +47,11 @@ typedef struct {
     uint32_t stall_ticks;         /* periods without passing it */
     uint32_t stall_limit_ticks;   /* derived: STALL_MS in periods */
     int64_t home_step_q16;        /* derived: HOME_VEL per period, counts q16 */
+    int8_t enc_dir;               /* encoder plausibility: sign of a command above ENC_CMD0, 0 none */
+    int32_t enc_ref;              /* position at the last period */
+    int64_t enc_vlo_q8;           /* lower bound of the speed in enc_dir, counts/s q8 */
+    int64_t enc_exp_q24;          /* counts the encoder is behind that speed's distance, q24 */
+    tl_enc_cfg_t enc;             /* derived */
 } tl_axis_t;
 
 typedef struct {

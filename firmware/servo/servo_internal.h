@@ -12,6 +12,7 @@
 
 #include "hal.h"
 #include "servo.h"
+#include "enc_check.h"
 
 #define IDX_NONE (-1)
 #define PI(id) TLP_PARAM_INDEX[id]
@@ -41,6 +42,7 @@ typedef struct {
     tl_ctl_derived_t d;
     uint32_t stall_limit_ticks;   /* STALL_MS in periods, rounded up */
     int64_t home_step_q16;        /* HOME_VEL per period, q16 counts */
+    tl_enc_cfg_t enc;             /* encoder plausibility */
 } tl_axis_cfg_t;
 
 /* Every parameter's default, then what they give the iteration (start-up). */

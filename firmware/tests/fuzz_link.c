@@ -17,8 +17,9 @@
  *    the fuzzer reaches every command behind the MAC check and the session's
  *    replay rules.  Checked: a frame with a flipped MAC bit, sent a second
  *    time, or sent again later in the session (whatever untagged frames did
- *    to the link's seq in between) is never executed, and the critical
- *    sections balance.
+ *    to the link's seq in between) is never executed - but STOP and
+ *    disabling, which run whatever their seq - and the critical sections
+ *    balance.
  *
  * Build: clang -fsanitize=fuzzer,address,undefined (tests/test_firmware_host.py). */
 #include <stdint.h>
@@ -92,7 +93,9 @@ static void key_holder(const uint8_t *data, size_t size)
         feed(wire, wl);
         if ((flags & 3u) == 3u && tlp_needs_key(cmd, p) && s.cnt.frames_ok != ok)
             abort();   /* a command that needs the key ran with a flipped MAC bit */
-        if ((flags & 3u) == 1u && s.cnt.frames_ok != ok && cmd != TLP_CMD_IDENTIFY && cmd != TLP_CMD_SESSION) {
+        /* STOP and disabling run whatever their seq (tl_auth_stopping): running them again is harmless */
+        bool any_seq = cmd == TLP_CMD_IDENTIFY || cmd == TLP_CMD_SESSION || tl_auth_stopping(cmd, p);
+        if ((flags & 3u) == 1u && s.cnt.frames_ok != ok && !any_seq) {
             for (uint32_t k = 0; k < n_seen; k++)
                 if (seen[k] == seq)
                     abort();   /* an authenticated frame ran twice in one session */
@@ -102,8 +105,9 @@ static void key_holder(const uint8_t *data, size_t size)
         if (flags & 4u) {
             ok = s.cnt.frames_ok;
             feed(wire, wl);
-            /* the second copy is never executed (IDENTIFY and SESSION answer any seq, as specified) */
-            if (s.cnt.frames_ok != ok && cmd != TLP_CMD_IDENTIFY && cmd != TLP_CMD_SESSION)
+            /* the second copy is never executed (IDENTIFY, SESSION, STOP and disabling answer any seq,
+               as specified) */
+            if (s.cnt.frames_ok != ok && !any_seq)
                 abort();
         }
         if (seq & 0x40u)

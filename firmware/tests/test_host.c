@@ -4,14 +4,15 @@
  * authentication (on the fake HAL).  Run by tests/test_firmware_host.py.
  *
  *   host_tests unit [seed]   run every test; prints the seed and the counts
- *   host_tests ctl           line-driven control.c, compared with
- *                            torqueloop/oracles/servo.py by the Python test */
+ *   host_tests ctl           line-driven control.c and enc_check.h, compared
+ *                            with torqueloop/oracles/servo.py by the Python test */
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "control.h"
+#include "enc_check.h"
 #include "hal_fake.h"
 #include "servo.h"
 #include "tl_link.h"
@@ -418,6 +419,7 @@ static void test_runaway(void)
         fresh();
         CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_PERIOD_US, PERIOD) == TLP_ST_OK, "period");
         CHECK(set_param(0, TLP_P_STALL_MS, STALL_MS) == TLP_ST_OK, "stall ms");
+        CHECK(set_param(0, TLP_P_ENC_CMD0, 1023) == TLP_ST_OK, "the stall check alone (no plausibility check)");
         CHECK(set_param(0, TLP_P_KP_Q16, 65536) == TLP_ST_OK, "kp 1 step per count");
         CHECK(set_param(0, TLP_P_LAW, 3) == TLP_ST_OK && set_param(0, TLP_P_KI_Q16, 65536 * 4) == TLP_ST_OK, "pid");
         CHECK(enable(1, 1) == TLP_ST_OK, "enable");
@@ -448,6 +450,73 @@ static void test_runaway(void)
                   "%s encoder: faults 0x%x", kinds[kind], sv.ax[0].faults);
             CHECK(n >= STALL_MS * 1000 / PERIOD && n <= STALL_MS * 1000 / PERIOD + 8,
                   "%s encoder tripped after %d periods, STALL_MS is %d", kinds[kind], n, STALL_MS * 1000 / PERIOD);
+        }
+    }
+}
+
+/* Encoder plausibility on a plant that follows the check's own model (speed
+ * 22.8 counts/s per step above a breakaway of 30 steps, time constant 20 ms;
+ * the check configured for it: ENC_CMD0 30, ENC_TAU_MS 100): a P law
+ * holding a command below STALL_CMD (85 steps) with the encoder frozen,
+ * undercounting (1 count of 50), reversed or chattering trips RUNAWAY; a
+ * healthy encoder through a move, a reversal and a stop never does. */
+static void test_encoder_plausibility(void)
+{
+    enum { PERIOD = 1000 };
+    const char *kinds[] = {"healthy", "frozen", "undercounting", "reversed", "chattering"};
+    for (int kind = 0; kind < 5; kind++) {
+        fresh();
+        CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_PERIOD_US, PERIOD) == TLP_ST_OK, "period");
+        CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_LINK_TIMEOUT_MS, 60000) == TLP_ST_OK, "timeout");
+        CHECK(set_param(0, TLP_P_STALL_CMD, 100) == TLP_ST_OK, "STALL_CMD 10 %%");
+        CHECK(set_param(0, TLP_P_KP_Q16, 65536) == TLP_ST_OK, "kp 1 step per count");
+        CHECK(set_param(0, TLP_P_FOLLOW_LIMIT, 1000000) == TLP_ST_OK, "no following error");
+        CHECK(set_param(0, TLP_P_ENC_CMD0, 30) == TLP_ST_OK && set_param(0, TLP_P_ENC_TAU_MS, 100) == TLP_ST_OK,
+              "the check configured for this plant");
+        CHECK(enable(1, 1) == TLP_ST_OK, "enable");
+        double x = 0.0, v = 0.0;   /* the plant: counts, counts/s */
+        int32_t target = 85, tripped_at = -1, max_travel = 0;
+        CHECK(move(0, U, target) == TLP_ST_OK, "hold a command of 85 < STALL_CMD");
+        for (int n = 0; n < 6000 && sv.ax[0].enabled; n++) {
+            if (kind == 0 && (n == 2000 || n == 3000 || n == 4000)) {
+                target = n == 2000 ? -300 : (n == 3000 ? 800 : (int32_t)x);   /* reverse, go on, stop */
+                CHECK(move(0, U, target) == TLP_ST_OK, "healthy: move to %" PRId32, target);
+            }
+            int32_t u = hal_fake.pwm_cmd[0];
+            int32_t over = u > 30 ? u - 30 : (u < -30 ? u + 30 : 0);
+            v += (22.8 * over - v) * (PERIOD * 1e-6 / 0.020);
+            x += v * PERIOD * 1e-6;
+            int32_t before = hal_fake.enc[0].pos, truth = (int32_t)(x >= 0 ? x + 0.5 : x - 0.5);
+            if (kind == 0)
+                hal_fake.enc[0].pos = truth;
+            else if (kind == 2)
+                hal_fake.enc[0].pos = truth / 50;
+            else if (kind == 3)
+                hal_fake.enc[0].pos = -truth;
+            else if (kind == 4)
+                hal_fake.enc[0].pos = n & 1;
+            hal_fake.enc[0].now += PERIOD * 50u;
+            if (hal_fake.enc[0].pos != before) {
+                hal_fake.enc[0].interval = hal_fake.enc[0].now - hal_fake.enc[0].edge_time;
+                hal_fake.enc[0].edge_time = hal_fake.enc[0].now;
+            }
+            if (n == 5 && kind == 1)
+                CHECK(u > 30 && u < 100, "the command is held below STALL_CMD: %" PRId32, u);
+            ticks(1);
+            if (!sv.ax[0].enabled)
+                tripped_at = n;
+            int32_t travel = truth < 0 ? -truth : truth;
+            if (travel > max_travel && kind != 0)
+                max_travel = travel;
+        }
+        if (kind == 0) {
+            CHECK(sv.ax[0].enabled && sv.ax[0].faults == 0, "healthy encoder: faults 0x%x", sv.ax[0].faults);
+        } else {
+            CHECK(sv.ax[0].faults == TLP_FAULT_RUNAWAY && !hal_fake.pwm_on[0], "%s encoder: faults 0x%x",
+                  kinds[kind], sv.ax[0].faults);
+            /* ENC_SLACK 64 counts at least half the model's speed behind: the travel is bounded */
+            CHECK(tripped_at >= 0 && max_travel < 600, "%s encoder: tripped after %d ms, %" PRId32 " counts of travel",
+                  kinds[kind], tripped_at, max_travel);
         }
     }
 }
@@ -549,6 +618,52 @@ static void test_link_feed(void)
     }
     host_tags = true;
     CHECK(!sv.ax[0].enabled && (sv.ax[0].faults & TLP_FAULT_LINK), "STOPs without a MAC fed the watchdog");
+    /* a recorded STOP with its MAC, replayed: it stops again, but shows no one in control */
+    CHECK(clear(1) == TLP_ST_OK && enable(1, 1) == TLP_ST_OK, "recover a third time");
+    wl = encode_cmd(++host_seq, TLP_CMD_STOP, &m, 1, true, wire);
+    feed(wire, wl);
+    for (int n = 0; n < 30 && sv.ax[0].enabled; n++) {
+        last_reply_len = -1;
+        feed(wire, wl);
+        CHECK(last_reply_len >= 1 && last_reply[1] == TLP_ST_OK, "a replayed STOP still stops");
+        ticks(1);
+    }
+    CHECK(!sv.ax[0].enabled && (sv.ax[0].faults & TLP_FAULT_LINK), "a replayed STOP fed the watchdog");
+}
+
+/* Someone who can write into the operator's stream puts a STATUS 0x4000 ahead of
+ * the board's seq before each of the operator's frames: every command of the
+ * operator is then stale, but STOP and disable run all the same, with a MAC or
+ * without, and nothing else does. */
+static void test_stop_cannot_be_blocked(void)
+{
+    for (int tagged = 0; tagged < 2; tagged++) {
+        fresh();
+        CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_PERIOD_US, 1000) == TLP_ST_OK, "period");
+        CHECK(enable(3, 1) == TLP_ST_OK && move(0, U, 900) == TLP_ST_OK, "moving");
+        host_tags = tagged != 0;
+        uint8_t wire[TLP_MAX_WIRE], ax = 0, m = 3;
+        uint16_t seqs_before = sv.seq.last;
+        for (int k = 0; k < 3; k++) {
+            feed(wire, encode_cmd((uint16_t)(sv.seq.last + 0x4000u), TLP_CMD_STATUS, &ax, 1, false, wire));
+            uint8_t st;
+            if (k == 0)
+                st = send_cmd(TLP_CMD_STOP, &m, 1);
+            else if (k == 1)
+                st = move(0, U, 1500);
+            else
+                st = enable(3, 0);
+            uint8_t want = k != 1 ? TLP_ST_OK : (tagged ? TLP_ST_REPLAY : TLP_ST_AUTH);
+            CHECK(st == want, "frame %d after an injected seq (tagged %d): status %u", k, tagged, st);
+            if (k == 0)
+                CHECK((sv.ax[0].c.target_q16 >> 16) == sv.ax[0].pos && sv.ax[0].enabled, "STOP held the position");
+            if (k == 1)
+                CHECK((sv.ax[0].c.target_q16 >> 16) == sv.ax[0].pos, "a stale MOVE ran");
+        }
+        CHECK(!sv.ax[0].enabled && !sv.ax[1].enabled, "disable ran although its seq was stale");
+        CHECK(sv.seq.last != seqs_before, "the injected frames moved the seq on");
+        host_tags = true;
+    }
 }
 
 /* A soft-limit fault can be cleared while outside; the axis may then be enabled and
@@ -626,10 +741,19 @@ static void test_homing(void)
         CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_LINK_TIMEOUT_MS, 60000) == TLP_ST_OK, "timeout");
         CHECK(set_param(0, TLP_P_HOME_VEL, 20000) == TLP_ST_OK && set_param(0, TLP_P_HOME_POS, -7) == TLP_ST_OK, "home");
         hal_fake.enc[0].pos = 5000;
-        CHECK(home(0, TLP_HOME_MODE_NEG, (uint8_t)index) == TLP_ST_STATE, "homing needs the axis enabled");
         CHECK(enable(1, 1) == TLP_ST_OK, "enable");
         CHECK(move(0, 0, 5100) == TLP_ST_NOT_HOMED, "not homed");
-        CHECK(home(0, TLP_HOME_MODE_NEG, (uint8_t)index) == TLP_ST_OK, "home toward the negative switch");
+        /* every path that moves the soft-limit window is closed while an axis is enabled */
+        CHECK(home(0, TLP_HOME_MODE_NEG, (uint8_t)index) == TLP_ST_STATE, "switch homing while enabled");
+        CHECK(home(0, TLP_HOME_MODE_HERE, 0) == TLP_ST_STATE, "home here while enabled");
+        CHECK(enable(1, 0) == TLP_ST_OK && enable(2, 1) == TLP_ST_OK, "the other axis enabled");
+        CHECK(home(0, TLP_HOME_MODE_NEG, (uint8_t)index) == TLP_ST_STATE, "homing while another axis is enabled");
+        CHECK(set_param(0, TLP_P_HOME_POS, 900000) == TLP_ST_LOOSEN && set_param(0, TLP_P_HOME_POS, -7) == TLP_ST_OK,
+              "HOME_POS frozen while an axis is enabled");
+        CHECK(enable(2, 0) == TLP_ST_OK, "all disabled");
+        CHECK(home(0, TLP_HOME_MODE_HERE, 0) == TLP_ST_STATE, "home here with limit switches declared");
+        CHECK(home(0, TLP_HOME_MODE_NEG, (uint8_t)index) == TLP_ST_OK && sv.ax[0].enabled,
+              "home toward the negative switch: it enables the axis");
         CHECK(move(0, U, 5100) == TLP_ST_STATE, "no move while homing");
         /* the stage: follows its set-point; the switch opens below raw count 1000,
          * an index every 400 counts */
@@ -666,10 +790,10 @@ static void test_homing(void)
     fresh();
     CHECK(set_param(0, TLP_P_LIMIT_SW, 0) == TLP_ST_OK, "no switches");
     hal_fake.enc[0].pos = 777;
-    CHECK(enable(1, 1) == TLP_ST_OK, "enable");
-    CHECK(home(0, TLP_HOME_MODE_NEG, 0) == TLP_ST_STATE, "switch homing without switches refused");
+    CHECK(home(0, TLP_HOME_MODE_NEG, 0) == TLP_ST_STATE && !sv.ax[0].enabled, "switch homing without switches refused");
     CHECK(home(0, TLP_HOME_MODE_HERE, 0) == TLP_ST_OK && sv.ax[0].pos == 0 && sv.ax[0].home == TLP_HOME_STATE_HOMED,
           "home here: %" PRId32, sv.ax[0].pos);
+    CHECK(enable(1, 1) == TLP_ST_OK, "enable");
     ticks(2);
     CHECK(hal_fake.pwm_cmd[0] == 0 && sv.ax[0].faults == 0, "no jump after homing here");
     /* an encoder fault loses the home */
@@ -726,8 +850,9 @@ static void test_encoder_wrap(void)
     }
     fresh();
     hal_fake.enc[0].pos = INT32_MAX - 2;
-    CHECK(enable(1, 1) == TLP_ST_OK && home(0, TLP_HOME_MODE_HERE, 0) == TLP_ST_OK, "home near the wrap");
+    CHECK(set_param(0, TLP_P_LIMIT_SW, 0) == TLP_ST_OK && home(0, TLP_HOME_MODE_HERE, 0) == TLP_ST_OK, "home near the wrap");
     CHECK(set_param(0, TLP_P_HOME_POS, INT32_MAX) == TLP_ST_OK && home(0, TLP_HOME_MODE_HERE, 0) == TLP_ST_OK, "re-home");
+    CHECK(enable(1, 1) == TLP_ST_OK, "enable");
     hal_fake.enc[0].pos = INT32_MIN + 2;    /* 5 counts on, across the wrap */
     ticks(3);
     CHECK(sv.ax[0].pos == INT32_MIN + 4 && (sv.ax[0].faults & TLP_FAULT_FOLLOWING) && !sv.ax[0].enabled,
@@ -920,6 +1045,8 @@ static void test_profile(void)
 
 static int ctl_main(void)
 {
+    static tl_axis_t ea;   /* enc_check's state and inputs */
+    int32_t enc_cmd0 = 0, enc_slack = 0;
     tl_ctl_params_t p = {0};
     tl_ctl_t c;
     memset(&c, 0, sizeof c);
@@ -954,6 +1081,20 @@ static int ctl_main(void)
             printf("%" PRId32 " %" PRId32 "\n", tl_gain_raw_from_phys((int32_t)a[0], (int32_t)a[1], (int32_t)a[2]),
                    tl_gain_phys_from_raw((int32_t)a[3], (int32_t)a[1], (int32_t)a[2]));
             break;
+        case 'E':   /* encoder plausibility: cmd0 cps tau_ms slack period_us */
+            enc_check_derive(&ea.enc, (int32_t)a[1], (int32_t)a[2], (uint32_t)a[4]);
+            enc_check_reset(&ea);
+            enc_cmd0 = (int32_t)a[0];
+            enc_slack = (int32_t)a[3];
+            break;
+        case 'e': { /* one period: cmd pos vel_q8 */
+            ea.cmd = (int32_t)a[0];
+            ea.pos = (int32_t)a[1];
+            ea.c.vel_q8 = (int32_t)a[2];
+            uint16_t f = enc_check(&ea, enc_cmd0, enc_slack);
+            printf("%d %" PRId64 " %" PRId64 "\n", f != 0, ea.enc_vlo_q8, ea.enc_exp_q24);
+            break;
+        }
         default: break;
         }
     }
@@ -973,6 +1114,8 @@ int main(int argc, char **argv)
     test_runaway();
     test_tighten_only();
     test_link_feed();
+    test_stop_cannot_be_blocked();
+    test_encoder_plausibility();
     test_soft_limit_recovery();
     test_limit_switches();
     test_homing();

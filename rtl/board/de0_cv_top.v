@@ -33,7 +33,12 @@
 module de0_cv_top #(
     parameter         ROM_INIT  = "",             // boot ROM image ($readmemh, one 32-bit word per line)
     parameter         RAM_INIT  = "",             // RAM image; empty when the program arrives over the UART
-    parameter integer RAM_BYTES = `TL_RAM_SIZE    // smaller only for quick generic synthesis checks
+    parameter integer RAM_BYTES = `TL_RAM_SIZE,   // smaller only for quick generic synthesis checks
+    // Bit n: axis n+1's bridge-fault comparator is wired (1) or not fitted (0:
+    // that fault pin is ignored).  Wired, the comparator holds the line low
+    // while the bridge is healthy, so an open line - a broken wire, an
+    // unpowered comparator - reads as a fault (the FPGA's weak pull-up).
+    parameter [1:0]   BRIDGE_FAULT_WIRED = 2'b11
 ) (
     input  wire        CLOCK_50,
     input  wire        RESET_N,
@@ -72,7 +77,7 @@ module de0_cv_top #(
     wire [AXES-1:0] ibt2_lpwm_pin;
     wire [AXES-1:0] ibt2_r_en_pin;
     wire [AXES-1:0] ibt2_l_en_pin;
-    wire [AXES-1:0] ibt2_fault_n_pin;   // comparator outputs, low = fault; pulled up
+    wire [AXES-1:0] ibt2_fault_pin;     // comparator outputs, 1 = fault (open: pulled up = fault)
     wire [AXES-1:0] enc_a_pin;
     wire [AXES-1:0] enc_b_pin;
     wire [AXES-1:0] enc_z_pin;
@@ -115,7 +120,7 @@ module de0_cv_top #(
         .l_en(soc_l_en),
         .pwm(soc_pwm),
         .dir(soc_dir),
-        .bridge_fault(~ibt2_fault_n_pin),
+        .bridge_fault(ibt2_fault_pin & BRIDGE_FAULT_WIRED),
         .enc_a(enc_a_pin),
         .enc_b(enc_b_pin),
         .enc_z(enc_z_pin),
@@ -130,13 +135,13 @@ module de0_cv_top #(
     );
 
     // ---- board-level drive interlock ----
-    // Reset values: key released (1), no fault (1), and the arm switch UP (1):
+    // Reset values: key released (1), no fault (0), and the arm switch UP (1):
     // a switch already up when reset ends must not look like a fresh up-move
     // (a 0 here would make a false rising edge two clocks after reset and arm
     // the drives - tb/de0_cv_top caught exactly that).
     wire            estop_n_s;
     wire            arm_sw_s;
-    wire [AXES-1:0] fault_n_s;
+    wire [AXES-1:0] fault_s;
     wire            armed, tripped;
     /* verilator lint_off UNUSEDSIGNAL */
     wire [AXES-1:0] fault_latched;      // for a future status register; LEDR[8] shows the sum
@@ -146,8 +151,8 @@ module de0_cv_top #(
         .clk(clk), .rst(rst), .async_in(KEY[0]), .sync_out(estop_n_s));
     tl_sync_2ff #(.WIDTH(1), .RESET_VAL(1)) u_sync_arm (
         .clk(clk), .rst(rst), .async_in(SW[0]), .sync_out(arm_sw_s));
-    tl_sync_2ff #(.WIDTH(AXES), .RESET_VAL(1)) u_sync_fault (
-        .clk(clk), .rst(rst), .async_in(ibt2_fault_n_pin), .sync_out(fault_n_s));
+    tl_sync_2ff #(.WIDTH(AXES), .RESET_VAL(0)) u_sync_fault (
+        .clk(clk), .rst(rst), .async_in(ibt2_fault_pin & BRIDGE_FAULT_WIRED), .sync_out(fault_s));
 
     wire [AXES-1:0] il_rpwm, il_lpwm, il_r_en, il_l_en;   // the interlock's registered outputs
     tl_drive_interlock #(.AXES(AXES), .FAULT_FILTER_CLKS(250)) u_interlock (
@@ -155,7 +160,7 @@ module de0_cv_top #(
         .rst(rst),
         .estop(~estop_n_s),
         .arm_sw(arm_sw_s),
-        .fault(~fault_n_s),
+        .fault(fault_s),
         .alive(wdog_alive),
         .rpwm_in(soc_rpwm),
         .lpwm_in(soc_lpwm),
@@ -185,7 +190,7 @@ module de0_cv_top #(
     assign GPIO_0[2]           = ibt2_r_en_pin[0];    // pin 3: IBT-2 #1 (axis 1) R_EN
     assign GPIO_0[3]           = ibt2_l_en_pin[0];    // pin 4: IBT-2 #1 (axis 1) L_EN
     assign GPIO_0[4]           = 1'bz;                // pin 5: input
-    assign ibt2_fault_n_pin[0] = GPIO_0[4];           // pin 5: IBT-2 #1 (axis 1) R_IS, L_IS via comparators
+    assign ibt2_fault_pin[0]   = GPIO_0[4];           // pin 5: IBT-2 #1 (axis 1) R_IS, L_IS via comparators
     assign GPIO_0[5]           = 1'bz;                // pin 6: input
     assign lim_neg_pin[0]      = GPIO_0[5];           // pin 6: limit switches (axis 1) negative-end switch
     assign GPIO_0[6]           = 1'bz;                // pin 7: input
@@ -209,7 +214,7 @@ module de0_cv_top #(
     assign GPIO_1[2]           = ibt2_r_en_pin[1];    // pin 3: IBT-2 #2 (axis 2) R_EN
     assign GPIO_1[3]           = ibt2_l_en_pin[1];    // pin 4: IBT-2 #2 (axis 2) L_EN
     assign GPIO_1[4]           = 1'bz;                // pin 5: input
-    assign ibt2_fault_n_pin[1] = GPIO_1[4];           // pin 5: IBT-2 #2 (axis 2) R_IS, L_IS via comparators
+    assign ibt2_fault_pin[1]   = GPIO_1[4];           // pin 5: IBT-2 #2 (axis 2) R_IS, L_IS via comparators
     assign GPIO_1[5]           = 1'bz;                // pin 6: input
     assign lim_neg_pin[1]      = GPIO_1[5];           // pin 6: limit switches (axis 2) negative-end switch
     assign GPIO_1[6]           = 1'bz;                // pin 7: input

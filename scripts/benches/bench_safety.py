@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from torqueloop.flow.firmware import CC, CFLAGS, boot_stub_words, build
+from torqueloop.oracles.servo import EncCheck, round_q16
 from torqueloop.sim import native
 from torqueloop.sim.link import SimTransport, sim_client
 from torqueloop.spec import auth, bootproto, regs
@@ -101,7 +102,9 @@ class Bench:
         self.set("LINK_TIMEOUT_MS", 60_000)
         if kp_q16 is not None:
             self.set("KP_Q16", kp_q16, 0)
+        self.set("LIMIT_SW", 0, 0)           # home here: only without switches (then back on)
         self.link.home(0, "here")
+        self.set("LIMIT_SW", 1, 0)
         self.link.enable(1)
         self.link.move(0, 300)
         self.run(3 * PERIOD_US * CLK // 1_000_000)
@@ -157,6 +160,62 @@ def _us(c: int) -> str:
     return "n/a" if c < 0 else (f"{c / CLK * 1e3:.3f} ms" if c >= CLK // 1000 else f"{c / CLK * 1e9:.0f} ns")
 
 
+#: the encoder-plausibility rows: axis 0 holds this command, below STALL_CMD (the issue's probe)
+ENC_CMD = 84
+
+
+def enc_check_trip_periods(kp_q16: int, step: int, encoder, axis: int = 0) -> int:
+    """Periods after which the encoder plausibility check trips while a P law
+    (``kp_q16``) holds a ``step`` and the encoder reads ``encoder(t)`` counts
+    t seconds after it, by the check's oracle (torqueloop.oracles.servo.EncCheck,
+    the axis's default parameters, speed measured 0 at the start).  With the
+    encoder still: when the lower-bound speed V (1 - e^(-t/tau)), V half the
+    model's speed, has covered ENC_SLACK counts."""
+    d = {n: P.PARAMS[n].defaults[axis] for n in ("ENC_CMD0", "ENC_CPS", "ENC_TAU_MS", "ENC_SLACK")}
+    chk = EncCheck(d["ENC_CMD0"], d["ENC_CPS"], d["ENC_TAU_MS"], d["ENC_SLACK"], PERIOD_US)
+    n, pos = 0, 0
+    while True:
+        cmd = max(-1023, min(1023, round_q16(kp_q16 * (step - pos))))
+        pos = encoder(n * PERIOD_US * 1e-6)
+        if chk.step(cmd, pos, 0):
+            return n
+        n += 1
+
+
+def encoder_check_rows(rom: Path, ram: Path, record) -> None:
+    """Encoder plausibility below STALL_CMD: axis 0 holds command ENC_CMD (a
+    300-count step at KP_Q16 = ENC_CMD * 65536 / 300) while the encoder pins
+    stand still, count one in 50 of the counts the paper's plant runs at that
+    command (1915 counts/s, tests/test_safety_simboard.py), count them the
+    wrong way, or one channel chatters; trip from the MOVE."""
+    period = PERIOD_US * CLK // 1_000_000
+    real_cps = 1915
+    late = 3 * PERIOD_US * 1e-6                # the bench turns the encoder 3 periods after the MOVE
+    readings = {"frozen": lambda t: 0, "undercounting": lambda t: max(0, int((t - late) * real_cps / 50)),
+                "reversed": lambda t: min(0, -int((t - late) * real_cps)),
+                "chattering": lambda t: max(0, int((t - late) * 1000)) % 2}
+    kp_q16 = ENC_CMD * 65536 // 300
+    for kind, cause in (("frozen", "encoder pins still"), ("undercounting", "1 count in 50"),
+                        ("reversed", "counts the wrong way"), ("chattering", "A toggles, B still")):
+        bound = (enc_check_trip_periods(kp_q16, 300, readings[kind]) + 3) * period
+        s = Bench(rom, ram)
+        s.drive_axis0(kp_q16=kp_q16)
+        t0 = s.b.cycle - 3 * period            # the MOVE: drive_axis0 waits 3 periods after it
+        if kind == "undercounting":
+            s.encoder(0, 60, spacing=CLK * 50 // real_cps)
+        elif kind == "reversed":
+            s.encoder(0, -3000, spacing=CLK // real_cps)
+        elif kind == "chattering":             # A up and down again: +1, -1, ... one edge per ms
+            n, c0 = 2000, s.b.cycle
+            ab = [QUAD[k % 2] for k in range(1, n + 1)]
+            s.b.push_edges(np.array([c0 + (k + 1) * (CLK // 1000) for k in range(n)]), np.zeros(n, int),
+                           np.array([x[0] for x in ab]), np.array([x[1] for x in ab]), np.zeros(n, int))
+        t = s.stop_time(t0, limit=2 * bound)
+        record(f"encoder check ({kind})", f"command {ENC_CMD} < STALL_CMD, {cause}", t, bound, "axis disabled")
+        assert s.link.status(0)["faults"] == P.FAULT["RUNAWAY"]
+        s.close()
+
+
 def main() -> int:
     t_start = time.monotonic()
     rom, ram = _servo_images()
@@ -168,6 +227,9 @@ def main() -> int:
 
     print(f"[bench_safety] board image + servo firmware on the native Verilator harness, "
           f"PERIOD_US {PERIOD_US}, PWM {CLK / PWM_PERIOD / 1e3:.1f} kHz", flush=True)
+    if sys.argv[1:] == ["encoder"]:            # the encoder-plausibility rows alone
+        encoder_check_rows(rom, ram, record)
+        return _report(rows, t_start)
 
     # KEY[0]: combinational to every pin (tl_estop_gate); the interlock then disarms
     s = Bench(rom, ram)
@@ -184,10 +246,10 @@ def main() -> int:
     s = Bench(rom, ram)
     s.drive_axis0()
     t0 = s.b.cycle
-    s.b.set_board(1, 1, 1, fault_n=0b10)
+    s.b.set_board(1, 1, 1, fault=0b01)         # axis 0's comparator releases its line (or the wire breaks)
     pwm, every = s.stop_time(t0, DRIVE0, also=ALL0)
-    record("bridge fault, PWM pins", "fault_n pin low", pwm, 5, "RPWM/LPWM low (SoC latch)")
-    record("bridge fault, all 4 inputs", "fault_n pin low", every, 260, "interlock disarmed")
+    record("bridge fault, PWM pins", "fault pin high or open", pwm, 5, "RPWM/LPWM low (SoC latch)")
+    record("bridge fault, all 4 inputs", "fault pin high or open", every, 260, "interlock disarmed")
     s.close()
 
     # Following error: the encoder slips 600 counts back (FOLLOW_LIMIT 500)
@@ -266,6 +328,11 @@ def main() -> int:
     assert not s.driving(4 * PWM_PERIOD, ALL0), "re-armed a hung firmware"
     s.close()
 
+    encoder_check_rows(rom, ram, record)
+    return _report(rows, t_start)
+
+
+def _report(rows: list[tuple[str, str, int, int, str]], t_start: float) -> int:
     bad = [r for r in rows if r[2] < 0 or r[2] > r[3]]
     print("\n| fault | cause (at the pins) | trip | clocks | what stops |")
     print("|---|---|---:|---:|---|")

@@ -27,9 +27,9 @@ int main(int argc, char **argv)
     auto run = (int (*)(void *, uint64_t, int))dlsym(lib, "tl_run");
     uint64_t n = std::strtoull(argv[2], nullptr, 0);
     void *h = create();
-    set_board(h, 0, 1, 0, 3);   // reset, then released with the drives armed
+    set_board(h, 0, 1, 0, 0);   // reset, then released with the drives armed
     run(h, 20, 0);
-    set_board(h, 1, 1, 1, 3);
+    set_board(h, 1, 1, 1, 0);
     run(h, 200000, 0);          // past the firmware's start-up
     std::clock_t c0 = std::clock();
     run(h, 200000 + n, 0);

@@ -7,13 +7,17 @@
 // constraints/pins.toml, the mirror of the board top's own GPIO block).
 // Every header input is driven (push-pull; Verilator is two-state and has
 // no pull-ups), so the spare pins are the only undriven ones: on a
-// four-state simulator the bench checks that they float (z).
+// four-state simulator the bench checks that they float (z).  The
+// exceptions are the bridge-fault lines, which the bench can leave open
+// (fault_open: a broken wire, no comparator): they carry the FPGA's weak
+// pull-up (constraints/pins.toml), so an open one reads 1.
 `default_nettype none
 
 module de0_cv_top_tb #(
     parameter         ROM_INIT  = "",
     parameter         RAM_INIT  = "",
-    parameter integer RAM_BYTES = 4096
+    parameter integer RAM_BYTES = 4096,
+    parameter [1:0]   BRIDGE_FAULT_WIRED = 2'b11
 ) (
     input  wire       clk,
     input  wire       reset_n,
@@ -26,7 +30,8 @@ module de0_cv_top_tb #(
     output wire [1:0] lpwm,
     output wire [1:0] r_en,
     output wire [1:0] l_en,
-    input  wire [1:0] fault_n,      // comparator outputs, low = fault
+    input  wire [1:0] fault,        // comparator lines: 0 = held low (healthy), 1 = released (fault)
+    input  wire [1:0] fault_open,   // 1 = that line is open: nothing drives it
     input  wire [1:0] enc_a,
     input  wire [1:0] enc_b,
     input  wire [1:0] enc_z,
@@ -44,7 +49,12 @@ module de0_cv_top_tb #(
     wire [35:0] GPIO_0;
     wire [35:0] GPIO_1;
 
-    de0_cv_top #(.ROM_INIT(ROM_INIT), .RAM_INIT(RAM_INIT), .RAM_BYTES(RAM_BYTES)) dut (
+    wire [1:0] fault_line = {fault_open[1] ? 1'bz : fault[1], fault_open[0] ? 1'bz : fault[0]};
+    pullup (GPIO_0[4]);   // the FPGA's weak pull-ups on the fault pins (header pin 5)
+    pullup (GPIO_1[4]);
+
+    de0_cv_top #(.ROM_INIT(ROM_INIT), .RAM_INIT(RAM_INIT), .RAM_BYTES(RAM_BYTES),
+                 .BRIDGE_FAULT_WIRED(BRIDGE_FAULT_WIRED)) dut (
         .CLOCK_50(clk), .RESET_N(reset_n), .KEY(key), .SW(sw), .LEDR(ledr),
         .HEX0(hex[6:0]), .HEX1(hex[13:7]), .HEX2(hex[20:14]),
         .HEX3(hex[27:21]), .HEX4(hex[34:28]), .HEX5(hex[41:35]),
@@ -53,7 +63,7 @@ module de0_cv_top_tb #(
 
     de0_cv_cable u_cable (
         .GPIO_0(GPIO_0), .GPIO_1(GPIO_1), .ibt2_rpwm_pin(rpwm), .ibt2_lpwm_pin(lpwm),
-        .ibt2_r_en_pin(r_en), .ibt2_l_en_pin(l_en), .ibt2_fault_n_pin(fault_n), .enc_a_pin(enc_a),
+        .ibt2_r_en_pin(r_en), .ibt2_l_en_pin(l_en), .ibt2_fault_pin(fault_line), .enc_a_pin(enc_a),
         .enc_b_pin(enc_b), .enc_z_pin(enc_z), .lim_neg_pin(lim_neg), .lim_pos_pin(lim_pos),
         .uart_rx_pin(rnxv_tx), .uart_tx_pin(rnxv_rx),
         .uart_cts_n_pin(rnxv_rts), .uart_rts_n_pin(rnxv_cts)

@@ -17,7 +17,10 @@ whatever the firmware does:
     cleared its latch, until SW[0] is moved down and up again; the motor
     currents decay to zero;
   - a bridge fault lasting 250 clocks trips the same way, a shorter glitch
-    does not;
+    does not; so does an open fault line (a broken wire, an unpowered
+    comparator: the weak pull-up reads it as a fault), and the drives cannot
+    be re-armed while it stays open; axis 2 is built as having no
+    comparator (BRIDGE_FAULT_WIRED = 01) and its open line is ignored;
   - the UART on GPIO_0 pins 13/14 carries bytes both ways (the firmware
     echoes each byte plus one; an independent UART model on the RN-XV side);
   - the encoders on pins 7/8 count in the decoder's direction (A leading B
@@ -112,15 +115,17 @@ class PlantOnPins:
             self.sync()
 
 
-async def _power_up(dut, sw: int, baud: int):
+async def _power_up(dut, sw: int, baud: int, fault_open: int = 0):
     """The cable harness at rest (keys released, no fault, encoders still,
-    the RN-XV idle and ready), switches at ``sw``, a reset pulse; returns the
-    RN-XV side's UART models (source into the FPGA, sink from it)."""
+    the RN-XV idle and ready), switches at ``sw``, the fault lines of the
+    axes in ``fault_open`` left open, a reset pulse; returns the RN-XV side's
+    UART models (source into the FPGA, sink from it)."""
     tbutil.start_clock(dut)
     dut.reset_n.value = 0
     dut.key.value = 0xF
     dut.sw.value = sw
-    dut.fault_n.value = 0b11
+    dut.fault.value = 0b00             # the comparators hold their lines low: healthy
+    dut.fault_open.value = fault_open
     dut.lim_neg.value = 0              # limit switches closed
     dut.lim_pos.value = 0
     dut.enc_a.value = 0
@@ -197,8 +202,9 @@ def _check_driving(high: dict[str, int], cycles: int, what: str) -> None:
 
 @cocotb.test()
 async def board_interlock_and_uart_on_the_header_pins(dut):
-    # SW[0] already up at power-up (SW[9] just to be different)
-    source, sink = await _power_up(dut, sw=0x201, baud=UART_BAUD)
+    # SW[0] already up at power-up (SW[9] just to be different); axis 2 has no
+    # fault comparator (BRIDGE_FAULT_WIRED = 01): its line stays open throughout
+    source, sink = await _power_up(dut, sw=0x201, baud=UART_BAUD, fault_open=0b10)
     plant = PlantOnPins(dut)
 
     # 1. Power-up with the arm switch up: the firmware asks for torque, nothing moves.
@@ -256,23 +262,40 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
     # 4. Bridge faults: a glitch shorter than the filter leaves the drives armed
     # (the SoC's own, unfiltered fault latch still stops the PWM until the
     # firmware acknowledges and the next period starts); a real fault trips both axes.
-    dut.fault_n.value = 0b01
+    dut.fault.value = 0b01
     await ClockCycles(dut.clk, FAULT_FILTER_CLKS // 2)
-    dut.fault_n.value = 0b11
+    dut.fault.value = 0b00
     await ClockCycles(dut.clk, STOP_LATENCY)
     assert (int(dut.ledr.value) >> 8) == 0b10, "a fault glitch must not trip the interlock"
     await ClockCycles(dut.clk, 2 * PWM_PERIOD)
     _check_driving(await _watch_armed(dut, 2 * PWM_PERIOD), 2 * PWM_PERIOD, "after a fault glitch")
     await FallingEdge(dut.clk)
-    dut.fault_n.value = 0b01      # axis 2's comparator pulls its line low
+    dut.fault.value = 0b01        # axis 1's comparator releases its line: fault
     await ClockCycles(dut.clk, FAULT_FILTER_CLKS + STOP_LATENCY)
     assert (int(dut.ledr.value) >> 8) == 0b01, "a lasting fault trips the interlock"
     await _expect_all_low(dut, PWM_PERIOD, "bridge fault")
-    dut.fault_n.value = 0b11
+    dut.fault.value = 0b00
     await _expect_all_low(dut, PWM_PERIOD, "fault gone, not re-armed")
     await _arm(dut)
     await ClockCycles(dut.clk, 2 * PWM_PERIOD)    # the SoC resumes at a period start
     _check_driving(await _watch_armed(dut, PWM_PERIOD), PWM_PERIOD, "re-armed after fault")
+
+    # 4b. Axis 1's fault line opens (its wire breaks): nothing drives header pin 5,
+    # the weak pull-up reads a fault, and the drives stop and stay off - SW[0]
+    # moved down and up arms nothing - until the line is driven low again.
+    await FallingEdge(dut.clk)
+    dut.fault_open.value = 0b11
+    await ClockCycles(dut.clk, FAULT_FILTER_CLKS + STOP_LATENCY)
+    assert str(dut.gpio0_pins.value)[::-1][4] == "1", "an open fault line must read 1 (the weak pull-up)"
+    assert (int(dut.ledr.value) >> 8) == 0b01, "an open fault line trips the interlock"
+    await _expect_all_low(dut, PWM_PERIOD, "fault line open")
+    await _arm(dut)
+    await _expect_all_low(dut, 2 * PWM_PERIOD, "re-armed while the fault line is open")
+    assert (int(dut.ledr.value) >> 9) == 0, "armed with a fault line open"
+    dut.fault_open.value = 0b10                  # the wire mended: the comparator holds it low
+    await _arm(dut)
+    await ClockCycles(dut.clk, 2 * PWM_PERIOD)
+    _check_driving(await _watch_armed(dut, PWM_PERIOD), PWM_PERIOD, "re-armed with the line driven again")
 
     # 5. UART through the header: bytes in on pin 13, the firmware's answer out on pin 14.
     message = bytes([0x00, 0x41, 0x7E, 0xFE, 0xFF, 0x00])   # 0xFF: the answer is a 0x00 byte
@@ -409,7 +432,7 @@ def test_de0_cv_top(sim):
     rom = build_rom_image("careless")
     run("de0_cv_top", sim, "test_de0_cv_top", toplevel="de0_cv_top_tb",
         extra_verilog=[CABLE_V, HERE / "de0_cv_top_tb.v"], testcase="board_interlock_and_uart_on_the_header_pins",
-        parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"'})
+        parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"', "BRIDGE_FAULT_WIRED": 1})
 
 
 @pytest.mark.parametrize("sim", [s for s in sims_for("de0_cv_top") if s == "icarus"])

@@ -113,6 +113,7 @@ class PinTable:
     ports: tuple[Port, ...]
     gpio: tuple[GpioUse, ...]
     firmware: tuple[tuple[str, Path], ...] = ()   # (top parameter, $readmemh image)
+    top_parameters: tuple[tuple[str, int], ...] = ()   # numeric parameters of the board top
 
     def port(self, name: str) -> Port:
         for p in self.ports:
@@ -184,7 +185,8 @@ def load_pin_table(path: Path = PINS_TOML) -> PinTable:
         for g in data.get("gpio", [])
     )
     firmware = tuple((name, REPO_ROOT / rel) for name, rel in data.get("firmware", {}).items())
-    return PinTable(board, ports, gpio, firmware)
+    params = tuple((name, int(v)) for name, v in data.get("top_parameters", {}).items())
+    return PinTable(board, ports, gpio, firmware, params)
 
 
 def load_board_pins(path: Path = BOARD_PINS_CSV) -> dict[str, BoardPin]:
@@ -494,7 +496,8 @@ def quartus_top_v(table: PinTable) -> Path:
 def gen_quartus_top(table: PinTable, project_dir: Path = QUARTUS_DIR) -> str:
     """The Quartus top-level entity: the board top with the [firmware] memory
     images as string parameters written in Verilog, relative to the project
-    folder (where Quartus resolves $readmemh names).  Same ports as the board
+    folder (where Quartus resolves $readmemh names), and the numeric
+    [top_parameters].  Same ports as the board
     top, one per pin-table port."""
     b = table.board
     items = []
@@ -504,13 +507,15 @@ def gen_quartus_top(table: PinTable, project_dir: Path = QUARTUS_DIR) -> str:
         items.append(f"{d} wire {rng}{p.name}")
     # Four to a line: the ports are the pin table's, stated in full in the board top.
     decl = ["    " + ", ".join(items[i:i + 4]) for i in range(0, len(items), 4)]
-    params = ", ".join(f'.{name}("{qsf_relpath(image, project_dir)}")' for name, image in table.firmware)
+    params = ", ".join([*(f'.{name}("{qsf_relpath(image, project_dir)}")' for name, image in table.firmware),
+                        *(f".{name}({value})" for name, value in table.top_parameters)])
     conns = ", ".join(f".{p.name}({p.name})" for p in table.ports)
     return "\n".join([
         f"// {b.quartus_top}: the Quartus top-level entity of the {b.name} project, {GEN_NOTE};",
         "// edit there.  It is the board top, rtl/board/" + TOP_V.name + ", with the boot memory",
         "// images as string parameters in Verilog (paths from the Quartus project folder,",
-        "// where $readmemh looks), since the .qsf's set_parameter is documented only for numbers.",
+        "// where $readmemh looks), since the .qsf's set_parameter is documented only for numbers,",
+        "// and the pin table's [top_parameters] beside them.",
         "`default_nettype none",
         "",
         f"module {b.quartus_top} (",

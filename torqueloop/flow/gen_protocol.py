@@ -188,7 +188,10 @@ def markdown() -> str:
          f"(within {P.SEQ_WINDOW:#x} ahead, modulo 2^16); the same seq again is a retransmission and is answered "
          "with REPLAY without being executed, so a replayed or duplicated frame never moves a motor twice. "
          "After reset any first seq is accepted. IDENTIFY is accepted at any seq and reports the last "
-         "accepted seq, so a reconnecting host continues from there.",
+         "accepted seq, so a reconnecting host continues from there. STOP and disabling (ENABLE with "
+         "enable = 0) run whatever their seq, with or without a MAC: running them again is harmless, and "
+         "frames injected into the link cannot block a stop by moving the seq ahead; a stale one only "
+         "moves no seq and feeds no watchdog.",
          f"* **Replies** carry the command's seq and cmd | 0x{P.REPLY_FLAG:02X}; the first payload byte is the status. "
          f"A chunk too damaged to trust its seq is answered with seq 0, cmd 0x{P.ERROR_CMD:02X} and the status.",
          f"* **Telemetry** frames (cmd 0x{P.TELEMETRY_CMD:02X}) carry a running count as seq.",

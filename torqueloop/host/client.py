@@ -45,6 +45,8 @@ from torqueloop.spec import protocol as P
 
 from .transport import LinkInfo, Transport
 
+#: how often one command is sent again with a fresh seq after REPLAY before the tool gives up
+REPLAY_ROUNDS = 3
 AUTH_STATUSES = frozenset({P.STATUS["AUTH"], P.STATUS["NO_SESSION"], P.STATUS["NO_KEY"]})
 FAULT_DESC: dict[str, str] = {f["name"]: f["desc"] for f in P.SPEC["fault"]}
 STATUS_DESC: dict[int, str] = {s["code"]: s["desc"] for s in P.SPEC["status"]}
@@ -392,34 +394,51 @@ class Client:
                     raise self._board_has_no_key(name) from None
                 if e.status not in (P.STATUS["NO_SESSION"], P.STATUS["AUTH"]) or attempt:
                     if e.status == P.STATUS["AUTH"]:
-                        raise self._auth_failed() from None
+                        # The session was opened just now and the board's proof showed it
+                        # holds our key: the key is right, another SESSION ended ours.
+                        raise CommandRejected(name, e.status, "- twice, although the board proved it holds "
+                                              "this key: another host opened a session on the board in "
+                                              "between (someone else is on the link; docs/security.md)"
+                                              ) from None
                     raise
         raise AssertionError("unreachable")
 
     def _transact(self, name: str, fields: dict, session: auth.Session | None) -> dict[str, int]:
-        seq = self._next_seq()
-        rep, attempt = self._exchange(name, seq, fields, session)
-        st = rep["status"]
-        if st == P.STATUS["REPLAY"]:
+        """One command with a fresh seq.  REPLAY to a first copy means it did
+        not run (the board's seq was moved on: another host, or frames
+        injected into the link): resynchronise and send it again, at most
+        REPLAY_ROUNDS times.  REPLAY to a retransmission means the first copy
+        may have run and only its reply was lost: a read is asked again (as
+        often as ``retries``), anything else is not."""
+        refused = lost = 0
+        while True:
+            seq = self._next_seq()
+            rep, attempt = self._exchange(name, seq, fields, session)
+            st = rep["status"]
+            if st != P.STATUS["REPLAY"]:
+                if st != P.STATUS["OK"]:
+                    raise CommandRejected(name, st, why=rep["why"])
+                return rep
             if attempt == 0:
-                # Another host (or an earlier session) moved the board's seq on.
+                refused += 1
+                if refused >= REPLAY_ROUNDS:
+                    raise CommandRejected(name, st, f"- refused as a replay {refused} times, so it did not run: "
+                                          "something else on the link keeps moving the board's sequence number "
+                                          "ahead (another host, or frames injected into this link; docs/security.md)")
                 self.stats.resyncs += 1
                 self.connect()
-                seq = self._next_seq()
-                rep, attempt = self._exchange(name, seq, fields, session)
-                st = rep["status"]
-            if st == P.STATUS["REPLAY"]:
-                # The first copy was accepted and executed; its reply was lost.
-                if P.COMMANDS[name].repeatable:
-                    return self.transact(name, **fields)
-                if name == "SET_PARAM":
-                    got = self.transact("GET_PARAM", axis=fields["axis"], param=fields["param"])
-                    return {"status": 0, "value": got["value"]}
-                raise ReplyLost(f"{name} (seq {seq}) reached the board but its reply was lost twice; "
-                                "it ran at most once - check `torqueloop status` before repeating it")
-        if st != P.STATUS["OK"]:
-            raise CommandRejected(name, st, why=rep["why"])
-        return rep
+                continue
+            if P.COMMANDS[name].repeatable:
+                lost += 1
+                if lost > self.retries:
+                    raise ReplyLost(f"{name}: the replies of {lost} tries were lost (each retry answered as a "
+                                    "replay); the link loses too much - check it and try again")
+                continue                       # harmless to ask again with a fresh seq
+            if name == "SET_PARAM":
+                got = self._transact("GET_PARAM", {"axis": fields["axis"], "param": fields["param"]}, None)
+                return {"status": 0, "value": got["value"]}
+            raise ReplyLost(f"{name} (seq {seq}) reached the board but its reply was lost; "
+                            "it ran at most once - check `torqueloop status` before repeating it")
 
     # ---- commands ---------------------------------------------------------------
     def connect(self) -> dict[str, int]:

@@ -215,3 +215,46 @@ class Axis:
         self.sat_sign = 1 if out > lim else (-1 if out < -lim else 0)
         self.cmd = clamp(out, lim)
         return self.cmd
+
+
+@dataclass
+class EncCheck:
+    """The encoder plausibility check of firmware/servo/enc_check.h, bit for
+    bit in Python integers (docs/safety.md): per period, the command applied
+    during it, the position and the measured speed (q8 counts/s) at its end;
+    ``step`` returns True when RUNAWAY trips."""
+
+    cmd0: int
+    cps: int
+    tau_ms: int
+    slack: int
+    period_us: int
+    dir: int = 0
+    ref: int = 0
+    vlo_q8: int = 0
+    behind_q24: int = 0
+
+    def __post_init__(self) -> None:
+        self.k_q8 = self.cps * 256 // (2 * SYSTEM.pwm_full)
+        self.alpha_q16 = min(65536, (self.period_us << 16) // (self.tau_ms * 1000))
+        self.dt_q16 = (self.period_us << 16) // 1_000_000
+
+    def step(self, cmd: int, pos: int, vel_q8: int) -> bool:
+        d = 1 if cmd > self.cmd0 else (-1 if cmd < -self.cmd0 else 0)
+        if d == 0 or d != self.dir:
+            self.dir, self.ref, self.behind_q24, self.vlo_q8 = d, pos, 0, d * vel_q8
+            return False
+        v_ss = (abs(cmd) - self.cmd0) * self.k_q8
+        if v_ss <= self.vlo_q8:
+            self.vlo_q8 = v_ss
+        else:
+            self.vlo_q8 += ((v_ss - self.vlo_q8) * self.alpha_q16) >> 16
+        if self.vlo_q8 <= 0:
+            self.ref, self.behind_q24 = pos, 0
+            return False
+        self.behind_q24 += self.vlo_q8 * self.dt_q16
+        moved = count_diff(pos, self.ref) * d
+        self.ref = pos
+        behind = self.behind_q24 - (moved << 24)
+        self.behind_q24 = max(behind, 0)
+        return behind > (self.slack << 24)

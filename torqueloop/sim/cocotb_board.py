@@ -60,7 +60,7 @@ class CocotbBoard:
         self._rx: list[tuple[int, int]] = []
         self._rx_errors = 0
         self._pin_sigs = (dut.rpwm, dut.lpwm, dut.r_en, dut.l_en)
-        for s, v in ((dut.reset_n, 0), (dut.key0_n, 1), (dut.sw0, 0), (dut.fault_n, 3), (dut.lim_neg, 0), (dut.lim_pos, 0), (dut.host_tx, 1),
+        for s, v in ((dut.reset_n, 0), (dut.key0_n, 1), (dut.sw0, 0), (dut.fault, 0), (dut.lim_neg, 0), (dut.lim_pos, 0), (dut.host_tx, 1),
                      (dut.enc_a, 0), (dut.enc_b, 0), (dut.enc_z, 0)):
             s.value = v
         cocotb.start_soon(self._rx_loop())
@@ -139,11 +139,11 @@ class CocotbBoard:
         return self._pins_now()
 
     @resume
-    async def set_board(self, reset_n: int, key0_n: int, sw0: int, fault_n: int = 3) -> None:
+    async def set_board(self, reset_n: int, key0_n: int, sw0: int, fault: int = 0) -> None:
         self.dut.reset_n.value = reset_n
         self.dut.key0_n.value = key0_n
         self.dut.sw0.value = sw0
-        self.dut.fault_n.value = fault_n
+        self.dut.fault.value = fault
 
     def set_uart_div(self, clocks_per_bit: int) -> None:
         self.div = clocks_per_bit

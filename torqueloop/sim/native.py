@@ -247,8 +247,9 @@ class NativeBoard:
             self.h = 0
 
     # board inputs
-    def set_board(self, reset_n: int, key0_n: int, sw0: int, fault_n: int = 3) -> None:
-        self.lib.tl_set_board(self.h, reset_n, key0_n, sw0, fault_n)
+    def set_board(self, reset_n: int, key0_n: int, sw0: int, fault: int = 0) -> None:
+        """``fault``: the bridge-fault pins, bit per axis, 1 = fault (or the line open)."""
+        self.lib.tl_set_board(self.h, reset_n, key0_n, sw0, fault)
 
     def set_limits(self, neg: int, pos: int) -> None:
         """Limit switch pins, bit per axis, 1 = open (tripped)."""

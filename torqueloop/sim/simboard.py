@@ -22,7 +22,10 @@ the level their reference models define:
 
 UART bytes reach the firmware when they arrive and its replies leave at
 once (115200 baud adds under 7 ms to a 70-byte frame; the host's timeouts
-are 0.5 s).  The board is a byte pipe (:class:`BytePipe`): ``write`` /
+are 0.5 s).  The cycle counter the firmware reads (``hal_cycles``, mcycle
+on the board) is the simulated clock, one character time apart for the
+bytes of one write, and every firmware start begins from cleared RAM (crt0's
+.bss): the session nonces are drawn as the board draws them.  The board is a byte pipe (:class:`BytePipe`): ``write`` /
 ``read`` bytes and ``advance`` time; :mod:`.server` puts any byte pipe on a
 TCP port, so the RTL co-simulation can take this one's place.
 """
@@ -58,6 +61,8 @@ DEFAULT_BUILD_ID = 0x51B0_0001
 #: end's above the second (about +-190 mm of a 4 mm lead).
 LIMIT_COUNTS = (-400_000, 400_000)
 LIM_NEG, LIM_POS = 0x01, 0x02
+#: an undercounting encoder passes one count of this many (set_encoder_fault)
+UNDERCOUNT = 50
 
 
 class BytePipe(Protocol):
@@ -118,7 +123,8 @@ class SimBoard:
         self._txbuf = ctypes.create_string_buffer(16384)
         self._drive = (ctypes.c_int32 * 7)()
         self.bridge_fault = [False, False]
-        #: per axis None, "frozen" (the count stops where it is) or "reversed" (counts the wrong way)
+        #: per axis None, "frozen" (the count stops where it is), "reversed" (counts the wrong way) or
+        #: "undercounting" (one count of every UNDERCOUNT arrives)
         self.encoder_fault: list[str | None] = [None, None]
         self._fault_ref = [0, 0]
         self.limit_counts = [LIMIT_COUNTS, LIMIT_COUNTS]
@@ -146,7 +152,7 @@ class SimBoard:
         if self.boot is not None:
             self.boot.rx(data, self.tick)
         else:
-            self._lib.sb_rx(data, ctypes.c_uint32(len(data)))
+            self._lib.sb_rx(ctypes.c_uint32(self.tick & 0xFFFFFFFF), data, ctypes.c_uint32(len(data)))
             self._load_drives()
 
     def read(self) -> bytes:
@@ -209,8 +215,9 @@ class SimBoard:
 
     def set_encoder_fault(self, axis: int, kind: str | None) -> None:
         """Freeze the encoder's count where it is, make it count the wrong way
-        from here (a swapped A/B pair), or (None) heal it."""
-        if kind not in (None, "frozen", "reversed"):
+        from here (a swapped A/B pair), lose all but one count of UNDERCOUNT
+        from here (a dirty disc, a marginal signal), or (None) heal it."""
+        if kind not in (None, "frozen", "reversed", "undercounting"):
             raise ValueError(f"encoder fault {kind!r}")
         self._fault_ref[axis] = self.plant.count(axis)
         self.encoder_fault[axis] = kind
@@ -219,6 +226,8 @@ class SimBoard:
         """The count the decoder reports (the plant's, unless a fault is injected)."""
         c, ref = self.plant.count(axis), self._fault_ref[axis]
         kind = self.encoder_fault[axis]
+        if kind == "undercounting":
+            return ref + (c - ref) // UNDERCOUNT
         return ref if kind == "frozen" else (2 * ref - c if kind == "reversed" else c)
 
     def limits(self, axis: int) -> int:

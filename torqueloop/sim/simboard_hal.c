@@ -22,7 +22,7 @@ static uint32_t safety;
 static uint32_t baud_div;
 static uint32_t build_id;
 static uint8_t key_slot[TLP_AUTH_KEY_SLOT_BYTES];   /* the boot ROM's last bytes (sb_reset) */
-static uint32_t cycles;                             /* the simulated clock at the last encoder update */
+static uint32_t cycles;                             /* mcycle: the simulated clock, running (sb_set_clock) */
 static uint8_t tx_buf[16384];
 static uint32_t tx_len;
 
@@ -69,7 +69,7 @@ void hal_safety_ack(uint32_t bits)
 uint32_t hal_build_id(void) { return build_id; }
 uint32_t hal_clk_hz(void) { return 50000000u; }
 const uint8_t *hal_key_slot(void) { return key_slot; }
-uint32_t hal_cycles(void) { return cycles++; }
+uint32_t hal_cycles(void) { return cycles; }
 void hal_set_baud_div(uint32_t div) { baud_div = div; }
 void hal_irq_off(void) {}
 void hal_irq_on(void) {}
@@ -100,13 +100,22 @@ void sb_reset(uint32_t id, const uint8_t *slot)
     baud_div = 0;
     build_id = id;
     tx_len = 0;
+    /* crt0 clears .bss at every firmware start: nothing of the last run's
+     * state (the nonce generator's stir, pool and count) survives a restart */
+    memset(&servo, 0, sizeof servo);
     tl_servo_init(&servo);
 }
 
-void sb_rx(const uint8_t *data, uint32_t len)
+/* The bytes of one write arrive now, one UART character (10 bits of
+ * BAUD_DIV + 1 clocks) after the other, so the cycle counter the firmware
+ * reads at each runs on as on the board. */
+void sb_rx(uint32_t now, const uint8_t *data, uint32_t len)
 {
-    for (uint32_t i = 0; i < len; i++)
+    uint32_t char_cycles = 10u * (baud_div + 1u);
+    for (uint32_t i = 0; i < len; i++) {
+        cycles = now + (i + 1u) * char_cycles;
         tl_servo_rx_byte(&servo, data[i], tx);
+    }
 }
 
 /* One control period: the timer interrupt, then what main.c's loop does next. */
@@ -146,7 +155,7 @@ void sb_set_encoder(uint32_t axis, int32_t pos, uint32_t edge_time, uint32_t int
     enc[axis].edge_time = edge_time;
     enc[axis].interval = interval;
     enc[axis].now = now;
-    cycles = now;
+    cycles = now;   /* the control interrupt's moment */
     enc[axis].illegal = illegal;
     enc[axis].bridge_fault = bridge_fault != 0;
     if (bridge_fault)   /* soc_sys latches the bridge fault input and forces the drives safe */

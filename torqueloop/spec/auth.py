@@ -123,6 +123,15 @@ def needs_key(name: str, fields: dict[str, int]) -> bool:
     return not any(fields.get(f) == v for f, v in c.open_when.items())
 
 
+def stopping(name: str, fields: dict[str, int]) -> bool:
+    """A command that shows the host in control (feeds_link) yet needs no key
+    can only take motion away: STOP and disabling.  The board runs it
+    whatever its seq, so frames injected into the link cannot block a stop
+    (docs/protocol.md); only a fresh one with a verified MAC feeds the link
+    watchdog."""
+    return P.COMMANDS[name].feeds_link and not needs_key(name, fields)
+
+
 # --- firmware uploads -------------------------------------------------------------------
 
 def upload_tag(key: bytes, header: bytes, image: bytes) -> bytes:

@@ -29,6 +29,8 @@ VALUES: dict[str, int | tuple[int, ...]] = {
     "fdiv_reset": divider_for(SYSTEM.axes[0].pwm_hz),
     "fdiv": tuple(divider_for(a.pwm_hz) for a in SYSTEM.axes),
     "tau_max_mnm": tuple(a.tau_max_mnm for a in SYSTEM.axes),
+    "no_load_cps": tuple(a.no_load_cps for a in SYSTEM.axes),
+    "enc_tau_ms": tuple(a.enc_tau_ms for a in SYSTEM.axes),
     "kp_unm": tuple(g.micro()[0] for g in _P),
     "kd_unm": tuple(g.micro()[1] for g in _P),
     "ki_unm": tuple(g.micro()[2] for g in _P),

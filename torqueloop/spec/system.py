@@ -42,6 +42,8 @@ class AxisConstants:
     name: str
     tau_max_mnm: int     # torque at full command, milli N m (the paper's tau_max)
     pwm_hz: float        # the paper's optimal carrier for this axis's motor
+    no_load_cps: int     # speed at full command without load, counts/s (encoder plausibility model)
+    enc_tau_ms: int      # the slowest the axis approaches a new speed, ms (encoder plausibility model)
 
     @property
     def tau_max_N_m(self) -> float:
@@ -111,7 +113,9 @@ def parse(data: dict) -> System:
     axes = tuple(
         AxisConstants(name=_get(a, "name", str, f"axis {i}"),
                       tau_max_mnm=int(_positive(_get(a, "tau_max_mnm", int, f"axis {i}"), f"axis {i}.tau_max_mnm")),
-                      pwm_hz=float(_positive(_get(a, "pwm_hz", num, f"axis {i}"), f"axis {i}.pwm_hz")))
+                      pwm_hz=float(_positive(_get(a, "pwm_hz", num, f"axis {i}"), f"axis {i}.pwm_hz")),
+                      no_load_cps=int(_positive(_get(a, "no_load_cps", int, f"axis {i}"), f"axis {i}.no_load_cps")),
+                      enc_tau_ms=int(_positive(_get(a, "enc_tau_ms", int, f"axis {i}"), f"axis {i}.enc_tau_ms")))
         for i, a in enumerate(data.get("axis", [])))
     if len(axes) != 2:
         raise SystemError_(f"system.toml: {len(axes)} [[axis]] tables; the board has 2 axes")

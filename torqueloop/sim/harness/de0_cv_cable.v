@@ -7,26 +7,26 @@
 module de0_cv_cable (
     inout  wire [35:0] GPIO_0,
     inout  wire [35:0] GPIO_1,
-    output wire [1:0]  ibt2_rpwm_pin,    // FPGA drives it
-    output wire [1:0]  ibt2_lpwm_pin,    // FPGA drives it
-    output wire [1:0]  ibt2_r_en_pin,    // FPGA drives it
-    output wire [1:0]  ibt2_l_en_pin,    // FPGA drives it
-    input  wire [1:0]  ibt2_fault_n_pin, // FPGA reads it
-    input  wire [1:0]  enc_a_pin,        // FPGA reads it
-    input  wire [1:0]  enc_b_pin,        // FPGA reads it
-    input  wire [1:0]  enc_z_pin,        // FPGA reads it
-    input  wire [1:0]  lim_neg_pin,      // FPGA reads it
-    input  wire [1:0]  lim_pos_pin,      // FPGA reads it
-    input  wire        uart_rx_pin,      // FPGA reads it
-    output wire        uart_tx_pin,      // FPGA drives it
-    input  wire        uart_cts_n_pin,   // FPGA reads it
-    output wire        uart_rts_n_pin    // FPGA drives it
+    output wire [1:0]  ibt2_rpwm_pin,  // FPGA drives it
+    output wire [1:0]  ibt2_lpwm_pin,  // FPGA drives it
+    output wire [1:0]  ibt2_r_en_pin,  // FPGA drives it
+    output wire [1:0]  ibt2_l_en_pin,  // FPGA drives it
+    input  wire [1:0]  ibt2_fault_pin, // FPGA reads it
+    input  wire [1:0]  enc_a_pin,      // FPGA reads it
+    input  wire [1:0]  enc_b_pin,      // FPGA reads it
+    input  wire [1:0]  enc_z_pin,      // FPGA reads it
+    input  wire [1:0]  lim_neg_pin,    // FPGA reads it
+    input  wire [1:0]  lim_pos_pin,    // FPGA reads it
+    input  wire        uart_rx_pin,    // FPGA reads it
+    output wire        uart_tx_pin,    // FPGA drives it
+    input  wire        uart_cts_n_pin, // FPGA reads it
+    output wire        uart_rts_n_pin  // FPGA drives it
 );
     assign ibt2_rpwm_pin[0]    = GPIO_0[0];           // pin 1: IBT-2 #1 (axis 1) RPWM
     assign ibt2_lpwm_pin[0]    = GPIO_0[1];           // pin 2: IBT-2 #1 (axis 1) LPWM
     assign ibt2_r_en_pin[0]    = GPIO_0[2];           // pin 3: IBT-2 #1 (axis 1) R_EN
     assign ibt2_l_en_pin[0]    = GPIO_0[3];           // pin 4: IBT-2 #1 (axis 1) L_EN
-    assign GPIO_0[4]           = ibt2_fault_n_pin[0]; // pin 5: IBT-2 #1 (axis 1) R_IS, L_IS via comparators
+    assign GPIO_0[4]           = ibt2_fault_pin[0];   // pin 5: IBT-2 #1 (axis 1) R_IS, L_IS via comparators
     assign GPIO_0[5]           = lim_neg_pin[0];      // pin 6: limit switches (axis 1) negative-end switch
     assign GPIO_0[6]           = enc_a_pin[0];        // pin 7: encoder 1 (axis 1) A
     assign GPIO_0[7]           = enc_b_pin[0];        // pin 8: encoder 1 (axis 1) B
@@ -40,7 +40,7 @@ module de0_cv_cable (
     assign ibt2_lpwm_pin[1]    = GPIO_1[1];           // pin 2: IBT-2 #2 (axis 2) LPWM
     assign ibt2_r_en_pin[1]    = GPIO_1[2];           // pin 3: IBT-2 #2 (axis 2) R_EN
     assign ibt2_l_en_pin[1]    = GPIO_1[3];           // pin 4: IBT-2 #2 (axis 2) L_EN
-    assign GPIO_1[4]           = ibt2_fault_n_pin[1]; // pin 5: IBT-2 #2 (axis 2) R_IS, L_IS via comparators
+    assign GPIO_1[4]           = ibt2_fault_pin[1];   // pin 5: IBT-2 #2 (axis 2) R_IS, L_IS via comparators
     assign GPIO_1[5]           = lim_neg_pin[1];      // pin 6: limit switches (axis 2) negative-end switch
     assign GPIO_1[6]           = enc_a_pin[1];        // pin 7: encoder 2 (axis 2) A
     assign GPIO_1[7]           = enc_b_pin[1];        // pin 8: encoder 2 (axis 2) B

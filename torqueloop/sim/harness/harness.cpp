@@ -216,7 +216,7 @@ void *tl_create(void)
     h->top->reset_n = 0;
     h->top->key0_n = 1;
     h->top->sw0 = 0;
-    h->top->fault_n = 3;
+    h->top->fault = 0;     // the comparators hold their lines low: no bridge fault
     h->top->lim_neg = 0;   // limit switches closed: not at a limit
     h->top->lim_pos = 0;
     h->top->host_tx = 1;
@@ -232,13 +232,13 @@ void tl_destroy(void *p)
     delete h;
 }
 
-void tl_set_board(void *p, int reset_n, int key0_n, int sw0, int fault_n)
+void tl_set_board(void *p, int reset_n, int key0_n, int sw0, int fault)
 {
     Harness *h = static_cast<Harness *>(p);
     h->top->reset_n = reset_n & 1;
     h->top->key0_n = key0_n & 1;
     h->top->sw0 = sw0 & 1;
-    h->top->fault_n = fault_n & 3;
+    h->top->fault = fault & 3;
     h->inputs_changed = true;
 }
 

@@ -18,7 +18,7 @@ module rtl_loop_top #(
     input  wire       reset_n,
     input  wire       key0_n,       // e-stop button, active low
     input  wire       sw0,          // drive arm switch: a rising edge arms the interlock
-    input  wire [1:0] fault_n,      // IBT-2 fault comparators, low = fault
+    input  wire [1:0] fault,        // IBT-2 fault comparators' lines, 1 = fault (an open line reads 1)
     input  wire [1:0] enc_a,
     input  wire [1:0] enc_b,
     input  wire [1:0] enc_z,
@@ -50,7 +50,7 @@ module rtl_loop_top #(
     /* verilator lint_on UNUSEDSIGNAL */
     de0_cv_cable u_cable (
         .GPIO_0(GPIO_0), .GPIO_1(GPIO_1), .ibt2_rpwm_pin(rpwm), .ibt2_lpwm_pin(lpwm),
-        .ibt2_r_en_pin(r_en), .ibt2_l_en_pin(l_en), .ibt2_fault_n_pin(fault_n), .enc_a_pin(enc_a),
+        .ibt2_r_en_pin(r_en), .ibt2_l_en_pin(l_en), .ibt2_fault_pin(fault), .enc_a_pin(enc_a),
         .enc_b_pin(enc_b), .enc_z_pin(enc_z), .lim_neg_pin(lim_neg), .lim_pos_pin(lim_pos),
         .uart_rx_pin(host_tx), .uart_tx_pin(host_rx),
         .uart_cts_n_pin(1'b0), .uart_rts_n_pin(rnxv_cts_n)   // RN-XV RTS low: the FPGA may always send
