@@ -20,6 +20,7 @@ import argparse
 import json
 import math
 import os
+import re
 import sys
 import time
 from pathlib import Path
@@ -31,6 +32,7 @@ from torqueloop.host import analysis
 from torqueloop.spec import units
 from torqueloop.spec.pwm import carrier_hz
 from torqueloop.host import config as hconfig
+from torqueloop.host import drive as hdrive
 from torqueloop.host.client import Client, NoAnswer, ProtocolError, decode_faults, describe_faults, key_missing
 from torqueloop.host.transport import DEFAULT_BAUD, LinkOpenError, open_link
 from torqueloop.host.upload import ImageRefused
@@ -372,6 +374,55 @@ def cmd_home(ctx: Ctx) -> int:
     if a.mode != "here" and a.wait and st["home"] != HOMED:
         raise ProtocolError(f"axis {a.axis} still {obj['home_state']} after {a.wait:g} s")
     return 0
+
+
+def cmd_drive(ctx: Ctx) -> int:
+    a = ctx.args
+    percent = hdrive.parse_duty(a.duty)        # refused before the link is opened
+    steps = hdrive.steps_for(percent)
+    ctx.require_key("DRIVE")
+    c = ctx.client
+    clk = (c.identity or {}).get("clk_hz", units.CLK_HZ)
+    fdiv_before = c.get_param("FDIV", a.axis)
+    fdiv = fdiv_before
+    if a.pwm_freq is not None:
+        fdiv = units.to_raw("pwm_freq", str(a.pwm_freq), clk)[1]
+        _check_pair(ctx, "FDIV", fdiv, a.axis, clk)
+    hdrive.check_ready(c, a.axis, steps)
+    if fdiv != fdiv_before:
+        c.set_param("FDIV", fdiv, a.axis)
+    pw0, pwmax = c.get_param("PW0", a.axis), c.get_param("PWMAX", a.axis)
+    mech = ctx.mech(a.axis)
+    carrier = carrier_hz(fdiv, clk)
+    if not a.json:
+        print(f"axis {a.axis}: open-loop {percent:+g}% = {steps} steps (bridge duty "
+              f"{hdrive.pin_duty(steps, pw0, pwmax):.1f}% with PW0 {pw0}, PWMAX {pwmax}) at {carrier:.1f} Hz "
+              f"for {a.seconds:g} s; Ctrl-C stops", file=sys.stderr)
+
+    def show(smp: dict) -> None:
+        if not a.json:
+            print(f"t {smp['t_s']:6.2f} s  count {smp['position']:9d}  speed {smp['velocity_cps']:9.1f} counts/s "
+                  f"({mech.from_counts(round(smp['velocity_cps']), 'rev'):+.3f} rev/s)  pwm {smp['pwm_cmd']:5d}",
+                  flush=True)
+
+    try:
+        r = hdrive.drive(c, a.axis, steps, a.seconds, on_sample=show)
+    finally:
+        if fdiv != fdiv_before:
+            c.set_param("FDIV", fdiv_before, a.axis)
+    sign = (r.moved > 0) - (r.moved < 0)
+    obj = {"axis": a.axis, "duty_percent": percent, "duty_steps": steps, "pwm_freq_hz": round(carrier, 3),
+           "start_counts": r.start_counts, "end_counts": r.end_counts, "moved_counts": r.moved,
+           "sign_matches": sign == ((steps > 0) - (steps < 0)), "seconds": round(r.seconds, 3),
+           "interrupted": r.interrupted, "faults": decode_faults(r.faults), "samples": r.samples}
+    verdict = ("no motion: the duty may be inside the dead zone (raise it), or the encoder is not counting"
+               if sign == 0 else ("the encoder counts the same way as the duty" if obj["sign_matches"] else
+                                  "the encoder counts AGAINST the duty: swap its A/B wires (or the motor's) "
+                                  "before closing the loop"))
+    ctx.out(obj, f"axis {a.axis} disabled{' (Ctrl-C)' if r.interrupted else ''}: moved {r.moved:+d} counts "
+                 f"({mech.from_counts(r.moved, 'mm'):+.3f} mm) in {r.seconds:.1f} s; {verdict}"
+                 + (f"; FAULT {describe_faults(r.faults)}" if r.faults else ""))
+    return 1 if r.faults else 0
 
 
 def cmd_stop(ctx: Ctx) -> int:
@@ -781,6 +832,16 @@ def parser() -> argparse.ArgumentParser:
                     help="wait up to S seconds for homing to finish, keeping the link alive [60]")
     axis_opts(sp, False)
     sp.set_defaults(fn=cmd_home)
+    sp = sub.add_parser("drive", help="open-loop drive at a fixed duty (5%%, -5%%): enables the axis, prints "
+                                      "the encoder count and speed (the sign check), disables it at the end")
+    sp.add_argument("duty", help="signed duty in percent of the full command, e.g. 5%% or -5%% (at most CMD_LIMIT)")
+    axis_opts(sp, False)
+    sp.add_argument("--pwm-freq", type=_bounded(float, 1, 1e7, "--pwm-freq"), default=None, metavar="HZ",
+                    help="PWM carrier for this drive (the nearest the divider makes; restored afterwards)")
+    sp.add_argument("--for", dest="seconds", type=_bounded(float, 0.1, 3600, "--for"), default=2.0, metavar="S",
+                    help="seconds to drive [2]")
+    sp._negative_number_matcher = re.compile(r"^-\d*\.?\d+%?$")   # `drive -5%`: a duty, not an option
+    sp.set_defaults(fn=cmd_drive)
     sp = sub.add_parser("stop", help="hold the present position")
     axis_opts(sp)
     sp.set_defaults(fn=cmd_stop)

@@ -104,8 +104,12 @@
 #define TLP_CMD_SESSION_REQ_LEN 16u
 #define TLP_CMD_SESSION_REP_LEN 33u
 #define TLP_CMD_SESSION_FEEDS_LINK 0u
+#define TLP_CMD_DRIVE 0x0Fu
+#define TLP_CMD_DRIVE_REQ_LEN 3u
+#define TLP_CMD_DRIVE_REP_LEN 1u
+#define TLP_CMD_DRIVE_FEEDS_LINK 1u
 /* bit cmd set: that command, executed, feeds the link watchdog */
-#define TLP_LINK_FEED_MASK ((1u << TLP_CMD_ENABLE) | (1u << TLP_CMD_MOVE) | (1u << TLP_CMD_STOP) | (1u << TLP_CMD_HEARTBEAT) | (1u << TLP_CMD_HOME))
+#define TLP_LINK_FEED_MASK ((1u << TLP_CMD_ENABLE) | (1u << TLP_CMD_MOVE) | (1u << TLP_CMD_STOP) | (1u << TLP_CMD_HEARTBEAT) | (1u << TLP_CMD_HOME) | (1u << TLP_CMD_DRIVE))
 #define TLP_MOVE_TRAPEZOID 0x01u
 #define TLP_MOVE_UNHOMED 0x80u
 #define TLP_HOME_MODE_NEG 0u
@@ -186,6 +190,9 @@
 #define TLP_SESSION_REP_STATUS 0u
 #define TLP_SESSION_REP_BOARD_NONCE 1u
 #define TLP_SESSION_REP_PROOF 17u
+#define TLP_DRIVE_REQ_AXIS 0u
+#define TLP_DRIVE_REQ_DUTY 1u
+#define TLP_DRIVE_REP_STATUS 0u
 #define TLP_TELEM_TIME_US 0u
 #define TLP_TELEM_HEAD_LEN 4u
 #define TLP_TELEM_AX_SETPOINT 0u
@@ -225,6 +232,7 @@ static inline int tlp_needs_key(uint8_t cmd, const uint8_t *payload)
     case TLP_CMD_BOOTLOADER: return 1;
     case TLP_CMD_HEARTBEAT: return 1;
     case TLP_CMD_HOME: return 1;
+    case TLP_CMD_DRIVE: return 1;
     default: return 0;   /* open, or unknown (answered UNKNOWN_CMD) */
     }
 }

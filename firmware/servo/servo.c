@@ -114,6 +114,7 @@ static void disable_axis(tl_servo_t *s, uint32_t i)
     hal_pwm_cmd(i, 0);
     a->enabled = false;
     a->cmd = 0;
+    a->drive = false;
     if (a->home == TLP_HOME_STATE_HOMING)
         a->home = TLP_HOME_STATE_NOT_HOMED;
     tl_ctl_hold(&a->c, a->pos);
@@ -222,6 +223,8 @@ TL_FOR_SIZE void tl_servo_init(tl_servo_t *s)
         a->recover = 0;
         a->home = TLP_HOME_STATE_NOT_HOMED;
         a->stall_dir = 0;
+        a->drive = false;
+        a->drive_duty = 0;
         tl_ctl_reset(&a->c, e.pos, e.now);
     }
     sync_all(s);
@@ -347,6 +350,7 @@ static inline __attribute__((always_inline)) uint8_t blocked_with(const tl_axis_
                      ((a->faults & TLP_FAULT_LIMIT_POS) ? TLP_LIMIT_POS : 0u));
 }
 static uint8_t blocked(const tl_axis_t *a) { return blocked_with(a, soft_side(a)); }
+uint8_t tl_axis_blocked(const tl_axis_t *a) { return blocked(a); }
 
 /* One period of homing (the phases above); the point found reads HOME_POS. */
 static void home_tick(tl_axis_t *a, uint32_t i, uint32_t now)
@@ -407,6 +411,8 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
     tl_enc_sample_t e;
     hal_enc_read_inline(i, &e);
     a->pos = wrap_add(e.pos, a->offset);
+    if (a->drive)
+        tl_ctl_hold(&a->c, a->pos);   /* open loop: the set-point follows, no following error */
     uint8_t out = 0;
     uint16_t f = axis_checks(a, i, &e, t, &out);
     if (f) {
@@ -424,6 +430,8 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
     if (homing)
         home_tick(a, i, e.now);
     int32_t cmd = tl_ctl_step_inline(&a->c, &a->ctl, a->pos, e.edge_time, e.now, e.interval, a->enabled);
+    if (a->drive)
+        cmd = a->drive_duty;
     if (!a->enabled) {
         cmd = 0;
     } else {
@@ -730,6 +738,7 @@ static uint8_t do_move(tl_servo_t *s, uint8_t axis, uint8_t mode, int32_t target
     if (!(mode & TLP_MOVE_TRAPEZOID) && (d > pv(a, TLP_P_FOLLOW_LIMIT) || -d > pv(a, TLP_P_FOLLOW_LIMIT)))
         return TLP_ST_RANGE;   /* a step that far would trip the following error at once */
     hal_irq_off();
+    a->drive = false;
     tl_ctl_move(&a->c, target, (mode & TLP_MOVE_TRAPEZOID) != 0u);
     hal_irq_on();
     return TLP_ST_OK;
@@ -755,6 +764,7 @@ static uint8_t do_home(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index)
         hal_irq_on();
         return TLP_ST_STATE;
     }
+    a->drive = false;
     a->home = TLP_HOME_STATE_HOMING;
     a->home_phase = HOME_SEEK;
     a->home_dir = mode == TLP_HOME_MODE_NEG ? -1 : 1;
@@ -785,6 +795,7 @@ TL_FOR_SIZE static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
     case TLP_CMD_HEARTBEAT: need = TLP_CMD_HEARTBEAT_REQ_LEN; break;
     case TLP_CMD_HOME: need = TLP_CMD_HOME_REQ_LEN; break;
     case TLP_CMD_SESSION: need = TLP_CMD_SESSION_REQ_LEN; break;
+    case TLP_CMD_DRIVE: need = TLP_CMD_DRIVE_REQ_LEN; break;
     default:
         sat_inc(&s->cnt.unknown);
         send_status(s, tx, f->seq, rc, TLP_ST_UNKNOWN_CMD);
@@ -865,6 +876,7 @@ TL_FOR_SIZE static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
             if (m & (1u << i)) {
                 if (s->ax[i].home == TLP_HOME_STATE_HOMING)
                     s->ax[i].home = TLP_HOME_STATE_NOT_HOMED;
+                s->ax[i].drive = false;
                 tl_ctl_hold(&s->ax[i].c, s->ax[i].pos);
             }
         hal_irq_on();
@@ -874,6 +886,9 @@ TL_FOR_SIZE static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
         break;
     case TLP_CMD_HOME:
         st = do_home(s, q[TLP_HOME_REQ_AXIS], q[TLP_HOME_REQ_MODE], q[TLP_HOME_REQ_INDEX]);
+        break;
+    case TLP_CMD_DRIVE:
+        st = tl_drive_start(s, q[TLP_DRIVE_REQ_AXIS], (int16_t)tl_get_u16(&q[TLP_DRIVE_REQ_DUTY]));
         break;
     case TLP_CMD_STATUS: {
         uint8_t axis = q[TLP_STATUS_REQ_AXIS];

@@ -39,6 +39,8 @@ typedef struct {
     uint32_t stall_ticks;         /* periods without passing it */
     uint32_t stall_limit_ticks;   /* derived: STALL_MS in periods */
     int64_t home_step_q16;        /* derived: HOME_VEL per period, counts q16 */
+    bool drive;                   /* open-loop drive (DRIVE, openloop.c): the command is drive_duty */
+    int16_t drive_duty;           /* signed PWM steps, |duty| <= CMD_LIMIT */
 } tl_axis_t;
 
 typedef struct {
@@ -77,5 +79,9 @@ void tl_servo_rx_byte(tl_servo_t *s, uint8_t byte, tl_tx_fn tx);
 void tl_servo_telemetry(const tl_servo_t *s, uint8_t *payload);
 uint32_t tl_servo_period_cycles(const tl_servo_t *s);
 int tl_param_index(uint8_t id);
+/* TLP_LIMIT_* sides toward which axis a must not be driven now (servo.c). */
+uint8_t tl_axis_blocked(const tl_axis_t *a);
+/* DRIVE (openloop.c): put an enabled axis under the open-loop command duty; a TLP_ST_* status. */
+uint8_t tl_drive_start(tl_servo_t *s, uint8_t axis, int32_t duty);
 
 #endif

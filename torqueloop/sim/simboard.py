@@ -36,7 +36,7 @@ import subprocess
 from pathlib import Path
 from typing import Protocol
 
-from torqueloop.flow.firmware import AUTH_SOURCES
+from torqueloop.flow.firmware import AUTH_SOURCES, SERVO_CORE_SOURCES
 from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, run_until
 from torqueloop.spec import auth
 from torqueloop.spec.bridge import BRAKE, COAST
@@ -44,8 +44,8 @@ from torqueloop.spec.system import SYSTEM
 
 REPO = Path(__file__).resolve().parents[2]
 FW = REPO / "firmware"
-SOURCES = [Path(__file__).with_name("simboard_hal.c"), FW / "servo" / "servo.c",
-           FW / "servo" / "control.c", FW / "protocol" / "tl_link.c", *AUTH_SOURCES]
+SOURCES = [Path(__file__).with_name("simboard_hal.c"), *SERVO_CORE_SOURCES, FW / "protocol" / "tl_link.c",
+           *AUTH_SOURCES]
 HEADERS = [FW / "servo" / "servo.h", FW / "servo" / "control.h", FW / "servo" / "hal.h",
            FW / "protocol" / "tl_link.h", FW / "protocol" / "tl_protocol.h", FW / "protocol" / "tl_auth.h",
            FW / "crypto" / "tl_sha256.h", FW / "crypto" / "tl_keyslot.h"]
