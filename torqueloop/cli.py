@@ -152,17 +152,49 @@ def _status_text(a: int, s: dict[str, int], mech: units.Mechanics, unit: str) ->
             f"faults: {describe_faults(s['faults'])}; link errors seen by the board: {s['rx_errors']}")
 
 
+def _store_text(r: dict[str, int] | None) -> str:
+    """What the board's parameter store says about the running parameters (SAVE op 0)."""
+    if r is None:
+        return "parameters: this firmware cannot store them (RAM only: lost at power-off and upload)"
+    if not r["saved"]:
+        return "parameters: none saved on the board (it starts with the defaults): `torqueloop save` keeps these"
+    if r["differs"]:
+        return (f"parameters: DIFFER from the saved copy {r['seq']} (the board starts with that one): "
+                "`torqueloop save` keeps the running ones")
+    return f"parameters: as saved on the board (copy {r['seq']})"
+
+
+def _store_json(r: dict[str, int] | None) -> dict[str, Any] | None:
+    return None if r is None else {"saved": bool(r["saved"]), "differs": bool(r["differs"]), "seq": r["seq"]}
+
+
 def cmd_status(ctx: Ctx) -> int:
     res = {}
     lines = []
+    report = ctx.client.store_report()
+    store = _store_json(report)
     for a in _axes(ctx.args):
         s = ctx.client.status(a)
         s = {k: v for k, v in s.items() if k != "status"}
         s["fault_names"] = decode_faults(s["faults"])
         s["home_state"] = P.HOME_STATE.get(s["home"], "?")
+        s["saved_parameters"] = store
         res[a] = s
         lines.append(_status_text(a, s, ctx.mech(a), ctx.args.unit))
+    lines.append(_store_text(report))
     ctx.out(res, "\n".join(lines))
+    return 0
+
+
+def cmd_save(ctx: Ctx) -> int:
+    ctx.require_key("SAVE", op=1)
+    c = ctx.client
+    on = [a for a in range(P.AXIS_COUNT) if c.status(a)["enabled"]]
+    if on:
+        raise ProtocolError(f"axes {on} are enabled: the board stores its parameters only with every axis "
+                            "disabled (a save stalls the link for the flash's erase): `torqueloop disable --all`")
+    r = c.save()
+    ctx.out(_store_json(r), f"saved: the board starts with these parameters from now on (copy {r['seq']})")
     return 0
 
 
@@ -668,14 +700,23 @@ def cmd_upload(ctx: Ctx) -> int:
     from torqueloop.host import upload
 
     image = upload.load_image(ctx.args.file, raw_ok=ctx.args.raw)   # before the link is opened
+    before = ctx.client.store_report()
+    if not ctx.args.json and (before is None or before["differs"]):
+        print("note: the running parameters are not saved on the board; the new firmware starts with "
+              + ("the saved copy" if before and before["saved"] else "its defaults")
+              + " (`torqueloop config save FILE` or `torqueloop save` first to keep them)", file=sys.stderr)
     show = None if ctx.args.json else (lambda done, total: progress(done, total, "upload"))
     r = upload.run_upload(ctx.client, image, show, window_s=ctx.args.window)
     obj = {"ok": r.ok, "message": r.message, "bytes": r.bytes, "crc32": f"0x{r.crc32:08x}",
            "old_build_id": f"0x{r.old_build_id:08x}",
            "new_build_id": None if r.new_build_id is None else f"0x{r.new_build_id:08x}",
            "bootloader_replies": r.replies, "seconds": round(r.seconds, 3)}
+    after = ctx.client.store_report() if r.new_build_id is not None else None
+    obj["saved_parameters_before"] = _store_json(before)
+    obj["saved_parameters"] = _store_json(after)
     ctx.out(obj, lambda: (f"upload {'done' if r.ok else 'REFUSED'}: {r.message} ({r.seconds:.1f} s)\n"
-                          f"build id 0x{r.old_build_id:08x} -> {obj['new_build_id']}"))
+                          f"build id 0x{r.old_build_id:08x} -> {obj['new_build_id']}"
+                          + (f"\n{_store_text(after)}" if r.new_build_id is not None else "")))
     return 0 if r.ok else 1
 
 
@@ -725,8 +766,13 @@ def cmd_sim(ctx: Ctx) -> int:
         board: Any = RtlBoard(seed=a.seed, plant=a.plant, key=key)
         what = f"RTL board image (Verilator) + plant model, far below real time, {keyed}"
     else:
-        board = SimBoard(build_id=a.build_id, seed=a.seed, plant=a.plant, key=key)
-        what = f"servo firmware + plant model, build id 0x{board.build_id:08x}, {keyed}"
+        from torqueloop.sim.epcs import Epcs
+        from torqueloop.sim.simboard import FLASH_ERASE_S, FLASH_PROGRAM_S
+
+        flash = Epcs(a.flash, program_s=FLASH_PROGRAM_S, erase_s=FLASH_ERASE_S) if a.flash else None
+        board = SimBoard(build_id=a.build_id, seed=a.seed, plant=a.plant, key=key, flash=flash)
+        what = (f"servo firmware + plant model, build id 0x{board.build_id:08x}, {keyed}, "
+                f"configuration flash {a.flash or 'in memory'}")
     srv = BoardServer(board, a.host, a.port, speed=a.speed, hello=a.hello)
     print(f"simulated board on socket://{a.host}:{srv.port} ({what}); Ctrl-C stops it", flush=True)
     try:
@@ -842,6 +888,9 @@ def parser() -> argparse.ArgumentParser:
                     help="seconds to drive [2]")
     sp._negative_number_matcher = re.compile(r"^-\d*\.?\d+%?$")   # `drive -5%`: a duty, not an option
     sp.set_defaults(fn=cmd_drive)
+    sp = sub.add_parser("save", help="store the running parameters on the board (its configuration flash): "
+                                     "it starts with them after a power cycle, reset or upload")
+    sp.set_defaults(fn=cmd_save)
     sp = sub.add_parser("stop", help="hold the present position")
     axis_opts(sp)
     sp.set_defaults(fn=cmd_stop)
@@ -913,6 +962,9 @@ def parser() -> argparse.ArgumentParser:
                     help="plant variant: paper-printed, paper or lab (lab-no-EFFECT switches one off) [paper]")
     sp.add_argument("--rtl", action="store_true",
                     help="serve the RTL co-simulation (torqueloop/cosim) instead of the firmware-in-the-loop board")
+    sp.add_argument("--flash", metavar="FILE", default=None,
+                    help="keep the board's configuration flash (its saved parameters) in FILE, so a new `sim` "
+                         "on the same FILE is the board after a power cycle [in memory]")
     sp.set_defaults(fn=cmd_sim)
     return p
 

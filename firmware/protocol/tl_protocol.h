@@ -34,6 +34,7 @@
 #define TLP_ST_AUTH 12u
 #define TLP_ST_NO_SESSION 13u
 #define TLP_ST_NO_KEY 14u
+#define TLP_ST_STORE 15u
 
 #define TLP_FAULT_ESTOP 0x0001u
 #define TLP_FAULT_BRIDGE 0x0002u
@@ -108,6 +109,10 @@
 #define TLP_CMD_DRIVE_REQ_LEN 3u
 #define TLP_CMD_DRIVE_REP_LEN 1u
 #define TLP_CMD_DRIVE_FEEDS_LINK 1u
+#define TLP_CMD_SAVE 0x10u
+#define TLP_CMD_SAVE_REQ_LEN 1u
+#define TLP_CMD_SAVE_REP_LEN 7u
+#define TLP_CMD_SAVE_FEEDS_LINK 0u
 /* bit cmd set: that command, executed, feeds the link watchdog */
 #define TLP_LINK_FEED_MASK ((1u << TLP_CMD_ENABLE) | (1u << TLP_CMD_MOVE) | (1u << TLP_CMD_STOP) | (1u << TLP_CMD_HEARTBEAT) | (1u << TLP_CMD_HOME) | (1u << TLP_CMD_DRIVE))
 #define TLP_MOVE_TRAPEZOID 0x01u
@@ -193,6 +198,11 @@
 #define TLP_DRIVE_REQ_AXIS 0u
 #define TLP_DRIVE_REQ_DUTY 1u
 #define TLP_DRIVE_REP_STATUS 0u
+#define TLP_SAVE_REQ_OP 0u
+#define TLP_SAVE_REP_STATUS 0u
+#define TLP_SAVE_REP_SAVED 1u
+#define TLP_SAVE_REP_DIFFERS 2u
+#define TLP_SAVE_REP_SEQ 3u
 #define TLP_TELEM_TIME_US 0u
 #define TLP_TELEM_HEAD_LEN 4u
 #define TLP_TELEM_AX_SETPOINT 0u
@@ -233,9 +243,27 @@ static inline int tlp_needs_key(uint8_t cmd, const uint8_t *payload)
     case TLP_CMD_HEARTBEAT: return 1;
     case TLP_CMD_HOME: return 1;
     case TLP_CMD_DRIVE: return 1;
+    case TLP_CMD_SAVE: return !(payload[TLP_SAVE_REQ_OP] == 0u);
     default: return 0;   /* open, or unknown (answered UNKNOWN_CMD) */
     }
 }
+
+/* Parameter store ([store] of protocol.toml; docs/firmware.md). */
+#define TLP_STORE_MAGIC 0x54534C54u
+#define TLP_STORE_SLOT_A 0x7E0000u
+#define TLP_STORE_SLOT_B 0x7F0000u
+#define TLP_STORE_FLASH_BYTES 0x800000u
+#define TLP_STORE_SECTOR_BYTES 0x10000u
+#define TLP_STORE_PAGE_BYTES 0x100u
+#define TLP_STORE_OP_READ 0x3u
+#define TLP_STORE_OP_WRITE_ENABLE 0x6u
+#define TLP_STORE_OP_READ_STATUS 0x5u
+#define TLP_STORE_OP_PAGE_PROGRAM 0x2u
+#define TLP_STORE_OP_SECTOR_ERASE 0xD8u
+#define TLP_STORE_STATUS_WIP 0x1u
+#define TLP_STORE_STATUS_WEL 0x2u
+#define TLP_STORE_PAGE_PROGRAM_US 0x1388u
+#define TLP_STORE_SECTOR_ERASE_US 0x2DC6C0u
 
 #define TLP_GLOBAL_AXIS 0xFFu
 #define TLP_P_LAW 0u
@@ -275,6 +303,7 @@ static inline int tlp_needs_key(uint8_t cmd, const uint8_t *payload)
    enabled the value may only rise / fall (a safety limit), 0 = free */
 typedef struct { uint8_t id; uint8_t global; int8_t tighten; int32_t min; int32_t max; int32_t dflt[TLP_AXIS_COUNT]; } tlp_param_info_t;
 #define TLP_PARAM_COUNT 31u
+#define TLP_PARAM_LAYOUT 0xE6357B87u   /* the stored record's layout word ([store]) */
 static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {
     {0u, 0u, 0, 0L, 3L, {1L, 1L}},  /* LAW */
     {1u, 0u, 0, 0L, 2147483647L, {17134L, 23145L}},  /* KP_Q16 */

@@ -80,3 +80,13 @@ uint32_t hal_clk_hz(void) { return TL_SYS_CLK_HZ; }
 void hal_set_baud_div(uint32_t div) { TL_UART_BAUD_DIV = div & TL_UART_BAUD_DIV_DIV_MSK; }
 void hal_irq_off(void) { __asm__ volatile("csrc mstatus, %0" : : "r"(1u << 3) : "memory"); }
 void hal_irq_on(void) { __asm__ volatile("csrs mstatus, %0" : : "r"(1u << 3) : "memory"); }
+
+/* The SoC has no serial-flash port yet (docs/soc.md, "Configuration flash"):
+ * the line reads high, as an erased flash would, so nothing stored is found,
+ * and a write never sets the enable latch, so SAVE answers STORE. */
+void hal_flash_select(bool on) { (void)on; }
+uint8_t hal_flash_xfer(uint8_t out)
+{
+    (void)out;
+    return 0xFFu;
+}

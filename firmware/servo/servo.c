@@ -21,6 +21,7 @@
 
 #include "control_step.h"
 #include "hal.h"
+#include "store.h"
 
 #define IDX_NONE (-1)
 #define LATCH_BITS (TL_HAL_SAFE_ESTOP | TL_HAL_SAFE_FAULT0 | TL_HAL_SAFE_FAULT1 | TL_HAL_SAFE_WDOG)
@@ -36,6 +37,11 @@ enum { HOME_SEEK, HOME_SETTLE, HOME_CREEP, HOME_BACKOFF, HOME_INDEX };
 #define HOME_SLOW_SHIFT 4
 
 int tl_param_index(uint8_t id) { return TLP_PARAM_INDEX[id]; }
+void tl_param_range(uint32_t k, int32_t *lo, int32_t *hi)
+{
+    *lo = TLP_PARAM_INFO[k].min;
+    *hi = TLP_PARAM_INFO[k].max;
+}
 
 /* TLP_PARAM_INDEX is a constant table: with a constant id each read is one load. */
 static inline int32_t pv(const tl_axis_t *a, uint8_t id) { return a->p[TLP_PARAM_INDEX[id]]; }
@@ -227,6 +233,7 @@ TL_FOR_SIZE void tl_servo_init(tl_servo_t *s)
         a->drive_duty = 0;
         tl_ctl_reset(&a->c, e.pos, e.now);
     }
+    tl_store_load(s);   /* the saved parameters over the defaults (store.c) */
     sync_all(s);
     for (uint32_t i = 0; i < TL_AXES; i++)
         disable_axis(s, i);
@@ -796,6 +803,7 @@ TL_FOR_SIZE static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
     case TLP_CMD_HOME: need = TLP_CMD_HOME_REQ_LEN; break;
     case TLP_CMD_SESSION: need = TLP_CMD_SESSION_REQ_LEN; break;
     case TLP_CMD_DRIVE: need = TLP_CMD_DRIVE_REQ_LEN; break;
+    case TLP_CMD_SAVE: need = TLP_CMD_SAVE_REQ_LEN; break;
     default:
         sat_inc(&s->cnt.unknown);
         send_status(s, tx, f->seq, rc, TLP_ST_UNKNOWN_CMD);
@@ -889,6 +897,10 @@ TL_FOR_SIZE static void handle(tl_servo_t *s, const tl_frame_t *f, tl_tx_fn tx)
         break;
     case TLP_CMD_DRIVE:
         st = tl_drive_start(s, q[TLP_DRIVE_REQ_AXIS], (int16_t)tl_get_u16(&q[TLP_DRIVE_REQ_DUTY]));
+        break;
+    case TLP_CMD_SAVE:
+        st = tl_store_command(s, q[TLP_SAVE_REQ_OP], rep);
+        n = TLP_CMD_SAVE_REP_LEN;
         break;
     case TLP_CMD_STATUS: {
         uint8_t axis = q[TLP_STATUS_REQ_AXIS];

@@ -79,6 +79,8 @@ void tl_servo_rx_byte(tl_servo_t *s, uint8_t byte, tl_tx_fn tx);
 void tl_servo_telemetry(const tl_servo_t *s, uint8_t *payload);
 uint32_t tl_servo_period_cycles(const tl_servo_t *s);
 int tl_param_index(uint8_t id);
+/* The range [min, max] of the parameter at index k of TLP_PARAM_INFO (servo.c holds the table). */
+void tl_param_range(uint32_t k, int32_t *lo, int32_t *hi);
 /* TLP_LIMIT_* sides toward which axis a must not be driven now (servo.c). */
 uint8_t tl_axis_blocked(const tl_axis_t *a);
 /* DRIVE (openloop.c): put an enabled axis under the open-loop command duty; a TLP_ST_* status. */

@@ -33,10 +33,11 @@ FW = REPO / "firmware"
 #: the authentication code the servo firmware, the host builds and the fuzzer share (docs/security.md)
 AUTH_SOURCES = [FW / "crypto" / "tl_sha256.c", FW / "crypto" / "tl_keyslot.c", FW / "protocol" / "tl_auth.c"]
 #: the servo core without its hardware (servo.h over hal.h): the image, the host tests and the simulated board
-SERVO_CORE_SOURCES = [FW / "servo" / "control.c", FW / "servo" / "servo.c", FW / "servo" / "openloop.c"]
+SERVO_CORE_SOURCES = [FW / "servo" / "control.c", FW / "servo" / "servo.c", FW / "servo" / "openloop.c",
+                      FW / "servo" / "store.c", FW / "boot" / "boot_crc.c"]
 SOURCES = [FW / "common" / "crt0.S", FW / "common" / "mem.c", FW / "protocol" / "tl_link.c", *AUTH_SOURCES,
            *SERVO_CORE_SOURCES, FW / "servo" / "hal_soc.c", FW / "servo" / "main.c"]
-INCLUDES = [FW / "include", FW / "protocol", FW / "crypto", FW / "servo"]
+INCLUDES = [FW / "include", FW / "protocol", FW / "crypto", FW / "servo", FW / "boot"]
 CFLAGS = ["-march=rv32im_zicsr", "-mabi=ilp32", "-O2", "-ffreestanding", "-nostdlib", "-static",
           "-std=c11", "-Wall", "-Wextra", "-Werror", "-ffunction-sections", "-fdata-sections",
           "-DTL_HAL_SOC_INLINE"]   # hal_soc_inline.h: the control iteration's register accessors inline
@@ -142,7 +143,7 @@ def build(name: str = "servo", defines: dict[str, str] | None = None, out: Path 
 
 #: the firmware C that runs on the host (tests, fuzzing) with the fake HAL
 HOST_SOURCES = [FW / "tests" / "hal_fake.c", FW / "protocol" / "tl_link.c", *AUTH_SOURCES, *SERVO_CORE_SOURCES]
-HOST_INCLUDES = [f"-I{FW / d}" for d in ("protocol", "crypto", "servo", "tests")]
+HOST_INCLUDES = [f"-I{FW / d}" for d in ("protocol", "crypto", "servo", "boot", "tests")]
 
 
 class FuzzerMissing(RuntimeError):
