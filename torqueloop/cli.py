@@ -457,6 +457,44 @@ def cmd_drive(ctx: Ctx) -> int:
     return 1 if r.faults else 0
 
 
+def cmd_char_sweep(ctx: Ctx) -> int:
+    from torqueloop.host import sweep
+
+    a = ctx.args
+    try:
+        carriers = [float(x) for x in a.carriers.split(",")] if a.carriers else []
+    except ValueError:
+        raise BadValue(f"--carriers {a.carriers!r}: give Hz, comma-separated (450,200)") from None
+    if any(not 0 < f < 1e7 for f in carriers):
+        raise BadValue(f"--carriers {a.carriers}: every carrier must be above 0 Hz")
+    ctx.require_key("DRIVE")
+    c = ctx.client
+    clk = (c.identity or {}).get("clk_hz", units.CLK_HZ)
+    if not carriers:
+        carriers = [carrier_hz(c.get_param("FDIV", a.axis), clk)]
+
+    def show(r: "sweep.Ramp") -> None:
+        if a.json:
+            return
+        sign = "+" if r.direction > 0 else "-"
+        moves = f"moves from {r.breakaway_percent:g}%" if r.breakaway_percent is not None else \
+            f"does not move up to {a.max:g}%"
+        stops = f", stops at {r.stop_percent:g}%" if r.stop_percent is not None else ""
+        print(f"{r.carrier_hz:9.1f} Hz  {sign}: {moves}{stops}" + (f"  FAULT {r.fault}" if r.fault else ""),
+              flush=True)
+
+    ramps = sweep.sweep(c, a.axis, carriers, clk, log=show, start=a.start, step=a.step, stop_at=a.max,
+                        hold_s=a.hold, move_counts=a.move_counts)
+    rows = sweep.as_rows(ramps)
+    if a.out:
+        out = Path(a.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps({"axis": a.axis, "ramps": rows}, indent=1) + "\n")
+    ctx.out({"axis": a.axis, "ramps": rows}, f"axis {a.axis}: {len(ramps)} ramps"
+            + (f"; written to {a.out}" if a.out else ""))
+    return 1 if any(r.fault for r in ramps) else 0
+
+
 def cmd_stop(ctx: Ctx) -> int:
     axes = _axes(ctx.args)
     ctx.client.stop(_mask(axes))
@@ -888,6 +926,25 @@ def parser() -> argparse.ArgumentParser:
                     help="seconds to drive [2]")
     sp._negative_number_matcher = re.compile(r"^-\d*\.?\d+%?$")   # `drive -5%`: a duty, not an option
     sp.set_defaults(fn=cmd_drive)
+    sp = sub.add_parser("characterize", help="the characterisation with the board as the PWM source")
+    csub = sp.add_subparsers(dest="char_command", required=True, metavar="STEP")
+    cs = csub.add_parser("sweep", help="encoder-only dead zone: the breakaway and stop duty per direction "
+                                       "at each carrier (raise the duty until it moves, lower it until it stops)")
+    axis_opts(cs, False)
+    cs.add_argument("--carriers", metavar="HZ,HZ", default=None,
+                    help="PWM carriers, comma-separated (each the nearest the divider makes) [the axis's own]")
+    cs.add_argument("--start", type=_bounded(float, 0, 100, "--start"), default=1.0, metavar="%",
+                    help="first duty of each ramp, percent [1]")
+    cs.add_argument("--step", type=_bounded(float, 0.05, 50, "--step"), default=0.5, metavar="%",
+                    help="duty step, percent [0.5]")
+    cs.add_argument("--max", type=_bounded(float, 0.1, 100, "--max"), default=30.0, metavar="%",
+                    help="highest duty tried, percent (at most CMD_LIMIT) [30]")
+    cs.add_argument("--hold", type=_bounded(float, 0.05, 60, "--hold"), default=0.3, metavar="S",
+                    help="seconds at each duty (keep it under STALL_MS above STALL_CMD) [0.3]")
+    cs.add_argument("--move-counts", type=_bounded(int, 1, 1_000_000, "--move-counts"), default=3, metavar="N",
+                    help="counts in the duty's direction during a hold that mean 'it moves' [3]")
+    cs.add_argument("--out", metavar="FILE", default=None, help="write the ramps as JSON")
+    cs.set_defaults(fn=cmd_char_sweep)
     sp = sub.add_parser("save", help="store the running parameters on the board (its configuration flash): "
                                      "it starts with them after a power cycle, reset or upload")
     sp.set_defaults(fn=cmd_save)
