@@ -81,12 +81,13 @@ void hal_set_baud_div(uint32_t div) { TL_UART_BAUD_DIV = div & TL_UART_BAUD_DIV_
 void hal_irq_off(void) { __asm__ volatile("csrc mstatus, %0" : : "r"(1u << 3) : "memory"); }
 void hal_irq_on(void) { __asm__ volatile("csrs mstatus, %0" : : "r"(1u << 3) : "memory"); }
 
-/* The SoC has no serial-flash port yet (docs/soc.md, "Configuration flash"):
- * the line reads high, as an erased flash would, so nothing stored is found,
- * and a write never sets the enable latch, so SAVE answers STORE. */
-void hal_flash_select(bool on) { (void)on; }
+/* The FLASH page (regmap.toml): chip select, and a byte clocked out and in. */
+void hal_flash_select(bool on) { TL_FLASH_CTRL = on ? TL_FLASH_CTRL_CS_MSK : 0u; }
 uint8_t hal_flash_xfer(uint8_t out)
 {
-    (void)out;
-    return 0xFFu;
+    TL_FLASH_TX = out;
+    uint32_t rx;
+    while ((rx = TL_FLASH_RX) & TL_FLASH_RX_BUSY_MSK) {
+    }
+    return (uint8_t)(rx & TL_FLASH_RX_DATA_MSK);
 }

@@ -77,17 +77,24 @@ class Epcs:
 
     def xfer(self, out: int) -> int:
         """One byte clocked while selected: ``out`` in, the byte the chip drives back."""
+        back = self.peek()
         self.t += self.byte_s
-        if not self.powered or not self._sel:
-            return 0x00 if not self.powered else 0xFF
-        self._cmd.append(out & 0xFF)
+        if self.powered and self._sel:
+            self._cmd.append(out & 0xFF)
+        return back
+
+    def peek(self) -> int:
+        """The byte the chip drives during the next byte clocked (it depends only on the
+        bytes before it: the pin-level adapter drives it bit by bit as the byte is clocked)."""
+        if not self.powered:
+            return 0x00
         c = self._cmd
-        if c[0] == OP_RDSR and len(c) >= 2:
-            return self.status()
-        if self.busy():
+        if not self._sel or not c:
             return 0xFF
-        if c[0] == OP_READ and len(c) >= 5:
-            addr = (c[1] << 16 | c[2] << 8 | c[3]) + len(c) - 5
+        if c[0] == OP_RDSR:
+            return self.status()
+        if not self.busy() and c[0] == OP_READ and len(c) >= 4:
+            addr = (c[1] << 16 | c[2] << 8 | c[3]) + len(c) - 4
             return self.mem[addr % FLASH_BYTES]
         return 0xFF
 
