@@ -135,7 +135,7 @@ def test_config_round_trip_and_validation() -> None:
 
 
 def test_write_order_satisfies_the_firmware_soft_limit_rule() -> None:
-    # firmware (servo.c set_param): SOFT_MIN <= SOFT_MAX must hold after every write
+    # firmware (params.c param_allowed): SOFT_MIN <= SOFT_MAX must hold after every write
     d = _doc()
     d["axes"][0].update(SOFT_MIN=2_000_000, SOFT_MAX=3_000_000)
     d["axes"][1].update(SOFT_MIN=-3_000_000, SOFT_MAX=-2_000_000)

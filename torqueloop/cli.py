@@ -9,9 +9,10 @@ or the simulated board.  docs/host.md is the user's guide.
 The link URL comes from ``--url`` or ``$TORQUELOOP_URL``; the link key from
 the file ``--key-file`` or ``$TORQUELOOP_KEY_FILE`` names (never the command
 line itself; docs/security.md).  Every command can print ``--json`` for
-scripts.  Exit status: 0 done, 1 refused by the board, a fault during the
-command, or a missing, unreadable or wrong key, 2 bad input (refused before
-anything was sent, one line, never a traceback), 3 no answer.
+scripts.  Exit status: 0 done, 1 refused by the board in its state, a fault
+during the command, or a missing, unreadable or wrong key, 2 bad input (a
+value refused before anything was sent or by the board's rules, one line
+naming the rule, never a traceback), 3 no answer.
 """
 
 from __future__ import annotations
@@ -33,14 +34,28 @@ from torqueloop.spec import units
 from torqueloop.spec.pwm import carrier_hz
 from torqueloop.host import config as hconfig
 from torqueloop.host import drive as hdrive
-from torqueloop.host.client import Client, NoAnswer, ProtocolError, decode_faults, describe_faults, key_missing
+from torqueloop.host.client import (Client, CommandRejected, NoAnswer, ProtocolError, decode_faults, describe_faults,
+                                    key_missing)
+from torqueloop.host.session import HOMED, HOMING, KEEPALIVE_S, Session
 from torqueloop.host.transport import DEFAULT_BAUD, LinkOpenError, open_link
 from torqueloop.host.upload import ImageRefused
 from torqueloop.spec.units import BadValue
 
 DEFAULT_URL = "socket://127.0.0.1:2000"
-KEEPALIVE_S = 0.15   # a HEARTBEAT this often keeps the firmware's link watchdog (>= 10 ms, default 0.5 s) quiet
-HOMED = 2            # STATUS.home (docs/protocol.md, HOME)
+#: what to do about a refusal, by its rule (protocol.toml [[refusal]] says what the rule is)
+REFUSAL_HINT = {
+    "DISABLED": "enable the axis first (`torqueloop enable`, or `move --enable`)",
+    "FAULT": "`torqueloop status` names the fault; remove its cause, then `torqueloop clear-fault`",
+    "NOT_HOMED": "`torqueloop home neg|pos|here` first, or --unhomed to move relative to where it was at power-up",
+    "FOLLOW": "use --trapezoid, a smaller step, or raise follow_limit",
+    "LIMIT": "only moves away from that end",
+    "CARRIER": "lower pwm_freq (a larger FDIV), or raise PWM_MAX_HZ within the bridge's rating",
+    "GAIN": f"the largest physical gain is {P.PARAMS['KP_UNM_RAD'].max / 1e6:g} N m/rad",
+    "PW_ORDER": "set the other end first",
+    "SOFT_ORDER": "set the other end first",
+    "NO_SWITCHES": "`torqueloop home here`",
+    "CAUSE": "`torqueloop status` shows what is still present",
+}
 
 
 class Ctx:
@@ -67,6 +82,10 @@ class Ctx:
             key, _, err = self.key()
             if key is None:
                 raise key_missing(command, err)
+
+    @property
+    def session(self) -> Session:
+        return Session(self.client)
 
     @property
     def client(self) -> Client:
@@ -220,63 +239,20 @@ def cmd_set(ctx: Ctx) -> int:
     ctx.require_key("SET_PARAM")
     clk = (ctx.client.identity or {}).get("clk_hz", units.CLK_HZ)
     param, raw = units.to_raw(a.name, a.value, clk)
-    _check_pair(ctx, param, raw, a.axis, clk)
     if param == "BAUD_DIV":
         print("warning: the board changes its baud rate after this reply; reconnect with --baud",
               file=sys.stderr)
-    stored = ctx.client.set_param(param, raw, a.axis)
+    try:
+        stored = ctx.client.set_param(param, raw, a.axis)
+    except CommandRejected as e:
+        if e.rule == "CARRIER" and param == "FDIV":
+            e.args = (f"{e} (FDIV {raw}: {carrier_hz(raw, clk):.0f} Hz; PWM_MAX_HZ "
+                      f"{ctx.client.get_param('PWM_MAX_HZ')} Hz)",)
+        raise
     val, unit = units.from_raw(a.name, stored, clk)
     ctx.out({"name": a.name, "param": param, "raw": stored, "value": val, "unit": unit},
             f"{a.name} = {val} {unit}   ({param} = {stored})")
     return 0
-
-
-def _check_pair(ctx: Ctx, param: str, raw: int, axis: int, clk: int) -> None:
-    """Bounds between parameters, checked before sending (the firmware checks them too)."""
-    c = ctx.client
-    if param == "FDIV":
-        ceiling = c.get_param("PWM_MAX_HZ")
-        if carrier_hz(raw, clk) > ceiling:
-            raise BadValue(f"the nearest carrier the divider makes is {carrier_hz(raw, clk):.0f} Hz (FDIV {raw}), "
-                           f"above PWM_MAX_HZ = {ceiling} Hz, the bridge's rating")
-    elif param == "PWM_MAX_HZ":
-        for ax in range(P.AXIS_COUNT):
-            f = carrier_hz(c.get_param("FDIV", ax), clk)
-            if f > raw:
-                raise BadValue(f"axis {ax} runs its PWM at {f:.0f} Hz, above {raw} Hz: lower its pwm_freq first")
-    elif param in P.RAW_GAIN_OF or param in P.RAW_GAIN_OF.values() or param in ("TAU_MAX_MNM", "COUNTS_PER_REV"):
-        _check_gains(ctx, param, raw, axis)
-    elif param == "PW0" and raw > (pwmax := c.get_param("PWMAX", axis)):
-        raise BadValue(f"PW0 {raw} above PWMAX {pwmax} (eq. 1 needs PW0 <= PW_F)")
-    elif param == "PWMAX" and raw < (pw0 := c.get_param("PW0", axis)):
-        raise BadValue(f"PWMAX {raw} below PW0 {pw0} (eq. 1 needs PW0 <= PW_F)")
-
-
-def _check_gains(ctx: Ctx, param: str, raw: int, axis: int) -> None:
-    """The firmware keeps every raw gain within its physical gain's range, so
-    that `get` reads back what `set` wrote (a raw gain 1000x the
-    largest physical one read back as 100 N m/rad)."""
-    c = ctx.client
-    tau, cpr = c.get_param("TAU_MAX_MNM", axis), c.get_param("COUNTS_PER_REV", axis)
-    phys_max = P.PARAMS["KP_UNM_RAD"].max
-    if param == "TAU_MAX_MNM":
-        tau = raw
-    elif param == "COUNTS_PER_REV":
-        cpr = raw
-    raw_max = P.gain_raw_from_phys(phys_max, tau, cpr)
-    if param in P.RAW_GAIN_OF.values():      # a physical gain: its raw gain must not saturate
-        g = P.gain_raw_from_phys(raw, tau, cpr)
-        if g >= 0x7FFF_FFFF and P.gain_phys_from_raw(g, tau, cpr) < raw:
-            raise BadValue(f"{param} {raw}: beyond what the raw q16 gain can hold at TAU_MAX_MNM {tau}, "
-                           f"COUNTS_PER_REV {cpr}")
-        return
-    gains = {k: c.get_param(k, axis) for k in P.RAW_GAIN_OF}
-    if param in gains:
-        gains = {param: raw}
-    for k, v in gains.items():
-        if v > raw_max:
-            raise BadValue(f"{k} {v} would be above {raw_max}, the raw gain of {phys_max / 1e6:g} N m/rad "
-                           f"(the largest physical gain) at TAU_MAX_MNM {tau}, COUNTS_PER_REV {cpr}")
 
 
 def cmd_enable(ctx: Ctx, on: bool) -> int:
@@ -317,31 +293,6 @@ def _poll_settled(ctx: Ctx, axis: int, limit_s: float, tol: int, t0: float) -> d
         time.sleep(KEEPALIVE_S)
 
 
-def _check_move(ctx: Ctx, axis: int, target: int, trapezoid: bool, unhomed: bool, st: dict[str, int]) -> None:
-    """Everything the firmware would refuse about a move, checked before the
-    axis is enabled: a refused move must not leave it enabled."""
-    c = ctx.client
-    lo, hi = c.get_param("SOFT_MIN", axis), c.get_param("SOFT_MAX", axis)
-    if not lo <= target <= hi:
-        raise BadValue(f"target {target} counts is outside axis {axis}'s soft limits [{lo}, {hi}]"
-                       + ("" if st["home"] == HOMED else " (relative to where it was at power-up: not homed)"))
-    step = target - st["position"]
-    if not trapezoid and abs(step) > (fl := c.get_param("FOLLOW_LIMIT", axis)):
-        raise BadValue(f"a step of {step} counts is larger than FOLLOW_LIMIT = {fl} counts: the following-error "
-                       "fault would trip at once; use --trapezoid, a smaller step, or raise follow_limit")
-    if st["home"] != HOMED and not unhomed:
-        raise ProtocolError(f"axis {axis} is not homed: `torqueloop home --axis {axis} neg|pos|here` first, "
-                            "or --unhomed to move relative to where it was at power-up")
-    blocking = st["faults"] & ~P.DIRECTIONAL_FAULTS
-    if blocking:
-        raise ProtocolError(f"axis {axis} has latched faults: {describe_faults(blocking)}; "
-                            "`torqueloop clear-fault` first")
-    lim = st["limits"] | (P.LIMIT_BITS["neg"] if st["faults"] & P.FAULT["LIMIT_NEG"] else 0) \
-        | (P.LIMIT_BITS["pos"] if st["faults"] & P.FAULT["LIMIT_POS"] else 0)
-    if (lim & P.LIMIT_BITS["pos"] and step > 0) or (lim & P.LIMIT_BITS["neg"] and step < 0):
-        raise ProtocolError(f"axis {axis}: the limit switch at that end is tripped; only moves away from it")
-
-
 def cmd_move(ctx: Ctx) -> int:
     a = ctx.args
     units.parse_position(a.target, units.Mechanics(), a.unit)   # refused before the link is opened
@@ -353,16 +304,7 @@ def cmd_move(ctx: Ctx) -> int:
         target += st["position"]
         if not units.INT32_MIN <= target <= units.INT32_MAX:
             raise BadValue(f"{a.target} from {st['position']} is beyond the encoder's 32-bit range")
-    _check_move(ctx, a.axis, target, a.trapezoid, a.unhomed, st)
-    enabled_here = a.enable and not st["enabled"]
-    if enabled_here:
-        ctx.client.enable(1 << a.axis, True)
-    try:
-        ctx.client.move(a.axis, target, a.trapezoid, a.unhomed)
-    except ProtocolError:
-        if enabled_here:
-            ctx.client.enable(1 << a.axis, False)
-        raise
+    ctx.session.move(a.axis, target, a.trapezoid, a.unhomed, enable=a.enable, st=st)
     res: dict[str, Any] = {"axis": a.axis, "target_counts": target, "mode": "trapezoid" if a.trapezoid else "step"}
     text = f"axis {a.axis} -> {target} counts ({mech.from_counts(target, a.unit):.4f} {a.unit})"
     if a.wait:
@@ -378,17 +320,11 @@ def cmd_home(ctx: Ctx) -> int:
     a = ctx.args
     ctx.require_key("HOME")
     c = ctx.client
-    st = c.status(a.axis)
-    if a.mode != "here":
-        if not st["enabled"]:
-            raise ProtocolError(f"axis {a.axis} is disabled: homing to a switch moves it (`torqueloop enable`)")
-        if not c.get_param("LIMIT_SW", a.axis):
-            raise ProtocolError(f"axis {a.axis} has no limit switches (LIMIT_SW 0): `torqueloop home here`")
     c.home(a.axis, a.mode, a.index)
     t0 = time.monotonic()
     while a.mode != "here" and time.monotonic() - t0 < a.wait:
         st = c.status(a.axis)
-        if st["home"] != 1 or st["faults"]:
+        if st["home"] != HOMING or st["faults"]:
             break
         c.heartbeat()
         if not a.json:
@@ -418,8 +354,7 @@ def cmd_drive(ctx: Ctx) -> int:
     fdiv_before = c.get_param("FDIV", a.axis)
     fdiv = fdiv_before
     if a.pwm_freq is not None:
-        fdiv = units.to_raw("pwm_freq", str(a.pwm_freq), clk)[1]
-        _check_pair(ctx, "FDIV", fdiv, a.axis, clk)
+        fdiv = units.to_raw("pwm_freq", str(a.pwm_freq), clk)[1]   # the board refuses a carrier above PWM_MAX_HZ
     hdrive.check_ready(c, a.axis, steps)
     if fdiv != fdiv_before:
         c.set_param("FDIV", fdiv, a.axis)
@@ -517,46 +452,13 @@ def cmd_clear_fault(ctx: Ctx) -> int:
 
 def capture(ctx: Ctx, duration: float, every: int = 1, on_record: Callable[[dict], None] | None = None,
             label: str = "capture", trigger: tuple[float, Callable[[], None]] | None = None) -> list[dict]:
-    """Stream telemetry for ``duration`` seconds of *board* time (the records'
-    time_us, so a co-simulation slower than real time is captured just as
-    long), feeding the link watchdog; ``trigger`` = (t, fn) calls fn once the
-    capture spans t seconds.  Returns the records."""
-    c = ctx.client
-    c.take_telemetry()
-    c.set_telemetry(every)
-    records: list[dict] = []
-    show = not ctx.args.json and on_record is None
-    span = 0.0
-    try:
-        last_keep = last_new = time.monotonic()
-        while span < duration:
-            c.pump(0.02)
-            new = c.take_telemetry()
-            now = time.monotonic()
-            if new:
-                records += new
-                last_new = now
-                span = ((records[-1]["time_us"] - records[0]["time_us"]) % (1 << 32)) / 1e6
-                if on_record:
-                    for r in new:
-                        on_record(r)
-                if trigger and span >= trigger[0]:
-                    trigger[1]()
-                    trigger = None
-            elif now - last_new > max(5.0, 10 * ctx.args.timeout):
-                raise ProtocolError(f"no telemetry for {now - last_new:.0f} s (board streaming every {every} "
-                                    "periods was requested); check `torqueloop info` counters")
-            if now - last_keep > KEEPALIVE_S:
-                c.heartbeat()
-                last_keep = now
-            if show and math.isfinite(duration):
-                progress(span, duration, label)
-        if show and math.isfinite(duration):
-            progress(duration, duration, label)
-    finally:
-        c.set_telemetry(0)
-        c.pump(0.05)
-        records += c.take_telemetry()
+    """Session.capture with a progress bar (none with --json, on_record or no end)."""
+    show = not ctx.args.json and on_record is None and math.isfinite(duration)
+    records = ctx.session.capture(duration, every, on_record, trigger,
+                                  on_progress=(lambda span: progress(span, duration, label)) if show else None,
+                                  silence_s=max(5.0, 10 * ctx.args.timeout))
+    if show:
+        progress(duration, duration, label)
     return records
 
 
@@ -634,7 +536,7 @@ def cmd_step_test(ctx: Ctx) -> int:
         target += start
         if not units.INT32_MIN <= target <= units.INT32_MAX:
             raise BadValue(f"{a.target} from {start} is beyond the encoder's 32-bit range")
-    _check_move(ctx, a.axis, target, a.trapezoid, a.unhomed, s0)
+    ctx.session.check_move(a.axis, target, a.trapezoid, a.unhomed, s0, enabling=not s0["enabled"])
     if s0["faults"]:
         raise ProtocolError(f"axis {a.axis} has latched faults: {describe_faults(s0['faults'])}; "
                             "`torqueloop clear-fault` first")
@@ -656,7 +558,7 @@ def cmd_step_test(ctx: Ctx) -> int:
         [k for k in range(cap.n) if sp[k] == target]
     if not moved:
         raise ProtocolError("the capture holds no sample after the move command (telemetry lost?)")
-    k0 = max(0, moved[0] - 1) if not a.trapezoid else max(0, moved[0] - 1)
+    k0 = max(0, moved[0] - 1)   # the sample before the first that shows the move
     t = cap.t[k0:] - cap.t[k0]
     x = cap.data["position"][k0:, a.axis]
     fig = analysis.step_figures(t, x, sp[k0:], start, target, a.band / 100)
@@ -1028,6 +930,8 @@ def parser() -> argparse.ArgumentParser:
 
 #: exit status (module docstring)
 EXIT_REFUSED, EXIT_BAD_INPUT, EXIT_NO_ANSWER = 1, 2, 3
+#: a value the board refuses as such is bad input, whoever checked it (the tool before sending, or the board)
+BAD_INPUT_STATUSES = frozenset({P.STATUS["BAD_ARG"], P.STATUS["RANGE"]})
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -1038,6 +942,10 @@ def main(argv: list[str] | None = None) -> int:
     except NoAnswer as e:
         print(f"torqueloop: {e}", file=sys.stderr)
         return EXIT_NO_ANSWER
+    except CommandRejected as e:
+        hint = REFUSAL_HINT.get(e.rule)
+        print(f"torqueloop: {e}" + (f"; {hint}" if hint else ""), file=sys.stderr)
+        return EXIT_BAD_INPUT if e.status in BAD_INPUT_STATUSES else EXIT_REFUSED
     except (BadValue, hconfig.HostConfigError, ImageRefused) as e:
         print(f"torqueloop: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT

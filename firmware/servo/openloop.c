@@ -9,25 +9,27 @@
  * the drive.  The set-point follows the position while it lasts, so the
  * following-error check sees nothing to follow and a STOP holds where the
  * axis is. */
-#include "servo.h"
+#include "servo_internal.h"
 
-#include "hal.h"
-
-uint8_t tl_drive_start(tl_servo_t *s, uint8_t axis, int32_t duty)
+uint8_t tl_drive_start(tl_servo_t *s, uint8_t axis, int32_t duty, uint8_t *why)
 {
     if (axis >= TL_AXES)
-        return TLP_ST_BAD_ARG;
+        return refuse(why, TLP_WHY_AXIS);
     tl_axis_t *a = &s->ax[axis];
-    int32_t limit = a->p[tl_param_index(TLP_P_CMD_LIMIT)];
+    int32_t limit = pv(a, TLP_P_CMD_LIMIT);
     if (duty > limit || duty < -limit)
-        return TLP_ST_RANGE;
+        return refuse(why, TLP_WHY_CMD_LIMIT);
     hal_irq_off();
     uint8_t st = TLP_ST_OK;
-    uint8_t b = tl_axis_blocked(a);
-    if (!a->enabled || a->home == TLP_HOME_STATE_HOMING || (hal_safety() & TL_HAL_SAFE_FORCED))
-        st = TLP_ST_STATE;
+    uint8_t b = tl_blocked(a);
+    if (!a->enabled)
+        st = refuse(why, TLP_WHY_DISABLED);
+    else if (a->home == TLP_HOME_STATE_HOMING)
+        st = refuse(why, TLP_WHY_HOMING);
+    else if (hal_safety() & TL_HAL_SAFE_FORCED)
+        st = refuse(why, TLP_WHY_FORCED);
     else if (((b & TLP_LIMIT_NEG) && duty < 0) || ((b & TLP_LIMIT_POS) && duty > 0))
-        st = TLP_ST_RANGE;
+        st = refuse(why, TLP_WHY_LIMIT);
     if (st == TLP_ST_OK) {
         if (!a->drive)
             tl_ctl_hold(&a->c, a->pos);

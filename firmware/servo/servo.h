@@ -1,9 +1,10 @@
 /* SPDX-License-Identifier: MIT */
 /* The servo application without its hardware: parameters, two axes under
  * control.c, the safety state machine and the command handler of the link
- * protocol.  servo/main.c calls tl_servo_tick() from the machine-timer
- * interrupt and feeds received bytes to tl_servo_rx_byte(); everything else
- * goes through hal.h, so the host tests and the fuzzer run this very code. */
+ * protocol (servo_internal.h says which file holds what).  servo/main.c calls
+ * tl_servo_tick() from the machine-timer interrupt and feeds received bytes to
+ * tl_servo_rx_byte(); everything else goes through hal.h, so the host tests,
+ * the fuzzer and the simulated board run this very code. */
 #ifndef TL_SERVO_H
 #define TL_SERVO_H
 
@@ -81,9 +82,8 @@ uint32_t tl_servo_period_cycles(const tl_servo_t *s);
 int tl_param_index(uint8_t id);
 /* The range [min, max] of the parameter at index k of TLP_PARAM_INFO (servo.c holds the table). */
 void tl_param_range(uint32_t k, int32_t *lo, int32_t *hi);
-/* TLP_LIMIT_* sides toward which axis a must not be driven now (servo.c). */
-uint8_t tl_axis_blocked(const tl_axis_t *a);
-/* DRIVE (openloop.c): put an enabled axis under the open-loop command duty; a TLP_ST_* status. */
-uint8_t tl_drive_start(tl_servo_t *s, uint8_t axis, int32_t duty);
+/* DRIVE (openloop.c): put an enabled axis under the open-loop command duty; a TLP_ST_* status,
+ * the refusal's rule (TLP_WHY_*) in *why. */
+uint8_t tl_drive_start(tl_servo_t *s, uint8_t axis, int32_t duty, uint8_t *why);
 
 #endif

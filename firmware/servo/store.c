@@ -14,7 +14,7 @@
 #include "store.h"
 
 #include "boot_crc.h"
-#include "hal.h"
+#include "servo_internal.h"
 
 /* The record, as it lies in the flash: u32 words, little-endian (protocol.toml [store]).
  * Every parameter slot of the global array and of each axis's array is stored, in the
@@ -199,11 +199,10 @@ TL_FOR_SIZE void tl_store_report(const tl_servo_t *s, tl_store_report_t *rep)
     rep->differs = !r || !same_values(r, &rec_new);
 }
 
-TL_FOR_SIZE uint8_t tl_store_save(tl_servo_t *s)
+TL_FOR_SIZE uint8_t tl_store_save(tl_servo_t *s, uint8_t *why)
 {
-    for (uint32_t i = 0; i < TL_AXES; i++)
-        if (s->ax[i].enabled)
-            return TLP_ST_STATE;
+    if (tl_any_enabled(s))
+        return refuse(why, TLP_WHY_ENABLED);
     const record_t *r = newest();
     /* the slot without the newest valid copy: the newest stays whole whatever happens */
     uint32_t slot = (r == &rec_a) ? TLP_STORE_SLOT_B : TLP_STORE_SLOT_A;
@@ -214,12 +213,12 @@ TL_FOR_SIZE uint8_t tl_store_save(tl_servo_t *s)
                                                                                                    : TLP_ST_STORE;
 }
 
-TL_FOR_SIZE uint8_t tl_store_command(tl_servo_t *s, uint8_t op, uint8_t *rep)
+TL_FOR_SIZE uint8_t tl_store_command(tl_servo_t *s, uint8_t op, uint8_t *rep, uint8_t *why)
 {
     if (op > 1u)
-        return TLP_ST_BAD_ARG;
+        return refuse(why, TLP_WHY_CHOICE);
     if (op == 1u) {
-        uint8_t st = tl_store_save(s);
+        uint8_t st = tl_store_save(s, why);
         if (st != TLP_ST_OK)
             return st;
     }

@@ -39,7 +39,7 @@ import subprocess
 from pathlib import Path
 from typing import Protocol
 
-from torqueloop.flow.firmware import AUTH_SOURCES, SERVO_CORE_SOURCES
+from torqueloop.flow.firmware import AUTH_SOURCES, SERVO_CORE
 from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, run_until
 from torqueloop.sim.epcs import Epcs
 from torqueloop.spec import auth
@@ -48,12 +48,9 @@ from torqueloop.spec.system import SYSTEM
 
 REPO = Path(__file__).resolve().parents[2]
 FW = REPO / "firmware"
-SOURCES = [Path(__file__).with_name("simboard_hal.c"), *SERVO_CORE_SOURCES, FW / "protocol" / "tl_link.c",
-           *AUTH_SOURCES]
-HEADERS = [FW / "servo" / "servo.h", FW / "servo" / "control.h", FW / "servo" / "hal.h", FW / "servo" / "store.h",
-           FW / "boot" / "boot_crc.h",
-           FW / "protocol" / "tl_link.h", FW / "protocol" / "tl_protocol.h", FW / "protocol" / "tl_auth.h",
-           FW / "crypto" / "tl_sha256.h", FW / "crypto" / "tl_keyslot.h"]
+SOURCES = [Path(__file__).with_name("simboard_hal.c"), *SERVO_CORE, FW / "protocol" / "tl_link.c", *AUTH_SOURCES]
+#: every header the build can include (the cache key of the built library)
+HEADERS = sorted(h for d in ("servo", "protocol", "crypto", "boot") for h in (FW / d).glob("*.h"))
 BUILD = REPO / "build" / "host"
 CLK_HZ = SYSTEM.clk_hz
 DEFAULT_BUILD_ID = 0x51B0_0001
