@@ -154,3 +154,35 @@ def test_a_refusal_names_its_rule() -> None:
     with pytest.raises(CommandRejected) as e:
         c.transact("GET_PARAM", axis=0, param=P.PARAMS["PERIOD_US"].id)         # a global one, axis 0
     assert e.value.rule == "SCOPE"
+
+
+def test_host_and_firmware_refuse_the_same_parameter_values() -> None:
+    """The other check the host makes before sending: a value outside the
+    parameter's [min, max] (Client.set_param).  Each parameter at and either
+    side of both ends, on a board with every axis disabled (no tighten-only
+    refusal): the host refuses exactly the values the firmware refuses, with
+    the same rule.  Bounds between parameters are left to the board."""
+    c = client()
+    cases = 0
+    for p in P.PARAMS.values():
+        axis = P.GLOBAL_AXIS if p.scope == "global" else 0
+        for v in (p.min - 1, p.min, p.max, p.max + 1):
+            if not -2**31 <= v < 2**31:
+                continue                                   # not a 32-bit value: nothing to send
+            try:
+                c.set_param(p.name, v, axis)
+                host = None
+            except CommandRejected as e:
+                host = e.rule
+            try:
+                c.transact("SET_PARAM", axis=axis, param=p.id, value=v)   # straight to the board
+                board = None
+            except CommandRejected as e:
+                board = e.rule
+            if host is None and board is not None:
+                assert board not in ("BELOW_MIN", "ABOVE_MAX"), (p.name, v, board)   # a bound between parameters
+            else:
+                assert host == board, (p.name, v, host, board)
+            cases += 1
+    print(f"{cases} values of {len(P.PARAMS)} parameters")
+    assert cases > 3 * len(P.PARAMS)

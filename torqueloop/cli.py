@@ -23,7 +23,6 @@ import math
 import os
 import re
 import sys
-import time
 from pathlib import Path
 from typing import Any, Callable
 
@@ -36,7 +35,7 @@ from torqueloop.host import config as hconfig
 from torqueloop.host import drive as hdrive
 from torqueloop.host.client import (Client, CommandRejected, NoAnswer, ProtocolError, decode_faults, describe_faults,
                                     key_missing)
-from torqueloop.host.session import HOMED, HOMING, KEEPALIVE_S, Session
+from torqueloop.host.session import HOMED, Session
 from torqueloop.host.transport import DEFAULT_BAUD, LinkOpenError, open_link
 from torqueloop.host.upload import ImageRefused
 from torqueloop.spec.units import BadValue
@@ -268,29 +267,14 @@ def cmd_enable(ctx: Ctx, on: bool) -> int:
 
 
 def _wait_settled(ctx: Ctx, axis: int, limit_s: float, tol: int) -> dict[str, int]:
-    c = ctx.client
-    t0 = time.monotonic()
+    """Session.wait_settled with a progress bar (none with --json)."""
+    show = not ctx.args.json
     try:
-        return _poll_settled(ctx, axis, limit_s, tol, t0)
+        return ctx.session.wait_settled(axis, limit_s, tol, on_progress=(
+            lambda t: progress(min(t, limit_s), limit_s, f"axis {axis} moving")) if show else None)
     finally:
-        if not ctx.args.json:
+        if show:
             sys.stderr.write("\n")
-
-
-def _poll_settled(ctx: Ctx, axis: int, limit_s: float, tol: int, t0: float) -> dict[str, int]:
-    c = ctx.client
-    while True:
-        s = c.status(axis)
-        if s["faults"]:
-            raise ProtocolError(f"axis {axis} faulted during the move: {describe_faults(s['faults'])}")
-        if not s["moving"] and abs(s["setpoint"] - s["position"]) <= tol and abs(s["velocity_q8"]) < 256 * 50:
-            return s
-        if time.monotonic() - t0 > limit_s:
-            return s
-        if not ctx.args.json:
-            progress(min(time.monotonic() - t0, limit_s), limit_s, f"axis {axis} moving")
-        c.heartbeat()
-        time.sleep(KEEPALIVE_S)
 
 
 def cmd_move(ctx: Ctx) -> int:
@@ -321,18 +305,11 @@ def cmd_home(ctx: Ctx) -> int:
     ctx.require_key("HOME")
     c = ctx.client
     c.home(a.axis, a.mode, a.index)
-    t0 = time.monotonic()
-    while a.mode != "here" and time.monotonic() - t0 < a.wait:
-        st = c.status(a.axis)
-        if st["home"] != HOMING or st["faults"]:
-            break
-        c.heartbeat()
-        if not a.json:
-            progress(time.monotonic() - t0, a.wait, f"axis {a.axis} homing")
-        time.sleep(KEEPALIVE_S)
-    if a.mode != "here" and not a.json:
+    show = a.mode != "here" and not a.json
+    st = ctx.session.wait_homing(a.axis, a.wait if a.mode != "here" else 0.0, on_progress=(
+        lambda t: progress(t, a.wait, f"axis {a.axis} homing")) if show else None)
+    if show:
         sys.stderr.write("\n")
-    st = c.status(a.axis)
     obj = {"axis": a.axis, "mode": a.mode, "index": a.index, "home_state": P.HOME_STATE.get(st["home"], "?"),
            "position_counts": st["position"], "faults": decode_faults(st["faults"])}
     ctx.out(obj, f"axis {a.axis}: {obj['home_state']}, position {st['position']} counts; "

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 """What the host tool does with the board beyond one command: a move that
-enables its axis for the move, and a telemetry capture that keeps the link
-watchdog fed.  The host asks the board: a refusal comes back with the rule
+enables its axis for the move, waiting for a move or a homing to end, and a
+telemetry capture, the waits and the capture feeding the link watchdog.  The host asks the board: a refusal comes back with the rule
 that refused it (``CommandRejected.why``, protocol.toml [[refusal]]), so the
 host keeps no copy of the firmware's rules, with one exception: MOVE's rule
 (:func:`move_refusal`) is applied before an axis is enabled for a move, so
@@ -17,10 +17,12 @@ from typing import Callable
 
 from torqueloop.spec import protocol as P
 
-from .client import Client, CommandRejected, ProtocolError
+from .client import Client, CommandRejected, ProtocolError, describe_faults
 
 HOMING, HOMED = (next(k for k, v in P.HOME_STATE.items() if v == s) for s in ("homing", "homed"))
-#: how often a capture sends a HEARTBEAT (the firmware's link watchdog: LINK_TIMEOUT_MS >= 10 ms, default 0.5 s)
+#: at rest: slower than this (counts/s x 256)
+SETTLED_Q8 = 256 * 50
+#: how often a capture or a wait sends a HEARTBEAT (the firmware's link watchdog: LINK_TIMEOUT_MS >= 10 ms, default 0.5 s)
 KEEPALIVE_S = 0.15
 
 
@@ -95,6 +97,40 @@ class Session:
                 c.enable(1 << axis, False)
             raise
         return enabling
+
+    def wait_settled(self, axis: int, limit_s: float, tol: int,
+                     on_progress: Callable[[float], None] | None = None) -> dict[str, int]:
+        """Poll STATUS, feeding the link watchdog, until the axis has stopped
+        within ``tol`` counts of its set-point (or ``limit_s`` seconds have
+        passed); its last STATUS.  A fault during the move is an error."""
+        c, t0 = self.client, time.monotonic()
+        while True:
+            s = c.status(axis)
+            if s["faults"]:
+                raise ProtocolError(f"axis {axis} faulted during the move: {describe_faults(s['faults'])}")
+            if not s["moving"] and abs(s["setpoint"] - s["position"]) <= tol and abs(s["velocity_q8"]) < SETTLED_Q8:
+                return s
+            if time.monotonic() - t0 > limit_s:
+                return s
+            if on_progress:
+                on_progress(time.monotonic() - t0)
+            c.heartbeat()
+            time.sleep(KEEPALIVE_S)
+
+    def wait_homing(self, axis: int, limit_s: float, on_progress: Callable[[float], None] | None = None
+                    ) -> dict[str, int]:
+        """Poll STATUS, feeding the link watchdog, while the axis homes (at
+        most ``limit_s`` seconds); its STATUS afterwards."""
+        c, t0 = self.client, time.monotonic()
+        while time.monotonic() - t0 < limit_s:
+            st = c.status(axis)
+            if st["home"] != HOMING or st["faults"]:
+                break
+            c.heartbeat()
+            if on_progress:
+                on_progress(time.monotonic() - t0)
+            time.sleep(KEEPALIVE_S)
+        return c.status(axis)
 
     def capture(self, duration: float, every: int = 1, on_record: Callable[[dict], None] | None = None,
                 trigger: tuple[float, Callable[[], None]] | None = None,
