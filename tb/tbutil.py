@@ -19,7 +19,7 @@ from pathlib import Path
 
 import cocotb
 from cocotb.clock import Clock
-from cocotb.triggers import FallingEdge
+from cocotb.triggers import FallingEdge, First, RisingEdge
 from cocotb.utils import get_sim_time
 
 from torqueloop.spec import bootproto, regs
@@ -43,7 +43,8 @@ def idle_soc_pins(dut, sw: int = 0) -> None:
     (active low), no e-stop, no bridge fault, encoders still, limit switches
     closed, UART line idle and the peer ready (CTS_N low); switches at ``sw``."""
     drive(dut, sw=sw, key_n=0xF, estop=0, bridge_fault=0, enc_a=0, enc_b=0, enc_z=0, lim_neg=0, lim_pos=0,
-          uart_rx=1, uart_cts_n=0)
+          uart_rx=1, uart_cts_n=0,
+          flash_miso=1)          # no flash answering: the line idles high, as an erased one reads
 
 
 def drive(dut, **values: int) -> None:
@@ -125,6 +126,46 @@ class BusMaster:
     async def write(self, addr: int, wdata: int, be: int = 0xF) -> None:
         _, err, _ = await self.access(addr, we=True, wdata=wdata, be=be)
         assert not err, f"{self.p} write {addr:#010x}: unexpected bus error"
+
+
+class EpcsPins:
+    """The configuration flash on the SoC's FLASH pins: ``torqueloop.sim.epcs.Epcs``
+    (the EPCS command set) behind SPI mode 0 - it samples flash_mosi on each
+    rising flash_dclk and drives flash_miso after each falling one, MSB first;
+    a command is framed by flash_ncs low.  The model's clock is the simulation's."""
+
+    def __init__(self, dut, model) -> None:
+        self.dut, self.m = dut, model
+        dut.flash_miso.value = 1
+        cocotb.start_soon(self._run())
+
+    def _now(self) -> None:
+        self.m.t = get_sim_time("ns") * 1e-9
+
+    async def _run(self) -> None:
+        d = self.dut
+        while True:
+            await FallingEdge(d.flash_ncs)
+            self._now()
+            self.m.select(True)
+            back, n, byte = self.m.peek(), 0, 0
+            d.flash_miso.value = back >> 7 & 1
+            while True:
+                await First(RisingEdge(d.flash_dclk), RisingEdge(d.flash_ncs))
+                if int(d.flash_ncs.value):
+                    break
+                byte, n = (byte << 1) | int(d.flash_mosi.value), n + 1
+                await First(FallingEdge(d.flash_dclk), RisingEdge(d.flash_ncs))
+                if n == 8:
+                    self._now()
+                    self.m.xfer(byte)
+                    back, n, byte = self.m.peek(), 0, 0
+                if int(d.flash_ncs.value):
+                    break
+                d.flash_miso.value = back >> (7 - n) & 1
+            self._now()
+            self.m.select(False)
+            d.flash_miso.value = 1
 
 
 # --- memory images -------------------------------------------------------------------------

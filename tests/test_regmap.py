@@ -22,7 +22,7 @@ def test_generated_files_are_up_to_date():
 
 def test_fixed_memory_map_matches_the_cpu_contract():
     rm = regmap.load()
-    assert rm.region("BOOT_ROM").base == 0x0000_0000 and rm.region("BOOT_ROM").size == 32768
+    assert rm.region("BOOT_ROM").base == 0x0000_0000 and rm.region("BOOT_ROM").size == 65536
     assert rm.region("RAM").base == 0x8000_0000
     assert rm.region("PERIPH").base == 0x4000_0000
     t = rm.block("TIMER")

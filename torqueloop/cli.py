@@ -39,6 +39,7 @@ from torqueloop.host import analysis
 from torqueloop.spec import units
 from torqueloop.spec.pwm import carrier_hz
 from torqueloop.host import config as hconfig
+from torqueloop.host import drive as hdrive
 from torqueloop.host.client import (Client, CommandRejected, LinkClosed, NoAnswer, ProtocolError, decode_faults,
                                     describe_faults, key_missing)
 from torqueloop.host import serve as hserve
@@ -207,17 +208,49 @@ def _status_text(a: int, s: dict[str, int], mech: units.Mechanics, unit: str) ->
             f"faults: {describe_faults(s['faults'])}; link errors seen by the board: {s['rx_errors']}")
 
 
+def _store_text(r: dict[str, int] | None) -> str:
+    """What the board's parameter store says about the running parameters (SAVE op 0)."""
+    if r is None:
+        return "parameters: this firmware cannot store them (RAM only: lost at power-off and upload)"
+    if not r["saved"]:
+        return "parameters: none saved on the board (it starts with the defaults): `torqueloop save` keeps these"
+    if r["differs"]:
+        return (f"parameters: DIFFER from the saved copy {r['seq']} (the board starts with that one): "
+                "`torqueloop save` keeps the running ones")
+    return f"parameters: as saved on the board (copy {r['seq']})"
+
+
+def _store_json(r: dict[str, int] | None) -> dict[str, Any] | None:
+    return None if r is None else {"saved": bool(r["saved"]), "differs": bool(r["differs"]), "seq": r["seq"]}
+
+
 def cmd_status(ctx: Ctx) -> int:
     res = {}
     lines = []
+    report = ctx.client.store_report()
+    store = _store_json(report)
     for a in _axes(ctx.args):
         s = ctx.client.status(a)
         s = {k: v for k, v in s.items() if k != "status"}
         s["fault_names"] = decode_faults(s["faults"])
         s["home_state"] = P.HOME_STATE.get(s["home"], "?")
+        s["saved_parameters"] = store
         res[a] = s
         lines.append(_status_text(a, s, ctx.mech(a), ctx.args.unit))
+    lines.append(_store_text(report))
     ctx.out(res, "\n".join(lines))
+    return 0
+
+
+def cmd_save(ctx: Ctx) -> int:
+    ctx.require_key("SAVE", op=1)
+    c = ctx.client
+    on = [a for a in range(P.AXIS_COUNT) if c.status(a)["enabled"]]
+    if on:
+        raise ProtocolError(f"axes {on} are enabled: the board stores its parameters only with every axis "
+                            "disabled (a save stalls the link for the flash's erase): `torqueloop disable --all`")
+    r = c.save()
+    ctx.out(_store_json(r), f"saved: the board starts with these parameters from now on (copy {r['seq']})")
     return 0
 
 
@@ -421,6 +454,92 @@ def cmd_home(ctx: Ctx) -> int:
     if a.hold:
         return _hold(ctx, a.axis)
     return 0
+
+
+def cmd_drive(ctx: Ctx) -> int:
+    a = ctx.args
+    percent = hdrive.parse_duty(a.duty)        # refused before the link is opened
+    steps = hdrive.steps_for(percent)
+    ctx.require_key("DRIVE")
+    c = ctx.client
+    clk = (c.identity or {}).get("clk_hz", units.CLK_HZ)
+    fdiv_before = c.get_param("FDIV", a.axis)
+    fdiv = fdiv_before
+    if a.pwm_freq is not None:
+        fdiv = units.to_raw("pwm_freq", str(a.pwm_freq), clk)[1]   # the board refuses a carrier above PWM_MAX_HZ
+    hdrive.check_ready(c, a.axis, steps)
+    if fdiv != fdiv_before:
+        c.set_param("FDIV", fdiv, a.axis)
+    pw0, pwmax = c.get_param("PW0", a.axis), c.get_param("PWMAX", a.axis)
+    mech = ctx.mech(a.axis)
+    carrier = carrier_hz(fdiv, clk)
+    if not a.json:
+        print(f"axis {a.axis}: open-loop {percent:+g}% = {steps} steps (bridge duty "
+              f"{hdrive.pin_duty(steps, pw0, pwmax):.1f}% with PW0 {pw0}, PWMAX {pwmax}) at {carrier:.1f} Hz "
+              f"for {a.seconds:g} s; Ctrl-C stops", file=sys.stderr)
+
+    def show(smp: dict) -> None:
+        if not a.json:
+            print(f"t {smp['t_s']:6.2f} s  count {smp['position']:9d}  speed {smp['velocity_cps']:9.1f} counts/s "
+                  f"({mech.from_counts(round(smp['velocity_cps']), 'rev'):+.3f} rev/s)  pwm {smp['pwm_cmd']:5d}",
+                  flush=True)
+
+    try:
+        r = hdrive.drive(c, a.axis, steps, a.seconds, on_sample=show)
+    finally:
+        if fdiv != fdiv_before:
+            c.set_param("FDIV", fdiv_before, a.axis)
+    sign = (r.moved > 0) - (r.moved < 0)
+    obj = {"axis": a.axis, "duty_percent": percent, "duty_steps": steps, "pwm_freq_hz": round(carrier, 3),
+           "start_counts": r.start_counts, "end_counts": r.end_counts, "moved_counts": r.moved,
+           "sign_matches": sign == ((steps > 0) - (steps < 0)), "seconds": round(r.seconds, 3),
+           "interrupted": r.interrupted, "faults": decode_faults(r.faults), "samples": r.samples}
+    verdict = ("no motion: the duty may be inside the dead zone (raise it), or the encoder is not counting"
+               if sign == 0 else ("the encoder counts the same way as the duty" if obj["sign_matches"] else
+                                  "the encoder counts AGAINST the duty: swap its A/B wires (or the motor's) "
+                                  "before closing the loop"))
+    ctx.out(obj, f"axis {a.axis} disabled{' (Ctrl-C)' if r.interrupted else ''}: moved {r.moved:+d} counts "
+                 f"({mech.from_counts(r.moved, 'mm'):+.3f} mm) in {r.seconds:.1f} s; {verdict}"
+                 + (f"; FAULT {describe_faults(r.faults)}" if r.faults else ""))
+    return 1 if r.faults else 0
+
+
+def cmd_char_sweep(ctx: Ctx) -> int:
+    from torqueloop.host import sweep
+
+    a = ctx.args
+    try:
+        carriers = [float(x) for x in a.carriers.split(",")] if a.carriers else []
+    except ValueError:
+        raise BadValue(f"--carriers {a.carriers!r}: give Hz, comma-separated (450,200)") from None
+    if any(not 0 < f < 1e7 for f in carriers):
+        raise BadValue(f"--carriers {a.carriers}: every carrier must be above 0 Hz")
+    ctx.require_key("DRIVE")
+    c = ctx.client
+    clk = (c.identity or {}).get("clk_hz", units.CLK_HZ)
+    if not carriers:
+        carriers = [carrier_hz(c.get_param("FDIV", a.axis), clk)]
+
+    def show(r: "sweep.Ramp") -> None:
+        if a.json:
+            return
+        sign = "+" if r.direction > 0 else "-"
+        moves = f"moves from {r.breakaway_percent:g}%" if r.breakaway_percent is not None else \
+            f"does not move up to {a.max:g}%"
+        stops = f", stops at {r.stop_percent:g}%" if r.stop_percent is not None else ""
+        print(f"{r.carrier_hz:9.1f} Hz  {sign}: {moves}{stops}" + (f"  FAULT {r.fault}" if r.fault else ""),
+              flush=True)
+
+    ramps = sweep.sweep(c, a.axis, carriers, clk, log=show, start=a.start, step=a.step, stop_at=a.max,
+                        hold_s=a.hold, move_counts=a.move_counts)
+    rows = sweep.as_rows(ramps)
+    if a.out:
+        out = Path(a.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps({"axis": a.axis, "ramps": rows}, indent=1) + "\n")
+    ctx.out({"axis": a.axis, "ramps": rows}, f"axis {a.axis}: {len(ramps)} ramps"
+            + (f"; written to {a.out}" if a.out else ""))
+    return 1 if any(r.fault for r in ramps) else 0
 
 
 def cmd_stop(ctx: Ctx) -> int:
@@ -647,14 +766,23 @@ def cmd_upload(ctx: Ctx) -> int:
     from torqueloop.host import upload
 
     image = upload.load_image(ctx.args.file, raw_ok=ctx.args.raw)   # before the link is opened
+    before = ctx.client.store_report()
+    if not ctx.args.json and (before is None or before["differs"]):
+        print("note: the running parameters are not saved on the board; the new firmware starts with "
+              + ("the saved copy" if before and before["saved"] else "its defaults")
+              + " (`torqueloop config save FILE` or `torqueloop save` first to keep them)", file=sys.stderr)
     show = None if ctx.args.json else (lambda done, total: progress(done, total, "upload"))
     r = upload.run_upload(direct_client(ctx, "upload"), image, show, window_s=ctx.args.window)
     obj = {"ok": r.ok, "message": r.message, "bytes": r.bytes, "crc32": f"0x{r.crc32:08x}",
            "old_build_id": f"0x{r.old_build_id:08x}",
            "new_build_id": None if r.new_build_id is None else f"0x{r.new_build_id:08x}",
            "bootloader_replies": r.replies, "seconds": round(r.seconds, 3)}
+    after = ctx.client.store_report() if r.new_build_id is not None else None
+    obj["saved_parameters_before"] = _store_json(before)
+    obj["saved_parameters"] = _store_json(after)
     ctx.out(obj, lambda: (f"upload {'done' if r.ok else 'REFUSED'}: {r.message} ({r.seconds:.1f} s)\n"
-                          f"build id 0x{r.old_build_id:08x} -> {obj['new_build_id']}"))
+                          f"build id 0x{r.old_build_id:08x} -> {obj['new_build_id']}"
+                          + (f"\n{_store_text(after)}" if r.new_build_id is not None else "")))
     return 0 if r.ok else 1
 
 
@@ -710,10 +838,15 @@ def cmd_sim(ctx: Ctx) -> int:
         board: Any = RtlBoard(seed=a.seed, plant=plant, key=key)
         what = f"RTL board image (Verilator) + plant model, far below real time, {keyed}"
     else:
-        board = SimBoard(build_id=a.build_id, seed=a.seed, plant=plant, key=key)
+        from torqueloop.sim.epcs import Epcs
+        from torqueloop.sim.simboard import FLASH_ERASE_S, FLASH_PROGRAM_S
+
+        flash = Epcs(a.flash, program_s=FLASH_PROGRAM_S, erase_s=FLASH_ERASE_S) if a.flash else None
+        board = SimBoard(build_id=a.build_id, seed=a.seed, plant=plant, key=key, flash=flash)
         if a.switches is not None:
             board.limit_counts = [(-a.switches, a.switches)] * P.AXIS_COUNT
-        what = f"servo firmware + plant model, build id 0x{board.build_id:08x}, {keyed}"
+        what = (f"servo firmware + plant model, build id 0x{board.build_id:08x}, {keyed}, "
+                f"configuration flash {a.flash or 'in memory'}")
     srv = BoardServer(board, a.host, a.port, speed=a.speed, hello=a.hello)
     print(f"simulated board on socket://{a.host}:{srv.port} ({what}); Ctrl-C stops it", flush=True)
     try:
@@ -754,6 +887,30 @@ def cmd_serve(ctx: Ctx) -> int:
     return 0
 
 
+def _sweep_parser() -> argparse.ArgumentParser:
+    """``torqueloop characterize sweep``: the board as the characterisation's
+    PWM source (the rest of ``characterize`` is the method's own command)."""
+    cs = _Parser(prog="torqueloop characterize sweep",
+                 description="encoder-only dead zone: the breakaway and stop duty per direction at each carrier "
+                             "(raise the duty until it moves, lower it until it stops)")
+    cs.add_argument("--axis", "-a", type=int, choices=range(P.AXIS_COUNT), default=0, help="axis [0]")
+                                       "at each carrier (raise the duty until it moves, lower it until it stops)")
+    cs.add_argument("--carriers", metavar="HZ,HZ", default=None,
+                    help="PWM carriers, comma-separated (each the nearest the divider makes) [the axis's own]")
+    cs.add_argument("--start", type=_bounded(float, 0, 100, "--start"), default=1.0, metavar="%",
+                    help="first duty of each ramp, percent [1]")
+    cs.add_argument("--step", type=_bounded(float, 0.05, 50, "--step"), default=0.5, metavar="%",
+                    help="duty step, percent [0.5]")
+    cs.add_argument("--max", type=_bounded(float, 0.1, 100, "--max"), default=30.0, metavar="%",
+                    help="highest duty tried, percent (at most CMD_LIMIT) [30]")
+    cs.add_argument("--hold", type=_bounded(float, 0.05, 60, "--hold"), default=0.3, metavar="S",
+                    help="seconds at each duty (keep it under STALL_MS above STALL_CMD) [0.3]")
+    cs.add_argument("--move-counts", type=_bounded(int, 1, 1_000_000, "--move-counts"), default=3, metavar="N",
+                    help="counts in the duty's direction during a hold that mean 'it moves' [3]")
+    cs.add_argument("--out", metavar="FILE", default=None, help="write the ramps as JSON")
+    return cs
+
+
 def cmd_characterize(ctx: Ctx) -> int:
     """``torqueloop characterize ...``: the characterisation method's own command
     (torqueloop/characterize/command.py; docs/characterization.md), which a
@@ -761,6 +918,10 @@ def cmd_characterize(ctx: Ctx) -> int:
     from torqueloop.characterize import command
 
     rest = list(ctx.args.rest)
+    if rest[:1] == ["sweep"]:
+        for k, v in vars(_sweep_parser().parse_args(rest[1:])).items():
+            setattr(ctx.args, k, v)
+        return cmd_char_sweep(ctx)
     try:
         return command.main(rest)
     except ImportError as e:   # `characterize sim` in a host-only install
@@ -921,6 +1082,19 @@ def parser() -> argparse.ArgumentParser:
                     help="afterwards keep the axis enabled, sending heartbeats, until Ctrl-C (then disable)")
     axis_opts(sp, False)
     sp.set_defaults(fn=cmd_home)
+    sp = sub.add_parser("drive", help="open-loop drive at a fixed duty (5%%, -5%%): enables the axis, prints "
+                                      "the encoder count and speed (the sign check), disables it at the end")
+    sp.add_argument("duty", help="signed duty in percent of the full command, e.g. 5%% or -5%% (at most CMD_LIMIT)")
+    axis_opts(sp, False)
+    sp.add_argument("--pwm-freq", type=_bounded(float, 1, 1e7, "--pwm-freq"), default=None, metavar="HZ",
+                    help="PWM carrier for this drive (the nearest the divider makes; restored afterwards)")
+    sp.add_argument("--for", dest="seconds", type=_bounded(float, 0.1, 3600, "--for"), default=2.0, metavar="S",
+                    help="seconds to drive [2]")
+    sp._negative_number_matcher = re.compile(r"^-\d*\.?\d+%?$")   # `drive -5%`: a duty, not an option
+    sp.set_defaults(fn=cmd_drive)
+    sp = sub.add_parser("save", help="store the running parameters on the board (its configuration flash): "
+                                     "it starts with them after a power cycle, reset or upload")
+    sp.set_defaults(fn=cmd_save)
     sp = sub.add_parser("stop", help="hold the present position")
     axis_opts(sp)
     sp.set_defaults(fn=cmd_stop)
@@ -1005,6 +1179,9 @@ def parser() -> argparse.ArgumentParser:
                          "[400000, about +-190 mm: homing at the default HOME_VEL takes minutes]")
     sp.add_argument("--rtl", action="store_true",
                     help="serve the RTL co-simulation (torqueloop/cosim) instead of the firmware-in-the-loop board")
+    sp.add_argument("--flash", metavar="FILE", default=None,
+                    help="keep the board's configuration flash (its saved parameters) in FILE, so a new `sim` "
+                         "on the same FILE is the board after a power cycle [in memory]")
     sp.set_defaults(fn=cmd_sim)
     sp = sub.add_parser("serve", help="hold the board's link and session for several clients at once "
                                       "(monitor in one terminal, move in another)")
@@ -1015,7 +1192,8 @@ def parser() -> argparse.ArgumentParser:
     sp.set_defaults(fn=cmd_serve)
     sp = sub.add_parser("characterize", add_help=False,
                         help="the paper's characterisation method on your sweeps: run, step5, check, show, "
-                             "export (and sim, with the simulation stack); `characterize -h`")
+                             "export (and sim, with the simulation stack); `characterize sweep`: the board as "
+                             "the PWM source; `characterize -h`")
     sp.add_argument("rest", nargs=argparse.REMAINDER)
     sp.set_defaults(fn=cmd_characterize)
     sp = sub.add_parser("shell", help="interactive session: the commands above, history, completion, "

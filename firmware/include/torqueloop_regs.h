@@ -14,7 +14,7 @@
 #define TL_CLK_HZ 50000000u
 
 #define TL_BOOT_ROM_BASE 0x00000000u
-#define TL_BOOT_ROM_SIZE 0x00008000u
+#define TL_BOOT_ROM_SIZE 0x00010000u
 #define TL_PERIPH_BASE 0x40000000u
 #define TL_PERIPH_SIZE 0x00008000u
 #define TL_RAM_BASE 0x80000000u
@@ -229,6 +229,18 @@
 #define TL_SYS_WDOG_ARM_ADDR 0x40006020u
 #define TL_SYS_WDOG_ARM TL_REG32(TL_SYS_WDOG_ARM_ADDR)
 #define TL_SYS_WDOG_ARM_RESET 0x00000000u
+
+/* FLASH: Serial port of the configuration flash (the DE0-CV's EPCS64, through the Cyclone V's ASMI block on the board; docs/soc.md, 'Configuration flash'): chip select and one byte at a time each way, MSB first, SPI mode 0 (DCLK idle low, both sides sample on its rising edge), DCLK = the system clock / 4 (12.5 MHz, under the EPCS's 20 MHz READ limit). */
+#define TL_FLASH_BASE 0x40007000u
+#define TL_FLASH_CTRL_ADDR 0x40007000u
+#define TL_FLASH_CTRL TL_REG32(TL_FLASH_CTRL_ADDR)
+#define TL_FLASH_CTRL_RESET 0x00000000u
+#define TL_FLASH_TX_ADDR 0x40007004u
+#define TL_FLASH_TX TL_REG32(TL_FLASH_TX_ADDR)
+#define TL_FLASH_TX_RESET 0x00000000u
+#define TL_FLASH_RX_ADDR 0x40007008u
+#define TL_FLASH_RX TL_REG32(TL_FLASH_RX_ADDR)
+#define TL_FLASH_RX_RESET 0x00000000u
 
 /* TIMER register offsets in the page (index several instances: base + _OFS) and fields */
 #define TL_TIMER_MTIME_LO_OFS 0x000u
@@ -482,5 +494,18 @@
 #define TL_SYS_WDOG_ARM_KEY_POS 0u
 #define TL_SYS_WDOG_ARM_KEY_MSK 0xFFFFFFFFu
 #define TL_SYS_WDOG_ARM_KEY_ARM_KEY 0x41524D21u
+
+/* FLASH register offsets in the page (index several instances: base + _OFS) and fields */
+#define TL_FLASH_CTRL_OFS 0x000u
+#define TL_FLASH_CTRL_CS_POS 0u
+#define TL_FLASH_CTRL_CS_MSK 0x00000001u
+#define TL_FLASH_TX_OFS 0x004u
+#define TL_FLASH_TX_DATA_POS 0u
+#define TL_FLASH_TX_DATA_MSK 0x000000FFu
+#define TL_FLASH_RX_OFS 0x008u
+#define TL_FLASH_RX_DATA_POS 0u
+#define TL_FLASH_RX_DATA_MSK 0x000000FFu
+#define TL_FLASH_RX_BUSY_POS 8u
+#define TL_FLASH_RX_BUSY_MSK 0x00000100u
 
 #endif /* TORQUELOOP_REGS_H */

@@ -34,6 +34,7 @@
 #define TLP_ST_AUTH 12u
 #define TLP_ST_NO_SESSION 13u
 #define TLP_ST_NO_KEY 14u
+#define TLP_ST_STORE 15u
 /* the rule that refused a command: byte TLP_REPLY_WHY of its error reply */
 #define TLP_REPLY_WHY 1u
 #define TLP_WHY_NONE 0u
@@ -62,6 +63,8 @@
 #define TLP_WHY_AXES_ENABLED 23u
 #define TLP_WHY_HAS_SWITCHES 24u
 #define TLP_WHY_HOME_POS_FROZEN 25u
+#define TLP_WHY_CMD_LIMIT 26u
+#define TLP_WHY_ENABLED 27u
 /* the status a rule comes with (a constant rule folds to a constant) */
 static inline uint8_t tlp_why_status(uint8_t why)
 {
@@ -91,6 +94,8 @@ static inline uint8_t tlp_why_status(uint8_t why)
     case TLP_WHY_AXES_ENABLED: return TLP_ST_STATE;
     case TLP_WHY_HAS_SWITCHES: return TLP_ST_STATE;
     case TLP_WHY_HOME_POS_FROZEN: return TLP_ST_LOOSEN;
+    case TLP_WHY_CMD_LIMIT: return TLP_ST_RANGE;
+    case TLP_WHY_ENABLED: return TLP_ST_STATE;
     default: return TLP_ST_OK;
     }
 }
@@ -150,13 +155,19 @@ static inline uint8_t tlp_why_status(uint8_t why)
 #define TLP_CMD_SESSION 0x0Eu
 #define TLP_CMD_SESSION_REQ_LEN 16u
 #define TLP_CMD_SESSION_REP_LEN 33u
+#define TLP_CMD_DRIVE 0x0Fu
+#define TLP_CMD_DRIVE_REQ_LEN 3u
+#define TLP_CMD_DRIVE_REP_LEN 1u
+#define TLP_CMD_SAVE 0x10u
+#define TLP_CMD_SAVE_REQ_LEN 1u
+#define TLP_CMD_SAVE_REP_LEN 7u
 /* Command descriptor flags (protocol.toml's command columns). */
 #define TLP_CF_SEQ_CHECKED 0x01u
 #define TLP_CF_READ_ONLY 0x02u
 #define TLP_CF_REPEATABLE 0x04u
 #define TLP_CF_UNTAGGED 0x08u
 #define TLP_CF_FEEDS_LINK 0x10u
-#define TLP_CMD_LIMIT 15u   /* command codes are below this */
+#define TLP_CMD_LIMIT 17u   /* command codes are below this */
 /* X(code, handler, req_len, rep_len, flags): one row per command; needing the key
    depends on the payload (open_when): tlp_needs_key() */
 #define TLP_COMMAND_TABLE(X) \
@@ -173,7 +184,9 @@ static inline uint8_t tlp_why_status(uint8_t why)
     X(TLP_CMD_COUNTERS, cmd_counters, TLP_CMD_COUNTERS_REQ_LEN, TLP_CMD_COUNTERS_REP_LEN, TLP_CF_SEQ_CHECKED | TLP_CF_READ_ONLY | TLP_CF_REPEATABLE | TLP_CF_UNTAGGED) \
     X(TLP_CMD_HEARTBEAT, cmd_heartbeat, TLP_CMD_HEARTBEAT_REQ_LEN, TLP_CMD_HEARTBEAT_REP_LEN, TLP_CF_SEQ_CHECKED | TLP_CF_REPEATABLE | TLP_CF_FEEDS_LINK) \
     X(TLP_CMD_HOME, cmd_home, TLP_CMD_HOME_REQ_LEN, TLP_CMD_HOME_REP_LEN, TLP_CF_SEQ_CHECKED | TLP_CF_FEEDS_LINK) \
-    X(TLP_CMD_SESSION, cmd_session, TLP_CMD_SESSION_REQ_LEN, TLP_CMD_SESSION_REP_LEN, TLP_CF_UNTAGGED)
+    X(TLP_CMD_SESSION, cmd_session, TLP_CMD_SESSION_REQ_LEN, TLP_CMD_SESSION_REP_LEN, TLP_CF_UNTAGGED) \
+    X(TLP_CMD_DRIVE, cmd_drive, TLP_CMD_DRIVE_REQ_LEN, TLP_CMD_DRIVE_REP_LEN, TLP_CF_SEQ_CHECKED | TLP_CF_FEEDS_LINK) \
+    X(TLP_CMD_SAVE, cmd_save, TLP_CMD_SAVE_REQ_LEN, TLP_CMD_SAVE_REP_LEN, TLP_CF_SEQ_CHECKED)
 
 #define TLP_MOVE_TRAPEZOID 0x01u
 #define TLP_MOVE_UNHOMED 0x80u
@@ -255,6 +268,14 @@ static inline uint8_t tlp_why_status(uint8_t why)
 #define TLP_SESSION_REP_STATUS 0u
 #define TLP_SESSION_REP_BOARD_NONCE 1u
 #define TLP_SESSION_REP_PROOF 17u
+#define TLP_DRIVE_REQ_AXIS 0u
+#define TLP_DRIVE_REQ_DUTY 1u
+#define TLP_DRIVE_REP_STATUS 0u
+#define TLP_SAVE_REQ_OP 0u
+#define TLP_SAVE_REP_STATUS 0u
+#define TLP_SAVE_REP_SAVED 1u
+#define TLP_SAVE_REP_DIFFERS 2u
+#define TLP_SAVE_REP_SEQ 3u
 #define TLP_TELEM_TIME_US 0u
 #define TLP_TELEM_HEAD_LEN 4u
 #define TLP_TELEM_AX_SETPOINT 0u
@@ -294,9 +315,28 @@ static inline int tlp_needs_key(uint8_t cmd, const uint8_t *payload)
     case TLP_CMD_BOOTLOADER: return 1;
     case TLP_CMD_HEARTBEAT: return 1;
     case TLP_CMD_HOME: return 1;
+    case TLP_CMD_DRIVE: return 1;
+    case TLP_CMD_SAVE: return !(payload[TLP_SAVE_REQ_OP] == 0u);
     default: return 0;   /* open, or unknown (answered UNKNOWN_CMD) */
     }
 }
+
+/* Parameter store ([store] of protocol.toml; docs/firmware.md). */
+#define TLP_STORE_MAGIC 0x54534C54u
+#define TLP_STORE_SLOT_A 0x7E0000u
+#define TLP_STORE_SLOT_B 0x7F0000u
+#define TLP_STORE_FLASH_BYTES 0x800000u
+#define TLP_STORE_SECTOR_BYTES 0x10000u
+#define TLP_STORE_PAGE_BYTES 0x100u
+#define TLP_STORE_OP_READ 0x3u
+#define TLP_STORE_OP_WRITE_ENABLE 0x6u
+#define TLP_STORE_OP_READ_STATUS 0x5u
+#define TLP_STORE_OP_PAGE_PROGRAM 0x2u
+#define TLP_STORE_OP_SECTOR_ERASE 0xD8u
+#define TLP_STORE_STATUS_WIP 0x1u
+#define TLP_STORE_STATUS_WEL 0x2u
+#define TLP_STORE_PAGE_PROGRAM_US 0x1388u
+#define TLP_STORE_SECTOR_ERASE_US 0x2DC6C0u
 
 #define TLP_GLOBAL_AXIS 0xFFu
 #define TLP_P_LAW 0u
@@ -340,6 +380,7 @@ static inline int tlp_needs_key(uint8_t cmd, const uint8_t *payload)
    enabled the value may only rise / fall (a safety limit), 0 = free */
 typedef struct { uint8_t id; uint8_t global; int8_t tighten; int32_t min; int32_t max; int32_t dflt[TLP_AXIS_COUNT]; } tlp_param_info_t;
 #define TLP_PARAM_COUNT 35u
+#define TLP_PARAM_LAYOUT 0x797CC59Fu   /* the stored record's layout word ([store]) */
 static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {
     {0u, 0u, 0, 0L, 3L, {1L, 1L}},  /* LAW */
     {1u, 0u, 0, 0L, 2147483647L, {17134L, 23145L}},  /* KP_Q16 */

@@ -10,6 +10,7 @@
  *  - only commands that show the host in control (TLP_CF_FEEDS_LINK), executed
  *    with a verified MAC, feed the link watchdog. */
 #include "servo_internal.h"
+#include "store.h"
 
 /* A handler: q the request payload, rep the reply payload (rep[0], the status,
  * is written by dispatch); returns the status.  On TLP_ST_OK the reply is the
@@ -113,6 +114,7 @@ static uint8_t cmd_move(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *
     if (!(mode & TLP_MOVE_TRAPEZOID) && (d > pv(a, TLP_P_FOLLOW_LIMIT) || -d > pv(a, TLP_P_FOLLOW_LIMIT)))
         return refuse(why, TLP_WHY_FOLLOW);   /* the following error would trip at once */
     hal_irq_off();
+    a->drive = false;
     tl_ctl_move(&a->c, target, (mode & TLP_MOVE_TRAPEZOID) != 0u);
     hal_irq_on();
     return TLP_ST_OK;
@@ -130,6 +132,7 @@ TL_FOR_SIZE static uint8_t cmd_stop(tl_servo_t *s, const uint8_t *q, uint8_t *re
         if (m & (1u << i)) {
             if (s->ax[i].home == TLP_HOME_STATE_HOMING)
                 s->ax[i].home = TLP_HOME_STATE_NOT_HOMED;
+            s->ax[i].drive = false;
             tl_ctl_hold(&s->ax[i].c, s->ax[i].pos);
         }
     hal_irq_on();
@@ -214,6 +217,17 @@ TL_FOR_SIZE static uint8_t cmd_home(tl_servo_t *s, const uint8_t *q, uint8_t *re
 {
     (void)rep;
     return tl_home_start(s, q[TLP_HOME_REQ_AXIS], q[TLP_HOME_REQ_MODE], q[TLP_HOME_REQ_INDEX], why);
+}
+
+TL_FOR_SIZE static uint8_t cmd_drive(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
+{
+    (void)rep;
+    return tl_drive_start(s, q[TLP_DRIVE_REQ_AXIS], (int16_t)tl_get_u16(&q[TLP_DRIVE_REQ_DUTY]), why);
+}
+
+TL_FOR_SIZE static uint8_t cmd_save(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)
+{
+    return tl_store_command(s, q[TLP_SAVE_REQ_OP], rep, why);
 }
 
 TL_FOR_SIZE static uint8_t cmd_session(tl_servo_t *s, const uint8_t *q, uint8_t *rep, uint8_t *why)

@@ -48,6 +48,10 @@ uint32_t hal_cycles(void);
 void hal_set_baud_div(uint32_t div);
 void hal_irq_off(void);
 void hal_irq_on(void);
+/* The configuration flash's serial port (the SoC's FLASH page, the ASMI block on
+ * the DE0-CV): chip select, and one byte out and one in, MSB first (SPI mode 0). */
+void hal_flash_select(bool on);
+uint8_t hal_flash_xfer(uint8_t out);
 
 /* The control iteration's accessors: inline on the SoC (hal_soc_inline.h; the iteration
  * reads the decoder with hal_enc_read_inline, every other caller with the function),

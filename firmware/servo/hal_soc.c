@@ -80,3 +80,14 @@ uint32_t hal_clk_hz(void) { return TL_SYS_CLK_HZ; }
 void hal_set_baud_div(uint32_t div) { TL_UART_BAUD_DIV = div & TL_UART_BAUD_DIV_DIV_MSK; }
 void hal_irq_off(void) { __asm__ volatile("csrc mstatus, %0" : : "r"(1u << 3) : "memory"); }
 void hal_irq_on(void) { __asm__ volatile("csrs mstatus, %0" : : "r"(1u << 3) : "memory"); }
+
+/* The FLASH page (regmap.toml): chip select, and a byte clocked out and in. */
+void hal_flash_select(bool on) { TL_FLASH_CTRL = on ? TL_FLASH_CTRL_CS_MSK : 0u; }
+uint8_t hal_flash_xfer(uint8_t out)
+{
+    TL_FLASH_TX = out;
+    uint32_t rx;
+    while ((rx = TL_FLASH_RX) & TL_FLASH_RX_BUSY_MSK) {
+    }
+    return (uint8_t)(rx & TL_FLASH_RX_DATA_MSK);
+}

@@ -107,6 +107,7 @@ uint8_t tl_home_start(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index, 
         hal_irq_on();
         return TLP_ST_OK;
     }
+    a->drive = false;
     a->home = TLP_HOME_STATE_HOMING;
     a->home_phase = HOME_SEEK;
     a->home_dir = mode == TLP_HOME_MODE_NEG ? -1 : 1;

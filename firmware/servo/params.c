@@ -9,6 +9,11 @@
 #define GAIN_PHYS_MAX 100000000
 
 int tl_param_index(uint8_t id) { return TLP_PARAM_INDEX[id]; }
+void tl_param_range(uint32_t k, int32_t *lo, int32_t *hi)
+{
+    *lo = TLP_PARAM_INFO[k].min;
+    *hi = TLP_PARAM_INFO[k].max;
+}
 
 /* Every parameter's default.  The per-axis ones come from the protocol definition,
  * which takes them from torqueloop/spec/system.toml: the paper's Table 1 P gains,

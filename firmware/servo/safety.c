@@ -20,6 +20,7 @@ void tl_axis_disable(tl_servo_t *s, uint32_t i)
     hal_pwm_cmd(i, 0);
     a->enabled = false;
     a->cmd = 0;
+    a->drive = false;
     if (a->home == TLP_HOME_STATE_HOMING)
         a->home = TLP_HOME_STATE_NOT_HOMED;
     tl_ctl_hold(&a->c, a->pos);

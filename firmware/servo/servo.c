@@ -7,6 +7,7 @@
  * commands commands.c. */
 #include "control_step.h"
 #include "safety.h"
+#include "store.h"
 
 TL_FOR_SIZE void tl_servo_init(tl_servo_t *s)
 {
@@ -40,8 +41,11 @@ TL_FOR_SIZE void tl_servo_init(tl_servo_t *s)
         a->home = TLP_HOME_STATE_NOT_HOMED;
         a->stall_dir = 0;
         enc_check_reset(a);
+        a->drive = false;
+        a->drive_duty = 0;
         tl_ctl_reset(&a->c, e.pos, e.now);
     }
+    tl_store_load(s);   /* the saved parameters over the defaults (store.c) */
     tl_params_sync(s);
     for (uint32_t i = 0; i < TL_AXES; i++)
         tl_axis_disable(s, i);
@@ -60,6 +64,8 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
     tl_enc_sample_t e;
     hal_enc_read_inline(i, &e);
     a->pos = wrap_add(e.pos, a->offset);
+    if (a->drive)
+        tl_ctl_hold(&a->c, a->pos);   /* open loop: the set-point follows, no following error */
     uint8_t out = 0;
     uint16_t f = axis_checks(a, i, &e, t, &out);
     if (f) {
@@ -77,6 +83,8 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
     if (__builtin_expect(homing, 0))   /* homing.c, a call: keep the path of an axis under control straight */
         tl_home_tick(a, i, e.now);
     int32_t cmd = tl_ctl_step_inline(&a->c, &a->ctl, a->pos, e.edge_time, e.now, e.interval, a->enabled);
+    if (a->drive)
+        cmd = a->drive_duty;
     if (!a->enabled) {
         cmd = 0;
     } else {

@@ -52,6 +52,8 @@ typedef struct {
     int64_t enc_vlo_q8;           /* lower bound of the speed in enc_dir, counts/s q8 */
     int64_t enc_exp_q24;          /* counts the encoder is behind that speed's distance, q24 */
     tl_enc_cfg_t enc;             /* derived */
+    bool drive;                   /* open-loop drive (DRIVE, openloop.c): the command is drive_duty */
+    int16_t drive_duty;           /* signed PWM steps, |duty| <= CMD_LIMIT */
 } tl_axis_t;
 
 typedef struct {
@@ -90,5 +92,10 @@ void tl_servo_rx_byte(tl_servo_t *s, uint8_t byte, tl_tx_fn tx);
 void tl_servo_telemetry(const tl_servo_t *s, uint8_t *payload);
 uint32_t tl_servo_period_cycles(const tl_servo_t *s);
 int tl_param_index(uint8_t id);
+/* The range [min, max] of the parameter at index k of TLP_PARAM_INFO (servo.c holds the table). */
+void tl_param_range(uint32_t k, int32_t *lo, int32_t *hi);
+/* DRIVE (openloop.c): put an enabled axis under the open-loop command duty; a TLP_ST_* status,
+ * the refusal's rule (TLP_WHY_*) in *why. */
+uint8_t tl_drive_start(tl_servo_t *s, uint8_t axis, int32_t duty, uint8_t *why);
 
 #endif

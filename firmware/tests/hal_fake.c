@@ -87,3 +87,11 @@ void hal_fake_set_key(const uint8_t key[TLP_AUTH_KEY_BYTES])
 void hal_set_baud_div(uint32_t div) { hal_fake.baud_div = div; }
 void hal_irq_off(void) { hal_fake.irq_depth++; }
 void hal_irq_on(void) { hal_fake.irq_depth--; }
+/* No configuration flash on the fake board: reads float high (erased, no stored
+ * parameters) and a write never sets the enable latch (SAVE answers STORE). */
+void hal_flash_select(bool on) { (void)on; }
+uint8_t hal_flash_xfer(uint8_t out)
+{
+    (void)out;
+    return 0xFFu;
+}

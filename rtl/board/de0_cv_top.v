@@ -96,6 +96,10 @@ module de0_cv_top #(
     wire [AXES-1:0] soc_rpwm, soc_lpwm, soc_r_en, soc_l_en;
     /* verilator lint_off UNUSEDSIGNAL */
     wire [AXES-1:0] soc_pwm, soc_dir;   // PWM+DIR mode: no IBT-2 input for it
+    // The configuration flash's port: its way to the EPCS64 is the Cyclone V's ASMI
+    // block (cyclonev_asmiblock), not built yet (docs/soc.md, "Configuration flash"):
+    // the SoC reads an idle-high line, as an erased flash, and stores nothing.
+    wire            flash_dclk, flash_ncs, flash_mosi;
     /* verilator lint_on UNUSEDSIGNAL */
 
     tl_soc #(
@@ -131,7 +135,11 @@ module de0_cv_top #(
         .estop(~KEY[0]),
         .lim_neg(lim_neg_pin),
         .lim_pos(lim_pos_pin),
-        .wdog_alive(wdog_alive)
+        .wdog_alive(wdog_alive),
+        .flash_dclk(flash_dclk),
+        .flash_ncs(flash_ncs),
+        .flash_mosi(flash_mosi),
+        .flash_miso(1'b1)
     );
 
     // ---- board-level drive interlock ----

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // tl_soc: the torqueloop system on chip - the RV32IM CPU (rtl/cpu) on the
 // fabric of rtl/soc/tl_soc_fabric.v (interconnect, boot ROM, RAM, machine
-// timer, interrupt controller, GPIO, UART, two motor axes, safety latch).
+// timer, interrupt controller, GPIO, UART, two motor axes, safety latch,
+// the configuration flash's serial port).
 //
 // This is the paper's "own FPGA-based programmable microprocessor"
 // (sections I, V.A) with its frequency, PWM and decoder blocks as
@@ -57,7 +58,11 @@ module tl_soc #(
     input  wire        estop,
     input  wire [1:0]  lim_neg,        // limit switches, asynchronous, 1 = open (tripped), per axis
     input  wire [1:0]  lim_pos,
-    output wire        wdog_alive      // hardware watchdog armed and not expired (to the drive interlock)
+    output wire        wdog_alive,     // hardware watchdog armed and not expired (to the drive interlock)
+    output wire        flash_dclk,     // configuration flash, SPI mode 0 (FLASH page)
+    output wire        flash_ncs,
+    output wire        flash_mosi,
+    input  wire        flash_miso
 );
 
     wire        ibus_req, ibus_ack, ibus_err;
@@ -110,7 +115,8 @@ module tl_soc #(
         .rpwm(rpwm), .lpwm(lpwm), .r_en(r_en), .l_en(l_en), .pwm(pwm), .dir(dir),
         .bridge_fault(bridge_fault), .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z),
         .uart_rx(uart_rx), .uart_tx(uart_tx), .uart_cts_n(uart_cts_n), .uart_rts_n(uart_rts_n),
-        .estop(estop), .lim_neg(lim_neg), .lim_pos(lim_pos), .wdog_alive(wdog_alive)
+        .estop(estop), .lim_neg(lim_neg), .lim_pos(lim_pos), .wdog_alive(wdog_alive),
+        .flash_dclk(flash_dclk), .flash_ncs(flash_ncs), .flash_mosi(flash_mosi), .flash_miso(flash_miso)
     );
 
 endmodule

@@ -92,6 +92,11 @@ module tl_soc_fabric #(
     // limit switches, asynchronous, 1 = open (tripped or wire broken), per axis
     input  wire [1:0]  lim_neg,
     input  wire [1:0]  lim_pos,
+    // configuration flash (FLASH page; the board reaches it through the ASMI block)
+    output wire        flash_dclk,
+    output wire        flash_ncs,
+    output wire        flash_mosi,
+    input  wire        flash_miso,
     // the hardware watchdog: armed and not expired (the board's drive interlock arms only then)
     output wire        wdog_alive
 );
@@ -116,8 +121,9 @@ module tl_soc_fabric #(
     localparam integer         P_AXIS0 = `TL_AXIS0_PAGE;
     localparam integer         P_AXIS1 = `TL_AXIS1_PAGE;
     localparam integer         P_SYS   = `TL_SYS_PAGE;
+    localparam integer         P_FLASH = `TL_FLASH_PAGE;
     localparam [N_PAGES-1:0]   PAGE_USED = (1 << P_TIMER) | (1 << P_INTC) | (1 << P_GPIO) | (1 << P_UART)
-                                         | (1 << P_AXIS0) | (1 << P_AXIS1) | (1 << P_SYS);
+                                         | (1 << P_AXIS0) | (1 << P_AXIS1) | (1 << P_SYS) | (1 << P_FLASH);
 
     // ---- instruction bus: launch once, answer in the next cycle ---------------------------
     reg  ibus_ack_q, i_ram_q, i_err_q;
@@ -284,6 +290,12 @@ module tl_soc_fabric #(
         .bus_req(page_req[P_UART*RQ +: RQ]), .bus_rsp(page_rsp[P_UART*RS +: RS]),
         .rxd(uart_rx), .txd(uart_tx), .cts_n(uart_cts_n), .rts_n(uart_rts_n),
         .rx_event(uart_rx_event), .tx_event(uart_tx_event)
+    );
+
+    tl_soc_flash u_flash (
+        .clk(clk), .rst(rst),
+        .bus_req(page_req[P_FLASH*RQ +: RQ]), .bus_rsp(page_rsp[P_FLASH*RS +: RS]),
+        .flash_dclk(flash_dclk), .flash_ncs(flash_ncs), .flash_mosi(flash_mosi), .flash_miso(flash_miso)
     );
 
     // ---- responses: rdata and err are valid with ack ------------------------------------------

@@ -79,6 +79,7 @@ def c_header() -> str:
         off += struct.calcsize(P._FMT[t])
     L += [f"#define TLP_TELEM_AX_LEN {off}u", f"#define TLP_TELEM_LEN {P.telemetry_payload_bytes()}u", ""]
     L += _c_auth()
+    L += _c_store()
     L.append("#define TLP_GLOBAL_AXIS 0xFFu")
     for p in P.PARAMS.values():
         L.append(f"#define TLP_P_{p.name} {p.id}u")
@@ -88,6 +89,7 @@ def c_header() -> str:
           "typedef struct { uint8_t id; uint8_t global; int8_t tighten; int32_t min; int32_t max;"
           " int32_t dflt[TLP_AXIS_COUNT]; } tlp_param_info_t;",
           f"#define TLP_PARAM_COUNT {len(P.PARAMS)}u",
+          f"#define TLP_PARAM_LAYOUT 0x{P.param_layout():08X}u   /* the stored record's layout word ([store]) */",
           "static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {"]
     for p in P.PARAMS.values():
         mn = f"(-{-p.min}L)" if p.min < 0 else f"{p.min}L"
@@ -104,6 +106,14 @@ def c_header() -> str:
         L.append("    " + ", ".join(f"{v:2d}" for v in index[row:row + 16]) + ",")
     L += ["};", "", "#endif", ""]
     return "\n".join(L)
+
+
+def _c_store() -> list[str]:
+    """The [store] constants: the parameter record and the EPCS flash it lives in."""
+    L = ["/* Parameter store ([store] of protocol.toml; docs/firmware.md). */"]
+    for k, v in P.SPEC["store"].items():
+        L.append(f"#define TLP_STORE_{k.upper()} 0x{v:X}u")
+    return L + [""]
 
 
 #: descriptor flags of the C command table, in bit order (protocol.toml's command columns)

@@ -511,6 +511,20 @@ class Client:
     def set_telemetry(self, every: int) -> None:
         self.transact("TELEMETRY", every=every)
 
+    def save(self) -> dict[str, int]:
+        """Store the running parameters on the board (every axis disabled); the store's report."""
+        return self.transact("SAVE", op=1)
+
+    def store_report(self) -> dict[str, int] | None:
+        """saved (a copy is stored), differs (the running parameters are not it), seq;
+        None from a firmware without the parameter store."""
+        try:
+            return self.transact("SAVE", op=0)
+        except CommandRejected as e:
+            if e.status == P.STATUS["UNKNOWN_CMD"]:
+                return None
+            raise
+
     def bootloader(self) -> None:
         self.transact("BOOTLOADER", magic=P.BOOTLOADER_MAGIC)
 

@@ -18,6 +18,9 @@ the level their reference models define:
   drives toward an open switch is held off;
 - faults a test can inject: a frozen or reversed encoder (``encoder_fault``),
   a bridge fault input, the e-stop;
+- the configuration flash the firmware stores its parameters in
+  (``torqueloop.sim.epcs``, the EPCS command set byte by byte; with a file,
+  it survives this process: a power cycle is a new process on the same file);
 - the plant: ``sim_models.stepper.TwoAxisPlant`` (paper eq. 5-17).
 
 UART bytes reach the firmware when they arrive and its replies leave at
@@ -41,6 +44,7 @@ from typing import TYPE_CHECKING, Protocol
 
 from torqueloop.flow.firmware import AUTH_SOURCES, SERVO_CORE
 from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, run_until
+from torqueloop.sim.epcs import Epcs
 from torqueloop.spec import auth
 from torqueloop.spec.bridge import BRAKE, COAST
 from torqueloop.spec.system import SYSTEM
@@ -52,7 +56,7 @@ REPO = Path(__file__).resolve().parents[2]
 FW = REPO / "firmware"
 SOURCES = [Path(__file__).with_name("simboard_hal.c"), *SERVO_CORE, FW / "protocol" / "tl_link.c", *AUTH_SOURCES]
 #: every header the build can include (the cache key of the built library)
-HEADERS = sorted(h for d in ("servo", "protocol", "crypto") for h in (FW / d).glob("*.h"))
+HEADERS = sorted(h for d in ("servo", "protocol", "crypto", "boot") for h in (FW / d).glob("*.h"))
 BUILD = REPO / "build" / "host"
 CLK_HZ = SYSTEM.clk_hz
 DEFAULT_BUILD_ID = 0x51B0_0001
@@ -63,6 +67,11 @@ LIMIT_COUNTS = (-400_000, 400_000)
 LIM_NEG, LIM_POS = 0x01, 0x02
 #: an undercounting encoder passes one count of this many (set_encoder_fault)
 UNDERCOUNT = 50
+#: the simulated flash's write times: a sector erase takes up to 3 s on an EPCS64, which the
+#: firmware would poll some 10^6 times through ctypes here; the logic does not depend on them
+FLASH_PROGRAM_S, FLASH_ERASE_S = 0.0002, 0.002
+_FLASH_SELECT = ctypes.CFUNCTYPE(None, ctypes.c_int32)
+_FLASH_XFER = ctypes.CFUNCTYPE(ctypes.c_uint32, ctypes.c_uint32)
 
 
 class BytePipe(Protocol):
@@ -90,7 +99,8 @@ def build_library() -> Path:
     if not lib.exists():
         tmp = lib.with_suffix(f".{os.getpid()}.tmp")   # concurrent builders (pytest -n) do not collide
         subprocess.run(["gcc", "-std=c11", "-O2", "-shared", "-fPIC", "-Wall", "-Wextra", "-Werror",
-                        f"-I{FW / 'servo'}", f"-I{FW / 'protocol'}", f"-I{FW / 'crypto'}", *map(str, SOURCES),
+                        f"-I{FW / 'servo'}", f"-I{FW / 'protocol'}", f"-I{FW / 'crypto'}", f"-I{FW / 'boot'}",
+                        *map(str, SOURCES),
                         "-o", str(tmp)],
                        check=True)
         tmp.replace(lib)
@@ -104,7 +114,7 @@ class SimBoard:
     refuses motion, parameter changes and uploads; docs/security.md)."""
 
     def __init__(self, build_id: int = DEFAULT_BUILD_ID, seed: int = 0, plant: "str | PlantSpec" = "paper",
-                 key: bytes | None = None) -> None:
+                 key: bytes | None = None, flash: Epcs | None = None) -> None:
         from sim_models.stepper import TwoAxisPlant
         from sim_models.variants import plant_of
 
@@ -136,6 +146,11 @@ class SimBoard:
         self._slot = ctypes.create_string_buffer(auth.key_slot(key), auth.KEY_SLOT_BYTES)
         self.boot: SimBootRom | None = None
         self._boot_out = b""
+        #: the configuration flash; shortened write times (the firmware polls it byte by byte here)
+        self.flash = flash if flash is not None else Epcs(program_s=FLASH_PROGRAM_S, erase_s=FLASH_ERASE_S)
+        self._flash_cbs = (_FLASH_SELECT(lambda on: self.flash.select(bool(on))),
+                           _FLASH_XFER(lambda out: self.flash.xfer(out)))
+        self._lib.sb_set_flash(*self._flash_cbs)
         self._sync_encoders()
         self._lib.sb_reset(ctypes.c_uint32(build_id), self._slot)
         self._load_drives()
@@ -195,6 +210,12 @@ class SimBoard:
         self._lib.sb_reset(ctypes.c_uint32(build_id), self._slot)
         self._load_drives()
         self._next_tick_at = self.tick + self._period_ticks()
+
+    def power_cycle(self) -> None:
+        """Power off and on: the flash keeps what it holds, the firmware starts afresh."""
+        self.flash.power_on()
+        self.boot = None
+        self.restart(self.factory_build_id)
 
     def reset(self) -> None:
         """The reset button: drives off, the boot ROM's window (then the factory firmware, or an upload)."""

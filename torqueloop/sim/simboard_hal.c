@@ -74,6 +74,31 @@ void hal_set_baud_div(uint32_t div) { baud_div = div; }
 void hal_irq_off(void) {}
 void hal_irq_on(void) {}
 
+/* The configuration flash: the EPCS model of torqueloop/sim/epcs.py behind two
+ * callbacks (sb_set_flash).  A byte takes 8 serial clocks at a quarter of the
+ * system clock, as the SoC's FLASH port would clock it; the firmware's flash
+ * timeouts count hal_cycles, so the time spent here counts there too. */
+#define FLASH_BYTE_CYCLES 32u
+typedef void (*sb_flash_select_fn)(int32_t on);
+typedef uint32_t (*sb_flash_xfer_fn)(uint32_t out);
+static sb_flash_select_fn flash_select_cb;
+static sb_flash_xfer_fn flash_xfer_cb;
+void sb_set_flash(sb_flash_select_fn sel, sb_flash_xfer_fn xfer)
+{
+    flash_select_cb = sel;
+    flash_xfer_cb = xfer;
+}
+void hal_flash_select(bool on)
+{
+    if (flash_select_cb)
+        flash_select_cb(on);
+}
+uint8_t hal_flash_xfer(uint8_t out)
+{
+    cycles += FLASH_BYTE_CYCLES;
+    return flash_xfer_cb ? (uint8_t)flash_xfer_cb(out) : 0xFFu;
+}
+
 static bool tx(const uint8_t *wire, uint32_t len)
 {
     if (tx_len + len > sizeof tx_buf)

@@ -95,6 +95,8 @@ TELEMETRY_CMD: int = META["telemetry_cmd"]
 ERROR_CMD: int = META["error_cmd"]
 SEQ_WINDOW: int = META["seq_window"]
 BOOTLOADER_MAGIC: int = META["bootloader_magic"]
+#: the parameter store on the board's configuration flash and the EPCS facts it relies on ([store])
+STORE: dict[str, int] = SPEC["store"]
 FIRMWARE_VERSION: int = META["firmware_version"]
 MAX_PACKET = HEADER_BYTES + MAX_PAYLOAD + CRC_BYTES
 # COBS adds one byte per 254 plus the leading code byte.
@@ -381,3 +383,10 @@ def counts_to_mm(counts: int, counts_per_rev: int = SYSTEM.counts_per_turn,
 
 PARAMS: dict[str, Param] = _params(SPEC["param"])
 PARAM_BY_ID.update({p.id: p for p in PARAMS.values()})
+
+
+def param_layout() -> int:
+    """The stored record's layout word ([store]): CRC-32 of the parameters' (id, global)
+    in table order, so a firmware with other parameters ignores a record it cannot read."""
+    import zlib
+    return zlib.crc32(bytes(b for p in PARAMS.values() for b in (p.id, int(p.scope == "global")))) & 0xFFFF_FFFF

@@ -1,0 +1,122 @@
+# SPDX-License-Identifier: MIT
+"""The board as the characterisation's PWM source, encoder-only variant
+(``torqueloop characterize sweep``; docs/characterization.md, "Without a
+force gauge"): at each PWM carrier and in each direction, the dead zone as the
+paper defines it - raise the pulse until the system moves (the breakaway
+duty), then lower it until it stops (the stop duty) - measured with the
+open-loop drive (DRIVE) and the encoder alone.
+
+Each step holds the duty for ``hold_s`` and calls the axis moving when the
+encoder advanced at least ``move_counts`` in the duty's direction during the
+second half of the hold (the first half lets it speed up or coast down to
+the new duty).  The duty ramps up from ``start`` by ``step`` until it moves (or
+``stop_at``), then down by ``step`` until it no longer does.  The axis is
+enabled once per ramp and disabled after it, whatever happens (a fault, a
+refusal, Ctrl-C).
+
+Safety is the firmware's, unchanged: a duty of STALL_CMD or more that does
+not move the axis within STALL_MS trips RUNAWAY and ends the ramp; a motor
+whose breakaway lies above STALL_CMD needs that check raised first (with
+every axis disabled), which this tool never does by itself.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+
+from torqueloop.host.client import Client, ProtocolError, describe_faults
+from torqueloop.host.drive import check_ready, steps_for
+from torqueloop.spec import pwm
+
+
+@dataclass
+class Ramp:
+    carrier_hz: float
+    direction: int                 # +1 / -1
+    breakaway_percent: float | None  # first duty that moved it (None: none up to stop_at)
+    stop_percent: float | None     # first duty on the way down that no longer did
+    points: list[tuple[float, int]]  # (duty %, counts moved during its hold), in order
+    fault: str = ""
+
+
+def _moved(c: Client, axis: int, steps: int, hold_s: float) -> tuple[int, int]:
+    """Drive at ``steps`` for ``hold_s`` (a HEARTBEAT at least every 0.1 s); the counts moved in
+    the second half of the hold (the first lets the speed settle at the new duty) and new faults."""
+    faults0 = c.status(axis)["faults"]
+    c.transact("DRIVE", axis=axis, duty=steps)
+    _hold(c, hold_s / 2)
+    p1 = c.status(axis)["position"]
+    _hold(c, hold_s / 2)
+    after = c.status(axis)
+    return after["position"] - p1, after["faults"] & ~faults0
+
+
+def _hold(c: Client, seconds: float) -> None:
+    end = time.monotonic() + seconds
+    while (left := end - time.monotonic()) > 0:
+        time.sleep(min(0.1, left))
+        c.heartbeat()
+
+
+def ramp(c: Client, axis: int, direction: int, carrier_hz: float, *, start: float = 1.0, step: float = 0.5,
+         stop_at: float = 30.0, hold_s: float = 0.3, move_counts: int = 3) -> Ramp:
+    """One up-and-down ramp in ``direction`` at the carrier already set (FDIV)."""
+    r = Ramp(carrier_hz, direction, None, None, [])
+    check_ready(c, axis, steps_for(direction * stop_at))
+    c.enable(1 << axis, True)
+    try:
+        duty = start
+        while duty <= stop_at + 1e-9:
+            moved, fault = _moved(c, axis, steps_for(direction * duty), hold_s)
+            r.points.append((round(duty, 3), moved))
+            if fault:
+                r.fault = describe_faults(fault)
+                return r
+            if moved * direction >= move_counts:
+                r.breakaway_percent = round(duty, 3)
+                break
+            duty += step
+        if r.breakaway_percent is None:
+            return r
+        while duty > 0:
+            duty = max(0.0, duty - step)   # at 0 the bridge brakes: it stops there at the latest
+            moved, fault = _moved(c, axis, steps_for(direction * duty), hold_s)
+            r.points.append((round(duty, 3), moved))
+            if fault:
+                r.fault = describe_faults(fault)
+                return r
+            if moved * direction < move_counts:
+                r.stop_percent = round(duty, 3)
+                break
+        return r
+    finally:
+        c.enable(1 << axis, False)
+
+
+def sweep(c: Client, axis: int, carriers_hz: list[float], clk_hz: int, log=None, **kw) -> list[Ramp]:
+    """A ramp per carrier and direction; the axis's FDIV is restored afterwards."""
+    fdiv0 = c.get_param("FDIV", axis)
+    pwm_max = c.get_param("PWM_MAX_HZ")
+    out: list[Ramp] = []
+    try:
+        for f in carriers_hz:
+            div = pwm.divider_for(f, clk_hz)
+            actual = pwm.carrier_hz(div, clk_hz)
+            if actual > pwm_max:
+                raise ProtocolError(f"a {f:g} Hz carrier is above PWM_MAX_HZ = {pwm_max} Hz")
+            c.set_param("FDIV", div, axis)
+            for direction in (1, -1):
+                r = ramp(c, axis, direction, round(actual, 3), **kw)
+                out.append(r)
+                if log:
+                    log(r)
+                if r.fault:
+                    return out
+    finally:
+        c.set_param("FDIV", fdiv0, axis)
+    return out
+
+
+def as_rows(ramps: list[Ramp]) -> list[dict]:
+    return [{k: v for k, v in asdict(r).items()} for r in ramps]
