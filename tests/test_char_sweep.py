@@ -26,9 +26,9 @@ from torqueloop.spec import auth
 
 def breakaway_percent(plant: str) -> float:
     """The duty whose on-time current (V - brush drop) / R makes the breakaway torque of axis 0."""
-    from sim_models.variants import load_variant, parse_plant
+    from sim_models.variants import plant_of
 
-    p = load_variant(*parse_plant(plant))
+    p = plant_of(plant).params()
     a = p.axes[0]
     return 100 * a.motor_static_N_m * a.resistance_ohm / (a.ke_V_s_per_rad * (p.bridge.supply_V - a.brush_drop_V))
 
@@ -58,10 +58,12 @@ def sweep(tmp_path, capsys, plant: str, *args: str) -> tuple[dict, dict, dict]:
 
 def test_the_lab_plant_s_dead_zone_is_found_in_both_directions(tmp_path, capsys) -> None:
     step = 0.5
-    res, _, _ = sweep(tmp_path, capsys, "lab", "--carriers", "450", "--start", "2", "--step", str(step), "--max", "9")
-    want = breakaway_percent("lab")
+    # lab-2025: the hard brush drop the closed form above assumes (lab's brushes are ohmic below a knee)
+    res, _, _ = sweep(tmp_path, capsys, "lab-2025", "--carriers", "450", "--start", "2", "--step", str(step),
+                      "--max", "9")
+    want = breakaway_percent("lab-2025")
     ramps = res["ramps"]
-    print("lab plant, 450 Hz: expected breakaway %.2f %%; found %s" % (
+    print("lab-2025 plant, 450 Hz: expected breakaway %.2f %%; found %s" % (
         want, [(r["direction"], r["breakaway_percent"], r["stop_percent"]) for r in ramps]))
     assert [r["direction"] for r in ramps] == [1, -1]
     for r in ramps:

@@ -100,7 +100,8 @@ def test_a_frozen_encoder_trips_runaway_under_the_drive(host: Host) -> None:
     st = host.ok("STATUS", axis=0)
     stall_s = P.PARAMS["STALL_MS"].default / 1000
     assert st["faults"] == P.FAULT["RUNAWAY"] and not st["enabled"], st
-    assert stall_s <= t_off - t0 <= stall_s + 3 * PERIOD_S, t_off - t0
+    # the stall check trips by STALL_MS; the encoder plausibility check (docs/safety.md) may trip first
+    assert 0 < t_off - t0 <= stall_s + 3 * PERIOD_S, t_off - t0
     # the fault ended the drive: enabling again (after clearing) does not resume it
     b.set_encoder_fault(0, None)
     host.run(0.1)

@@ -466,7 +466,8 @@ def cmd_drive(ctx: Ctx) -> int:
     fdiv_before = c.get_param("FDIV", a.axis)
     fdiv = fdiv_before
     if a.pwm_freq is not None:
-        fdiv = units.to_raw("pwm_freq", str(a.pwm_freq), clk)[1]   # the board refuses a carrier above PWM_MAX_HZ
+        # the nearest carrier (as --help says); the board refuses one above PWM_MAX_HZ
+        fdiv = units.to_raw("pwm_freq", str(a.pwm_freq), clk, nearest=True)[1]
     hdrive.check_ready(c, a.axis, steps)
     if fdiv != fdiv_before:
         c.set_param("FDIV", fdiv, a.axis)
@@ -894,7 +895,6 @@ def _sweep_parser() -> argparse.ArgumentParser:
                  description="encoder-only dead zone: the breakaway and stop duty per direction at each carrier "
                              "(raise the duty until it moves, lower it until it stops)")
     cs.add_argument("--axis", "-a", type=int, choices=range(P.AXIS_COUNT), default=0, help="axis [0]")
-                                       "at each carrier (raise the duty until it moves, lower it until it stops)")
     cs.add_argument("--carriers", metavar="HZ,HZ", default=None,
                     help="PWM carriers, comma-separated (each the nearest the divider makes) [the axis's own]")
     cs.add_argument("--start", type=_bounded(float, 0, 100, "--start"), default=1.0, metavar="%",
