@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: MIT
 """Run a linked RV32IM ELF on the torqueloop CPU in simulation.
 
-    scripts/run_elf.py PROG.elf [--sim verilator|icarus] [--max-cycles N] [--signature FILE]
+    scripts/run_elf.py PROG.elf [--sim verilator|icarus] [--core multi|pipe] [--max-cycles N] [--signature FILE]
     scripts/run_elf.py --memory-map
 
 The ELF's loadable segments are written at their addresses into the RAM of
@@ -16,6 +16,8 @@ otherwise 1 (an odd value (n << 1) | 1 names failed test n), 2 on the cycle
 limit, 3 on a bad ELF.  --signature writes the words from begin_signature to
 end_signature as 8-digit hex, one per line.  Programs are linked by the
 caller (see tb/cpu/progs/link.ld for a script that fits the memory map).
+--core picks the core: `multi` (tl_cpu, the default) or `pipe` (tl_cpu_pipe,
+on a harness whose buses take a request every cycle).
 """
 
 from __future__ import annotations
@@ -44,12 +46,15 @@ from torqueloop.spec import regs  # noqa: E402
 # through the generated include; its RAM_BYTES defaults to the map's RAM size.
 RAM_BASE = regs.RAM_BASE
 RAM_BYTES = regs.RAM_SIZE
+#: the cores cpu_sim_top holds: --core name -> its parameters
+CORES = {"multi": {"PIPELINED": 0}, "pipe": {"PIPELINED": 1}}
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("elf", nargs="?", type=Path)
     ap.add_argument("--sim", choices=["verilator", "icarus"], default="verilator")
+    ap.add_argument("--core", choices=list(CORES), default="multi")
     ap.add_argument("--max-cycles", type=int, default=10_000_000)
     ap.add_argument("--signature", type=Path)
     ap.add_argument("--memory-map", action="store_true", help="print the RAM region programs may use")
@@ -98,7 +103,8 @@ def main(argv: list[str] | None = None) -> int:
             os.dup2(fd, 2)
             os.close(fd)
         try:
-            run("cpu_sim_top", args.sim, "elf_runner_tb", extra_env=env, build_tag="run_elf", bench="cpu")
+            run("cpu_sim_top", args.sim, "elf_runner_tb", parameters=CORES[args.core], extra_env=env,
+                build_tag=f"run_elf_{args.core}", bench="cpu")
             error = None
         except (AssertionError, SystemExit, RuntimeError) as e:
             error = e

@@ -24,7 +24,10 @@ module tl_soc #(
     parameter [31:0]  BUILD_ID         = 32'd0,
     parameter integer CLK_HZ           = `TL_CLK_HZ,
     parameter [31:0]  HART_ID          = 32'd0,
-    parameter integer LIMIT_DEBOUNCE_CLKS = 50_000   // limit switch debounce, 1 ms
+    parameter integer LIMIT_DEBOUNCE_CLKS = 50_000,  // limit switch debounce, 1 ms
+    // the CPU: 0 tl_cpu (multi-cycle), 1 tl_cpu_pipe (pipelined, on a fabric
+    // that takes a request every cycle); docs/cpu.md
+    parameter integer CPU_PIPELINED    = 0
 ) (
     input  wire        clk,
     input  wire        rst,            // synchronous, active high
@@ -68,19 +71,33 @@ module tl_soc #(
     wire        retire;   // instruction-retired pulse: for test benches (instruction counts)
     /* verilator lint_on UNUSEDSIGNAL */
 
-    tl_cpu #(.RESET_PC(`TL_BOOT_ROM_BASE), .HART_ID(HART_ID)) u_cpu (
-        .clk(clk), .rst(rst),
-        .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
-        .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
-        .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
-        .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
-        .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
-        .mtime(mtime), .retire(retire)
-    );
+    generate
+        if (CPU_PIPELINED != 0) begin : g_pipe
+            tl_cpu_pipe #(.RESET_PC(`TL_BOOT_ROM_BASE), .HART_ID(HART_ID)) u_cpu (
+                .clk(clk), .rst(rst),
+                .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
+                .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
+                .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
+                .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
+                .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
+                .mtime(mtime), .retire(retire)
+            );
+        end else begin : g_multi
+            tl_cpu #(.RESET_PC(`TL_BOOT_ROM_BASE), .HART_ID(HART_ID)) u_cpu (
+                .clk(clk), .rst(rst),
+                .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
+                .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
+                .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
+                .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
+                .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
+                .mtime(mtime), .retire(retire)
+            );
+        end
+    endgenerate
 
     tl_soc_fabric #(
         .RAM_BYTES(RAM_BYTES), .RAM_INIT(RAM_INIT), .ROM_INIT(ROM_INIT), .BUILD_ID(BUILD_ID),
-        .CLK_HZ(CLK_HZ), .LIMIT_DEBOUNCE_CLKS(LIMIT_DEBOUNCE_CLKS)
+        .CLK_HZ(CLK_HZ), .LIMIT_DEBOUNCE_CLKS(LIMIT_DEBOUNCE_CLKS), .PIPELINED(CPU_PIPELINED)
     ) u_fabric (
         .clk(clk), .rst(rst),
         .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),

@@ -21,8 +21,10 @@
 // its read value and "no such register" in the same cycle (bus_rsp, layout
 // in regmap.vh / regmap_pkg.vhd), which is registered here.  An access takes
 // two cycles (launch, ack) and the next can launch in the cycle after the
-// ack.  The two masters never share a memory port, so they never wait for
-// each other.
+// ack; with PIPELINED = 1 (a master that never holds a request through its
+// ack cycle: rtl/cpu/tl_cpu_pipe.v) the next launches in the ack cycle, one
+// access per cycle per bus.  The two masters never share a memory port, so
+// they never wait for each other.
 // the register map's TL_* names (generated; the include guard makes a second include empty)
 `include "regmap.vh"
 `default_nettype none
@@ -33,7 +35,8 @@ module tl_soc_fabric #(
     parameter         ROM_INIT         = "",     // $readmemh image of the boot ROM
     parameter [31:0]  BUILD_ID         = 32'd0,
     parameter integer CLK_HZ           = `TL_CLK_HZ,
-    parameter integer LIMIT_DEBOUNCE_CLKS = 50_000   // limit switch debounce, 1 ms
+    parameter integer LIMIT_DEBOUNCE_CLKS = 50_000,  // limit switch debounce, 1 ms
+    parameter integer PIPELINED        = 0           // 1: launch in the ack cycle too (see above)
 ) (
     input  wire        clk,
     input  wire        rst,            // synchronous, active high
@@ -118,7 +121,7 @@ module tl_soc_fabric #(
 
     // ---- instruction bus: launch once, answer in the next cycle ---------------------------
     reg  ibus_ack_q, i_ram_q, i_err_q;
-    wire i_launch = ibus_req && !ibus_ack_q;
+    wire i_launch = ibus_req && (PIPELINED != 0 || !ibus_ack_q);
     wire i_rom    = (ibus_addr & ROM_MASK) == `TL_BOOT_ROM_BASE;
     wire i_ram    = (ibus_addr & RAM_MASK) == `TL_RAM_BASE;
 
@@ -137,7 +140,7 @@ module tl_soc_fabric #(
 
     // ---- data bus -----------------------------------------------------------------------------
     reg  dbus_ack_q, d_ram_q, d_per_q, d_err_q;
-    wire d_launch = dbus_req && !dbus_ack_q;
+    wire d_launch = dbus_req && (PIPELINED != 0 || !dbus_ack_q);
     wire d_rom    = (dbus_addr & ROM_MASK) == `TL_BOOT_ROM_BASE;
     wire d_ram    = (dbus_addr & RAM_MASK) == `TL_RAM_BASE;
     wire d_per    = (dbus_addr & PER_MASK) == PER_BASE;

@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: MIT
-"""The CPU core: CPI on a small integer benchmark (tb/cpu/progs/bench.c, -O2),
+"""The CPU cores side by side, the multi-cycle tl_cpu and the pipelined
+tl_cpu_pipe: CPI on a small integer benchmark (tb/cpu/progs/bench.c, -O2),
 cycles per instruction class, Cyclone V resources and logic depth."""
 
 from __future__ import annotations
@@ -55,7 +56,11 @@ def run_elf(elf: Path, *extra: str) -> str:
     return proc.stdout
 
 
-def logic_depth(netlist: Path, skip_prefix: str | None = None) -> int:
+#: the cores: name in scripts/run_elf.py --core -> manifest core
+CORES = {"multi": "cpu", "pipe": "cpu_pipe"}
+
+
+def logic_depth(netlist: Path, top: str, skip_prefix: str | None = None) -> int:
     """Longest path in cells (LUTs, carry cells, DSPs) between flip-flops, block
     RAMs (registered reads) and ports: Yosys ltp after removing those cells
     (optionally also one submodule's cells).  Works around eda.synth_cyclonev's
@@ -63,7 +68,7 @@ def logic_depth(netlist: Path, skip_prefix: str | None = None) -> int:
     src = netlist
     if skip_prefix:
         d = json.loads(netlist.read_text())
-        m = d["modules"]["tl_cpu"]
+        m = d["modules"][top]
         m["cells"] = {k: v for k, v in m["cells"].items() if not k.startswith(skip_prefix)}
         src = Path(tempfile.mkdtemp()) / "netlist.json"
         src.write_text(json.dumps(d))
@@ -77,33 +82,37 @@ def main() -> int:
     from torqueloop.flow.cpu_progs import PROGS, build
 
     elf = build("bench", [PROGS / "bench.c"], tag="bench", opt="-O2")
-    out = run_elf(elf)
-    m = re.search(r"cycles=(\d+) instructions=(\d+) cpi=([\d.]+)", out)
-    print(f"bench.c (-O2: CRC-32, insertion sort, 12x12 matrix product, itoa): "
-          f"{m.group(1)} cycles, {m.group(2)} instructions, CPI {m.group(3)}")
-
     with tempfile.TemporaryDirectory() as tmp:
         src = Path(tmp) / "classes.S"
         src.write_text(class_program())
         celf = build("classes", [src], tag="bench", crt0=False)
-        sig = Path(tmp) / "sig.txt"
-        run_elf(celf, "--signature", str(sig))
-        cycles = [int(l, 16) for l in sig.read_text().split()]
-    print(f"cycles per instruction by class (zero-wait-state RAM, {REPS} in a row, mcycle):")
-    for name, c in zip(CLASSES, cycles):
-        print(f"  {name:22s} {c / REPS:6.2f}")
+        cycles = {}
+        for name in CORES:
+            out = run_elf(elf, "--core", name)
+            m = re.search(r"cycles=(\d+) instructions=(\d+) cpi=([\d.]+)", out)
+            print(f"{name:5s} bench.c (-O2: CRC-32, insertion sort, 12x12 matrix product, itoa): "
+                  f"{m.group(1)} cycles, {m.group(2)} instructions, CPI {m.group(3)}")
+            sig = Path(tmp) / f"sig_{name}.txt"
+            run_elf(celf, "--core", name, "--signature", str(sig))
+            cycles[name] = [int(l, 16) for l in sig.read_text().split()]
+    print(f"cycles per instruction by class (zero-wait-state RAM, {REPS} in a row, mcycle): "
+          + "  ".join(f"{n:>6s}" for n in CORES))
+    for i, cls in enumerate(CLASSES):
+        print(f"  {cls:22s} " + "  ".join(f"{cycles[n][i] / REPS:6.2f}" for n in CORES))
 
-    row = eda.synth_cyclonev(core("cpu"))
-    if "error" in row:
-        print(row["error"])
-        return 1
-    netlist = eda.BUILD / "synth" / "cpu" / "netlist.json"
-    depth = logic_depth(netlist)
-    depth_core = logic_depth(netlist, "u_muldiv")
-    print(f"Cyclone V (yosys synth_intel_alm): {row['luts']} LUTs, {row['carry_cells']} carry cells, "
-          f"{row['ffs']} FFs, {row['dsp']} DSP blocks, {row['m10k']} M10K, {row['mlab']} MLAB")
-    print(f"logic depth: {row.get('lut_levels', '?')} LUT levels (eda.lut_levels: carry hops free); "
-          f"{depth} cells by ltp counting every carry-chain cell (without the multiplier: {depth_core})")
+    for name, cname in CORES.items():
+        c = core(cname)
+        row = eda.synth_cyclonev(c)
+        if "error" in row:
+            print(row["error"])
+            return 1
+        netlist = eda.BUILD / "synth" / cname / "netlist.json"
+        depth = logic_depth(netlist, c.top)
+        depth_core = logic_depth(netlist, c.top, "u_muldiv")
+        print(f"{name:5s} Cyclone V (yosys synth_intel_alm): {row['luts']} LUTs, {row['carry_cells']} carry cells, "
+              f"{row['ffs']} FFs, {row['dsp']} DSP blocks, {row['m10k']} M10K, {row['mlab']} MLAB")
+        print(f"{name:5s} logic depth: {row.get('lut_levels', '?')} LUT levels (eda.lut_levels: carry hops free); "
+              f"{depth} cells by ltp counting every carry-chain cell (without the multiplier: {depth_core})")
     return 0
 
 

@@ -17,7 +17,10 @@
 // fault).  Unlike tl_soc_fabric, both buses may add random wait states.  The
 // testbench loads and reads the RAM through the ld_* port while rst is high.
 module cpu_sim_top #(
-    parameter integer RAM_BYTES = `TL_RAM_SIZE   // a power of two
+    parameter integer RAM_BYTES = `TL_RAM_SIZE,  // a power of two
+    // 0: tl_cpu; 1: tl_cpu_pipe, and both buses take a request in their own
+    // ack cycle (one word per cycle; tl_cpu would see its held request twice)
+    parameter integer PIPELINED = 0
 ) (
     input  wire        clk,
     input  wire        rst,
@@ -58,15 +61,32 @@ module cpu_sim_top #(
     wire [63:0] mtime;
     wire        irq_software, irq_external;
 
-    tl_cpu #(.RESET_PC(`TL_BOOT_ROM_BASE)) u_cpu (
-        .clk(clk), .rst(rst),
-        .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
-        .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
-        .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
-        .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
-        .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
-        .mtime(mtime), .retire(retire)
-    );
+    generate
+        if (PIPELINED != 0) begin : g_pipe
+            tl_cpu_pipe #(.RESET_PC(`TL_BOOT_ROM_BASE)) u_cpu (
+                .clk(clk), .rst(rst),
+                .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
+                .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
+                .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
+                .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
+                .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
+                .mtime(mtime), .retire(retire)
+            );
+        end else begin : g_multi
+            tl_cpu #(.RESET_PC(`TL_BOOT_ROM_BASE)) u_cpu (
+                .clk(clk), .rst(rst),
+                .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
+                .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
+                .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
+                .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
+                .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
+                .mtime(mtime), .retire(retire)
+            );
+        end
+    endgenerate
+    // a slave that takes a request in its ack cycle (PIPELINED) or not
+    wire i_busy = PIPELINED == 0 && ibus_ack;
+    wire d_busy = PIPELINED == 0 && dbus_ack;
 
     // Random wait states from a 16-bit LFSR (x^16 + x^14 + x^13 + x^11 + 1)
     reg [15:0] lfsr;
@@ -108,7 +128,7 @@ module cpu_sim_top #(
 
     always @(posedge clk) begin
         ibus_ack <= 1'b0;
-        if (!rst && ibus_req && !ibus_ack && !istall) begin
+        if (!rst && ibus_req && !i_busy && !istall) begin
             ibus_ack   <= 1'b1;
             ibus_err   <= !(i_ram || i_rom);
             ibus_rdata <= i_rom ? rom_word : ram[i_word];
@@ -116,7 +136,7 @@ module cpu_sim_top #(
     end
 
     // ---- the SoC's timer and interrupt controller on their pages ----------------
-    wire d_go = !rst && dbus_req && !dbus_ack && !dstall;
+    wire d_go = !rst && dbus_req && !d_busy && !dstall;
     /* verilator lint_off UNUSEDSIGNAL */  // the other pages' requests go nowhere
     wire [RQ*N_PAGES-1:0] page_req;
     /* verilator lint_on UNUSEDSIGNAL */

@@ -50,7 +50,6 @@ FAST_FDIV = 2                      # 24.4 kHz: the fastest carrier under the IBT
 PWM_PERIOD_US = FAST_FDIV * 1023 * CLK_NS / 1000
 U = P.MOVE_UNHOMED                 # positions relative to power-up: these tests do not home
 KEY = TB_KEY
-READS = {"IDENTIFY", "GET_PARAM", "STATUS", "COUNTERS", "SESSION", "TELEMETRY"}   # sent without a MAC
 
 
 def now_ns() -> float:
@@ -112,7 +111,7 @@ class TB:
                   **fields) -> dict:
         """One command and its reply; with the session's MAC unless it is a read (tagged overrides)."""
         self.seq = (self.seq + 1) & 0xFFFF
-        tag = (self.sess is not None and name not in READS) if tagged is None else tagged
+        tag = (self.sess is not None and not P.COMMANDS[name].untagged) if tagged is None else tagged
         wire = self.sess.request(name, self.seq, **fields) if tag else P.request(name, self.seq, **fields)
         self.sent.append(wire)
         await self.send_raw(wire)

@@ -63,6 +63,7 @@ class Board:
     quartus_top: str
     io_standard: str
     clock_period_ns: float
+    quartus_version: str = ""      # the Quartus release the generated project is written for
 
 
 @dataclass(frozen=True)
@@ -169,7 +170,8 @@ def load_pin_table(path: Path = PINS_TOML) -> PinTable:
         data = tomllib.load(f)
     b = data["board"]
     board = Board(name=b["name"], family=b["family"], device=b["device"], top=b["top"],
-                  soc_core=b["soc_core"], quartus_top=b.get("quartus_top", b["top"]), io_standard=b["io_standard"], clock_period_ns=float(b["clock_period_ns"]))
+                  soc_core=b["soc_core"], quartus_top=b.get("quartus_top", b["top"]), io_standard=b["io_standard"], clock_period_ns=float(b["clock_period_ns"]),
+                  quartus_version=b.get("quartus_version", ""))
     ports = tuple(
         Port(name=p["name"], dir=p["dir"], timing=p["timing"], role=p.get("role", ""),
              width=int(p["width"]) if "width" in p else None)
@@ -316,6 +318,10 @@ def gen_qsf(table: PinTable, board_pins: dict[str, BoardPin], verilog: list[Path
         f"set_global_assignment -name DEVICE {b.device}",
         f"set_global_assignment -name TOP_LEVEL_ENTITY {b.quartus_top}",
         "set_global_assignment -name PROJECT_OUTPUT_DIRECTORY output_files",
+        *([f"# Written for Quartus Prime {b.quartus_version}; a later release offers to upgrade the project.",
+           f"set_global_assignment -name ORIGINAL_QUARTUS_VERSION {b.quartus_version.split()[0]}",
+           f"set_global_assignment -name LAST_QUARTUS_VERSION {_qsf_quote(b.quartus_version)}"]
+          if b.quartus_version else []),
         "# RESET_N (P22) is the DEV_CLRN-capable pin: keep it an ordinary input.",
         "set_global_assignment -name ENABLE_DEVICE_WIDE_RESET OFF",
         "# Pins the design does not use stay inputs, so nothing on the headers is driven by accident.",

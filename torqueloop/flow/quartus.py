@@ -25,6 +25,7 @@ from pathlib import Path
 from torqueloop.flow import board_files as board
 from torqueloop.flow.licence import with_licence
 from torqueloop.flow.manifest import REPO_ROOT, load_manifest
+from torqueloop.spec import auth
 
 PROJECT = "de0_cv_top"
 
@@ -193,7 +194,15 @@ def compile_project(qpf: Path) -> int:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--compile", action="store_true", help="compile when quartus_sh is on PATH")
+    ap.add_argument("--keyless", action="store_true",
+                    help="build a boot ROM without a link key (a board that refuses every move)")
     args = ap.parse_args(argv)
+    if auth.key_file_path(None) is None and not args.keyless:
+        # A long compile ending in a board that refuses every move helps nobody: stop before it.
+        print(f"[quartus] no link key: name the key file in ${auth.KEY_FILE_ENV} (`torqueloop key new FILE`; "
+              "docs/security.md, 'Key provisioning'), or `make quartus KEYLESS=1` for a board that refuses "
+              "motion, parameter changes and uploads", file=sys.stderr)
+        return 2
     qpf = write_project()
     if not board.load_pin_table().firmware:
         print("[quartus] WARNING: constraints/pins.toml [firmware] names no ROM_INIT image: the boot ROM"

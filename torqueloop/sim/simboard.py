@@ -36,7 +36,7 @@ import subprocess
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
-from torqueloop.flow.firmware import AUTH_SOURCES
+from torqueloop.flow.firmware import AUTH_SOURCES, SERVO_CORE
 from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, run_until
 from torqueloop.spec import auth
 from torqueloop.spec.bridge import BRAKE, COAST
@@ -47,11 +47,9 @@ if TYPE_CHECKING:
 
 REPO = Path(__file__).resolve().parents[2]
 FW = REPO / "firmware"
-SOURCES = [Path(__file__).with_name("simboard_hal.c"), FW / "servo" / "servo.c",
-           FW / "servo" / "control.c", FW / "protocol" / "tl_link.c", *AUTH_SOURCES]
-HEADERS = [FW / "servo" / "servo.h", FW / "servo" / "control.h", FW / "servo" / "hal.h",
-           FW / "protocol" / "tl_link.h", FW / "protocol" / "tl_protocol.h", FW / "protocol" / "tl_auth.h",
-           FW / "crypto" / "tl_sha256.h", FW / "crypto" / "tl_keyslot.h"]
+SOURCES = [Path(__file__).with_name("simboard_hal.c"), *SERVO_CORE, FW / "protocol" / "tl_link.c", *AUTH_SOURCES]
+#: every header the build can include (the cache key of the built library)
+HEADERS = sorted(h for d in ("servo", "protocol", "crypto") for h in (FW / d).glob("*.h"))
 BUILD = REPO / "build" / "host"
 CLK_HZ = SYSTEM.clk_hz
 DEFAULT_BUILD_ID = 0x51B0_0001

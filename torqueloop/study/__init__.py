@@ -6,7 +6,7 @@ imports the other).
     experiment        - the paper's experiment and its title question (make run)
     characterization  - the characterisation method on the simulated bench, with
                         repeatability, linearity and each plant effect off (make characterize)
-    characterize_cli  - the characterisation command (run on a lab's CSVs, sim, step5, check, show, export)
+    characterize_cli  - the characterisation command with the study's sim (torqueloop/characterize/command.py has the rest)
     cli               - ``torqueloop-study experiment|characterize``
 
 A study takes objects, never a command line: an

@@ -3,7 +3,8 @@
 ``make characterize``.
 
     torqueloop-study experiment [--quick] [--t-end 40] [--sweep-t-end 10] [--laws P PD PID]
-                                [--model-plant paper] [--experiment-plant lab] [--jobs N] [--out build/report]
+                                [--model-plant paper] [--experiment-plant lab] [--jobs N] [--cluster ADDR]
+                                [--out build/report]
     torqueloop-study characterize run|sim|step5|check|show|export ...   (characterize --help)
 
 This module only parses: a plant name becomes a
@@ -21,10 +22,11 @@ from pathlib import Path
 from typing import Sequence
 
 from sim_models.params import PlantParamError
-from sim_models.variants import plant_of
+from sim_models.variants import plant_choice, plant_of
 from torqueloop.spec.repo import REPO_ROOT
 from torqueloop.study import characterize_cli
 from torqueloop.study import experiment as experiment_study
+from torqueloop.study.engine import EngineError
 from torqueloop.study.experiment import LAWS, ExperimentPlan, run_experiment
 
 
@@ -36,15 +38,20 @@ def experiment(argv: Sequence[str]) -> int:
     ap.add_argument("--sweep-t-end", type=float, default=None, help="T of each sweep run, s [10; quick 1]")
     ap.add_argument("--laws", nargs="+", default=list(LAWS), choices=LAWS)
     ap.add_argument("--model-plant", default="paper", help="the model arm's plant variant [paper]")
-    ap.add_argument("--experiment-plant", default="lab", help="the experiment arm's plant variant [lab]")
+    ap.add_argument("--experiment-plant", default=None, help="the experiment arm's plant variant [lab]")
+    ap.add_argument("--experiment-plant-file", default=os.environ.get("TORQUELOOP_PLANT_FILE") or None,
+                    metavar="FILE", help="the experiment arm's plant from a plant file (make run PLANT_FILE=...)")
     ap.add_argument("--char-dir", type=Path, default=REPO_ROOT / "build" / "characterize")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 2, help="runs in parallel [cores]")
+    ap.add_argument("--cluster", default=os.environ.get("TORQUELOOP_CLUSTER") or None, metavar="tcp://HOST:8786",
+                    help="run on a Dask scheduler's workers instead of the local pool (docs/experiment.md, "
+                         "'On a cluster')")
     ap.add_argument("--out", type=Path, default=REPO_ROOT / "build" / "report")
     a = ap.parse_args(argv)
     try:
         kw = dict(laws=tuple(a.laws), model_plant=plant_of(a.model_plant),
-                  experiment_plant=plant_of(a.experiment_plant), char_dir=a.char_dir, jobs=max(1, a.jobs),
-                  out=a.out)
+                  experiment_plant=plant_choice(a.experiment_plant, a.experiment_plant_file, default="lab"), char_dir=a.char_dir, jobs=max(1, a.jobs),
+                  out=a.out, cluster=a.cluster)
     except PlantParamError as e:
         return _refuse(f"experiment: {e}")
     if a.t_end is not None:
@@ -58,6 +65,8 @@ def experiment(argv: Sequence[str]) -> int:
         return _refuse(f"experiment: {e}")
     try:
         return run_experiment(plan)
+    except EngineError as e:
+        return _refuse(f"experiment: {e}")
     except RuntimeError as e:
         print(f"torqueloop-study: experiment: {e}", file=sys.stderr)
         return 1

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import json
 import math
-import multiprocessing as mp
 import os
 import pickle
 import time
@@ -39,6 +38,7 @@ from torqueloop.sim import experiment, native, report
 from torqueloop.sim.experiment import ExperimentConfig, ModelRun, RtlRun
 from torqueloop.spec.repo import REPO_ROOT
 from torqueloop.study.characterization import inputs_digest, run_study
+from torqueloop.study.engine import Engine
 
 SWEEP_HZ = (50.0, 120.0, 300.0, 700.0, 1700.0, 4000.0, 10_000.0, 24_400.0)
 QUICK_SWEEP_HZ = (50.0, 1700.0, 24_400.0)
@@ -65,7 +65,12 @@ class ExperimentPlan:
     char_dir: Path = REPO_ROOT / "build" / "characterize"
     out: Path = REPO_ROOT / "build" / "report"
     jobs: int = field(default_factory=lambda: os.cpu_count() or 2)
+    cluster: str | None = None            # a Dask scheduler's address (torqueloop/study/engine.py); None: local pool
     quick: bool = False
+
+    @property
+    def engine(self) -> Engine:
+        return Engine(self.jobs, self.cluster)
 
     @classmethod
     def short(cls, **kw) -> "ExperimentPlan":
@@ -152,6 +157,7 @@ def execute(run: Run) -> tuple[Run, Result, float]:
     cfg = run.config
     try:
         if run.kind == "rtl":   # and its implementation check: the fast path with the carriers' phase it met
+            native.build()                # once per machine, keyed by its inputs (a cluster worker's first run)
             rtl = experiment.run_rtl(cfg, log=lambda m, **k: print(f"  {m.strip()}", flush=True))
             result: Result = (rtl, experiment.run_fast(replace(cfg, progress=False), rtl.carrier_start_clk))
         elif run.kind == "model":
@@ -185,22 +191,22 @@ def run_experiment(plan: ExperimentPlan) -> int:
     experiment.firmware_image()
 
     jobs = runs(plan, char)
-    _say(f"{len(jobs)} runs on {plan.jobs} processes: {len(plan.laws)} x experiment arm (RTL, T = {plan.t_end_s:g} s, "
+    engine = plan.engine
+    _say(f"{len(jobs)} runs on the {engine.name}: {len(plan.laws)} x experiment arm (RTL, T = {plan.t_end_s:g} s, "
          f"then its implementation check), model arm and {len(CASES)} cases per law, "
          f"{sum(j.key[0] == 'sweep' for j in jobs if j.kind == 'fast')} sweep runs (T = {plan.sweep_t_end_s:g} s)")
     st = report.Study(t_end_s=plan.t_end_s, target_rad=jobs[0].config.target_counts * 2 * math.pi / experiment.COUNTS_PER_REV,
                       laws=list(plan.laws), sweep_t_end_s=plan.sweep_t_end_s,
                       case_labels={k: v[0] for k, v in CASES.items()})
     done, failed = 0, []
-    with mp.get_context("fork").Pool(max(1, plan.jobs)) as pool:
-        for run, result, dt in pool.imap_unordered(execute, jobs, chunksize=1):
-            done += 1
-            if isinstance(result, RunFailed):
-                failed.append(f"{run.label()}: {result}")
-                _say(f"{done}/{len(jobs)} {run.label()} FAILED after {dt:.0f} s: {result}")
-                continue
-            _say(f"{done}/{len(jobs)} {run.label()} ({dt:.0f} s; {time.monotonic() - t0:.0f} s so far)")
-            collect(st, run, result)
+    for _, (run, result, dt) in engine.map_unordered(execute, jobs):
+        done += 1
+        if isinstance(result, RunFailed):
+            failed.append(f"{run.label()}: {result}")
+            _say(f"{done}/{len(jobs)} {run.label()} FAILED after {dt:.0f} s: {result}")
+            continue
+        _say(f"{done}/{len(jobs)} {run.label()} ({dt:.0f} s; {time.monotonic() - t0:.0f} s so far)")
+        collect(st, run, result)
     if failed:
         for f in failed:
             _say(f)
@@ -216,7 +222,7 @@ def run_experiment(plan: ExperimentPlan) -> int:
         "plots": [str(p) for p in sorted((plan.char_dir / "plots").glob("*.png"))],
     }
     st.meta = {"model_plant": plan.model_plant.label, "experiment_plant": plan.experiment_plant.label,
-               "quick": plan.quick, "jobs": plan.jobs, "wall_s_total": round(time.monotonic() - t0, 1)}
+               "quick": plan.quick, "jobs": plan.jobs, "engine": engine.name, "wall_s_total": round(time.monotonic() - t0, 1)}
     plan.out.mkdir(parents=True, exist_ok=True)
     (plan.out / "data").mkdir(exist_ok=True)
     with open(plan.out / "data" / "runs.pkl", "wb") as fh:      # for re-scoring without re-simulating

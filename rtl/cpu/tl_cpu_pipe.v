@@ -1,0 +1,414 @@
+// SPDX-License-Identifier: MIT
+`default_nettype none
+// torqueloop CPU, pipelined: RV32IM + Zicsr, machine mode only.  The same
+// ports, CSRs, traps and bus contract as tl_cpu (docs/cpu.md), in four
+// stages with the instruction fetch in front of them:
+//
+//   F  fetch   : ibus request (address f_pc, or the held address of a request
+//                not yet answered); answers go straight to D, or into a
+//                two-entry queue when D is stalled.
+//   D  decode  : the answered word (bus or queue): decoded, register file
+//                read (block RAM, registered read) at the edge into E;
+//                a load-use hazard holds it here.
+//   E  execute : operands forwarded from M and W, ALU, branch comparator,
+//                jump/branch targets (a taken branch or jump redirects the
+//                fetch from the next cycle: 2 cycles lost, no prediction),
+//                effective address, multiply/divide (E waits for the unit),
+//                every exception but a data bus error, and interrupts,
+//                taken before the instruction in E executes.
+//   M  memory  : the data bus request, from registers.
+//   W  write   : the data bus answer (a wait state stalls the pipeline),
+//                CSR instructions, mret and fence.i, trap entry; the one
+//                point where instructions retire, write rd and change
+//                architectural state, so traps are precise: an instruction
+//                that traps in W has no effect, and nothing younger has had
+//                any (a younger access in M is held off the bus while W
+//                traps or ends in a CSR/mret/fence.i, all of which flush the
+//                pipeline and refetch).
+//
+// Bus contract: tl_cpu's (docs/cpu.md), and a new request may start in an
+// ack cycle.  With a slave that takes a request in its own ack cycle (ack
+// <= req, see tb/cpu/cpu_sim_top.v PIPELINED) each bus moves one word per
+// cycle; with one that does not (ack <= req & ~ack, rtl/soc/tl_soc_fabric.v)
+// the core works unchanged at one word every two cycles.
+module tl_cpu_pipe #(
+    parameter [31:0] RESET_PC = 32'h0000_0000,
+    parameter [31:0] HART_ID  = 32'd0
+) (
+    input  wire        clk,
+    input  wire        rst,
+    output wire        ibus_req,
+    output wire [31:0] ibus_addr,
+    input  wire        ibus_ack,
+    input  wire [31:0] ibus_rdata,
+    input  wire        ibus_err,
+    output wire        dbus_req,
+    output wire [31:0] dbus_addr,
+    output wire        dbus_we,
+    output wire [3:0]  dbus_be,
+    output wire [31:0] dbus_wdata,
+    input  wire        dbus_ack,
+    input  wire [31:0] dbus_rdata,
+    input  wire        dbus_err,
+    input  wire        irq_timer,
+    input  wire        irq_external,
+    input  wire        irq_software,
+    input  wire [63:0] mtime,
+    output wire        retire
+);
+    // mcause exception codes (privileged spec, table 3.6)
+    localparam [3:0] CAUSE_FETCH_MISALIGNED = 4'd0, CAUSE_FETCH_FAULT = 4'd1, CAUSE_ILLEGAL = 4'd2,
+                     CAUSE_BREAKPOINT = 4'd3, CAUSE_LOAD_MISALIGNED = 4'd4, CAUSE_LOAD_FAULT = 4'd5,
+                     CAUSE_STORE_MISALIGNED = 4'd6, CAUSE_STORE_FAULT = 4'd7, CAUSE_ECALL_M = 4'd11;
+
+    // Control signals used before the stage that drives them.
+    wire        gs;              // global stall: W waits for its data bus answer
+    wire        flush_w;         // W redirects: trap, mret, CSR, fence.i
+    wire [31:0] redirect_w_pc;
+    wire        redirect_e;      // E redirects: taken branch, jal, jalr
+    wire [31:0] redirect_e_pc;
+    wire        redirect    = flush_w || redirect_e;
+    wire [31:0] redirect_pc = flush_w ? redirect_w_pc : redirect_e_pc;
+
+    // ==== F: instruction fetch =================================================================
+    reg         f_out;           // a request is outstanding (presented before, not answered yet)
+    reg  [31:0] f_out_addr;
+    reg         f_discard;       // its answer belongs to a flushed path
+    reg  [31:0] f_pc;            // the next address to request
+    reg  [1:0]  q_n;             // instruction queue: entries 0 (head) and 1
+    reg  [31:0] q_insn0, q_insn1, q_pc0, q_pc1;
+    reg         q_err0, q_err1;
+
+    wire resp   = f_out && ibus_ack && !f_discard;     // an answer for the current path
+    wire f_hold = f_out && !ibus_ack;
+    // Room for the answer of a new request: whatever D does, the queue can take it.
+    wire f_room = q_n == 2'd0 || (q_n == 2'd1 && !resp);
+    wire f_new  = !f_hold && f_room;
+    assign ibus_req  = !rst && (f_hold || f_new);
+    assign ibus_addr = f_hold ? f_out_addr : f_pc;
+
+    // ==== D: decode ================================================================================
+    wire        d_valid = q_n != 2'd0 || resp;
+    wire [31:0] d_insn  = q_n != 2'd0 ? q_insn0 : ibus_rdata;
+    wire [31:0] d_pc    = q_n != 2'd0 ? q_pc0 : f_out_addr;
+    wire        d_ferr  = q_n != 2'd0 ? q_err0 : ibus_err;
+
+    wire [4:0]  d_rd, d_rs1;
+    wire [2:0]  d_funct3;
+    wire [31:0] d_imm;
+    wire [16:0] d_flags;
+    tl_cpu_decode u_decode (
+        .insn(d_insn), .rd(d_rd), .rs1(d_rs1), .funct3(d_funct3), .imm(d_imm),
+        .is_lui(d_flags[0]), .is_auipc(d_flags[1]), .is_jal(d_flags[2]), .is_jalr(d_flags[3]),
+        .is_branch(d_flags[4]), .is_load(d_flags[5]), .is_store(d_flags[6]),
+        .alu_use_imm(d_flags[7]), .alu_alt(d_flags[8]), .is_muldiv(d_flags[9]),
+        .is_csr(d_flags[10]), .csr_writes(d_flags[11]), .is_ecall(d_flags[12]),
+        .is_ebreak(d_flags[13]), .is_mret(d_flags[14]),
+        .writes_rd(d_flags[15]), .illegal(d_flags[16])
+    );
+    wire [4:0] d_rs2      = d_insn[24:20];
+    wire [6:0] d_opcode   = d_insn[6:0];
+    // which source registers the instruction reads (a needless hazard costs a cycle)
+    wire d_uses_rs1 = d_opcode != 7'b0110111 && d_opcode != 7'b0010111 && d_opcode != 7'b1101111;
+    wire d_uses_rs2 = d_opcode == 7'b1100011 || d_opcode == 7'b0100011 || d_opcode == 7'b0110011;
+    wire d_fencei   = d_opcode == 7'b0001111 && d_funct3 == 3'b001;
+
+    // Load-use hazard: a load's word (or a CSR's old value) reaches rd only
+    // in W, and is not forwarded from there (that would put a block RAM's
+    // output in front of the ALU); a reader waits in D until the load is in
+    // W, then reads the register file in the edge the load writes it
+    // (forwarded inside the register file).
+    reg        e_valid, m_valid, w_valid;
+    reg        e_late, m_late;                 // a load or CSR instruction that writes rd
+    reg  [4:0] e_rd, m_rd;
+    wire hz_e = e_valid && e_late && ((d_uses_rs1 && d_rs1 == e_rd) || (d_uses_rs2 && d_rs2 == e_rd));
+    wire hz_m = m_valid && m_late && ((d_uses_rs1 && d_rs1 == m_rd) || (d_uses_rs2 && d_rs2 == m_rd));
+    wire d_hazard = hz_e || hz_m;
+
+    wire e_load;                                // E takes a new instruction (or a bubble) this edge
+    wire d_go = d_valid && !d_hazard && e_load;    // D moves on (unless a redirect kills it)
+
+    // ==== register file =====================================================================
+    wire        rf_we;
+    wire [4:0]  rf_waddr;
+    reg  [31:0] rf_wdata;
+    wire [31:0] rf_rdata1, rf_rdata2;
+    tl_cpu_regfile u_regfile (
+        .clk(clk), .we(rf_we), .waddr(rf_waddr), .wdata(rf_wdata),
+        .re(e_load), .raddr1(d_rs1), .raddr2(d_rs2),
+        .rdata1(rf_rdata1), .rdata2(rf_rdata2)
+    );
+
+    // ==== E: execute ==============================================================================
+    reg  [31:0] e_pc, e_insn, e_imm;
+    reg  [4:0]  e_rs1;
+    reg  [2:0]  e_funct3;
+    reg         e_ferr, e_fencei;
+    reg         e_lui, e_auipc, e_jal, e_jalr, e_branch, e_is_load, e_is_store, e_use_imm, e_alt;
+    reg         e_md, e_csr, e_csr_writes, e_ecall, e_ebreak, e_mret, e_writes, e_illegal;
+    reg         e_md_started, e_md_fin;
+    wire [4:0]  e_rs2 = e_insn[24:20];
+
+    // forwarding: M's and W's early results (ALU, jumps, lui/auipc, multiply/divide)
+    reg         m_early, w_early;
+    reg  [31:0] m_result, w_result;
+    reg  [4:0]  w_rd;
+    wire f1m = m_valid && m_early && m_rd == e_rs1;
+    wire f1w = w_valid && w_early && w_rd == e_rs1;
+    wire f2m = m_valid && m_early && m_rd == e_rs2;
+    wire f2w = w_valid && w_early && w_rd == e_rs2;
+    wire [31:0] rs1v = f1m ? m_result : (f1w ? w_result : rf_rdata1);
+    wire [31:0] rs2v = f2m ? m_result : (f2w ? w_result : rf_rdata2);
+
+    wire [31:0] alu_result;
+    wire        branch_taken;
+    tl_cpu_alu u_alu (
+        .funct3(e_funct3), .alt(e_alt), .a(rs1v), .b(e_use_imm ? e_imm : rs2v),
+        .result(alu_result), .cmp_a(rs1v), .cmp_b(rs2v), .branch_taken(branch_taken)
+    );
+    wire [31:0] e_pc4    = e_pc + 32'd4;
+    wire [31:0] e_pc_imm = e_pc + e_imm;
+    wire [31:0] e_eff    = rs1v + e_imm;
+    wire [31:0] e_jtarget = e_jalr ? {e_eff[31:1], 1'b0} : e_pc_imm;
+    wire        e_taken  = e_branch && branch_taken;
+
+    wire        e_misaligned;
+    wire [3:0]  e_be;
+    wire [31:0] e_wdata;
+    /* verilator lint_off PINCONNECTEMPTY */
+    tl_cpu_lsu u_lsu_e (
+        .funct3(e_funct3), .off(e_eff[1:0]), .store_data(rs2v),
+        .misaligned(e_misaligned), .be(e_be), .wdata(e_wdata), .rdata(32'd0), .load_data()
+    );
+    /* verilator lint_on PINCONNECTEMPTY */
+
+    // Exceptions of E, in the priority of tl_cpu: fetch fault, interrupt,
+    // illegal, ecall, ebreak, misaligned jump, misaligned access, misaligned
+    // taken branch.
+    wire        irq_pending;
+    wire [3:0]  irq_code;
+    reg         e_trap, e_irq;
+    reg  [3:0]  e_code;
+    reg  [31:0] e_tval;
+    always @(*) begin
+        e_trap = 1'b1;
+        e_irq  = 1'b0;
+        e_code = CAUSE_FETCH_MISALIGNED;
+        e_tval = 32'd0;
+        if (e_ferr) begin
+            e_code = CAUSE_FETCH_FAULT; e_tval = e_pc;
+        end else if (irq_pending) begin
+            e_irq = 1'b1; e_code = irq_code;
+        end else if (e_illegal) begin
+            e_code = CAUSE_ILLEGAL; e_tval = e_insn;
+        end else if (e_ecall) begin
+            e_code = CAUSE_ECALL_M;
+        end else if (e_ebreak) begin
+            e_code = CAUSE_BREAKPOINT; e_tval = e_pc;
+        end else if ((e_jal || e_jalr) && e_jtarget[1]) begin
+            e_code = CAUSE_FETCH_MISALIGNED; e_tval = e_jtarget;
+        end else if ((e_is_load || e_is_store) && e_misaligned) begin
+            e_code = e_is_store ? CAUSE_STORE_MISALIGNED : CAUSE_LOAD_MISALIGNED; e_tval = e_eff;
+        end else if (e_taken && e_pc_imm[1]) begin
+            e_code = CAUSE_FETCH_MISALIGNED; e_tval = e_pc_imm;
+        end else begin
+            e_trap = 1'b0;
+        end
+    end
+
+    // multiply / divide: started in E's first cycle, E waits for the result;
+    // an interrupt abandons it (re-executed after mret)
+    wire        md_done;
+    wire [31:0] md_result;
+    wire        in_md    = e_valid && e_md && e_md_started;   // a multiply/divide in progress
+    wire        md_start = e_valid && e_md && !e_md_started && !e_trap && !flush_w;
+    /* verilator lint_off PINCONNECTEMPTY */
+    tl_cpu_muldiv u_muldiv (
+        .clk(clk), .rst(rst), .start(md_start), .abort(flush_w || (in_md && e_trap)),
+        .funct3(e_funct3), .a(rs1v), .b(rs2v), .busy(), .done(md_done), .result(md_result)
+    );
+    /* verilator lint_on PINCONNECTEMPTY */
+    wire e_done = !e_md || e_trap || md_done || e_md_fin;
+    wire e_adv  = e_valid && e_done && !gs && !flush_w;   // E moves to M
+    assign e_load = !gs && (!e_valid || e_done);
+    assign redirect_e    = e_valid && !e_trap && !gs && (e_taken || e_jal || e_jalr);
+    assign redirect_e_pc = e_jtarget;
+
+    reg [31:0] e_result;
+    always @(*) begin
+        if (e_lui)
+            e_result = e_imm;
+        else if (e_auipc)
+            e_result = e_pc_imm;
+        else if (e_md)
+            e_result = md_result;
+        else if (e_jal || e_jalr || e_csr || e_mret || e_fencei)
+            e_result = e_pc4;               // the link, or where W refetches from
+        else
+            e_result = alu_result;
+    end
+
+    // ==== M: data bus request ======================================================================
+    reg  [31:0] m_pc, m_insn, m_addr, m_wdata, m_tval, m_csr_src;
+    reg  [3:0]  m_be, m_code;
+    reg  [2:0]  m_funct3;
+    reg         m_load, m_store, m_trap, m_irq, m_wr, m_csr, m_csr_writes, m_mret, m_fencei;
+    wire        m_acc = m_valid && (m_load || m_store) && !m_trap;
+
+    // ==== W: retire ================================================================================
+    reg  [31:0] w_pc, w_insn, w_addr, w_wdata, w_tval, w_csr_src;
+    reg  [3:0]  w_be, w_code;
+    reg  [2:0]  w_funct3;
+    reg         w_load, w_store, w_acc, w_trap, w_irq, w_wr, w_csr, w_csr_writes, w_mret, w_fencei;
+
+    wire        csr_illegal;
+    assign gs = w_valid && w_acc && !dbus_ack;
+    // W ends in a flush (or faults on the bus): M's access must not start
+    wire w_csr_flush = w_csr && (w_csr_writes || csr_illegal);
+    wire w_block = w_valid && (w_trap || w_csr_flush || w_mret || w_fencei || (w_acc && dbus_err));
+    assign dbus_req   = !rst && (gs || (m_acc && !w_block));
+    assign dbus_addr  = gs ? w_addr  : m_addr;
+    assign dbus_we    = gs ? w_store : m_store;
+    assign dbus_be    = gs ? w_be    : m_be;
+    assign dbus_wdata = gs ? w_wdata : m_wdata;
+
+    wire [31:0] csr_rdata, trap_target, mepc;
+    wire        w_done    = w_valid && !gs;
+    wire        bus_fault = w_acc && dbus_err;           // with dbus_ack (w_done)
+    wire        csr_bad   = w_csr && csr_illegal;
+    wire        take_trap = w_done && (w_trap || bus_fault || csr_bad);
+    wire [3:0]  trap_code = w_trap ? w_code : (bus_fault ? (w_store ? CAUSE_STORE_FAULT : CAUSE_LOAD_FAULT)
+                                                         : CAUSE_ILLEGAL);
+    wire [31:0] trap_tval = w_trap ? w_tval : (bus_fault ? w_addr : w_insn);
+    assign retire  = w_done && !take_trap && !rst;
+    // a CSR instruction that only reads changes nothing: no refetch
+    assign flush_w = take_trap || (retire && ((w_csr && w_csr_writes) || w_mret || w_fencei));
+    assign redirect_w_pc = take_trap ? trap_target : (w_mret ? mepc : w_result);
+
+    tl_cpu_csr #(.HART_ID(HART_ID)) u_csr (
+        .clk(clk), .rst(rst),
+        .addr(w_insn[31:20]), .op(w_funct3[1:0]), .src(w_csr_src),
+        .writes(w_csr_writes), .commit(retire && w_csr),
+        .rdata(csr_rdata), .illegal(csr_illegal),
+        .trap(take_trap && !rst), .trap_irq(w_trap && w_irq), .trap_code(trap_code), .trap_pc(w_pc),
+        .trap_tval(trap_tval), .trap_target(trap_target),
+        .mret(retire && w_mret), .mepc_out(mepc),
+        .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
+        .irq_pending(irq_pending), .irq_code(irq_code),
+        .retire(retire), .mtime(mtime)
+    );
+
+    wire [31:0] load_data;
+    /* verilator lint_off PINCONNECTEMPTY */
+    tl_cpu_lsu u_lsu_w (
+        .funct3(w_funct3), .off(w_addr[1:0]), .store_data(32'd0),
+        .misaligned(), .be(), .wdata(), .rdata(dbus_rdata), .load_data(load_data)
+    );
+    /* verilator lint_on PINCONNECTEMPTY */
+    assign rf_we    = retire && w_wr;
+    assign rf_waddr = w_rd;
+    always @(*) begin
+        if (w_load)
+            rf_wdata = load_data;
+        else if (w_csr)
+            rf_wdata = csr_rdata;
+        else
+            rf_wdata = w_result;
+    end
+
+    // ==== pipeline registers =====================================================================
+    wire e_writes_nz = e_writes && e_rd != 5'd0;
+    always @(posedge clk) begin
+        if (rst) begin
+            f_out     <= 1'b0;
+            f_discard <= 1'b0;
+            f_pc      <= RESET_PC;
+            q_n       <= 2'd0;
+            e_valid   <= 1'b0;
+            m_valid   <= 1'b0;
+            w_valid   <= 1'b0;
+            e_md_started <= 1'b0;
+            e_md_fin  <= 1'b0;
+        end else begin
+            // ---- F ----
+            f_out      <= ibus_req;
+            f_out_addr <= ibus_addr;
+            if (redirect) begin
+                f_pc      <= redirect_pc;
+                f_discard <= ibus_req;
+            end else begin
+                if (f_new)
+                    f_pc <= f_pc + 32'd4;
+                if (ibus_ack)
+                    f_discard <= 1'b0;
+            end
+            // ---- instruction queue: D takes the head (or the answer itself when empty) ----
+            if (redirect) begin
+                q_n <= 2'd0;
+            end else begin
+                if (q_n == 2'd0) begin
+                    if (resp && !d_go) begin
+                        q_insn0 <= ibus_rdata; q_pc0 <= f_out_addr; q_err0 <= ibus_err; q_n <= 2'd1;
+                    end
+                end else if (q_n == 2'd1) begin
+                    if (d_go && resp) begin
+                        q_insn0 <= ibus_rdata; q_pc0 <= f_out_addr; q_err0 <= ibus_err;
+                    end else if (d_go) begin
+                        q_n <= 2'd0;
+                    end else if (resp) begin
+                        q_insn1 <= ibus_rdata; q_pc1 <= f_out_addr; q_err1 <= ibus_err; q_n <= 2'd2;
+                    end
+                end else if (d_go) begin   // two entries: no request was outstanding
+                    q_insn0 <= q_insn1; q_pc0 <= q_pc1; q_err0 <= q_err1; q_n <= 2'd1;
+                end
+            end
+            // ---- D -> E ----
+            if (e_load) begin
+                e_valid <= d_go && !redirect;
+                e_md_started <= 1'b0;
+                e_md_fin <= 1'b0;
+            end else if (flush_w) begin
+                e_valid <= 1'b0;
+            end else begin
+                if (md_start)
+                    e_md_started <= 1'b1;
+                if (md_done)
+                    e_md_fin <= 1'b1;
+            end
+            if (e_load) begin
+                e_pc <= d_pc; e_insn <= d_insn; e_imm <= d_imm; e_rs1 <= d_rs1; e_rd <= d_rd;
+                e_funct3 <= d_funct3; e_ferr <= d_ferr; e_fencei <= d_fencei;
+                {e_illegal, e_writes, e_mret, e_ebreak, e_ecall, e_csr_writes, e_csr, e_md, e_alt,
+                 e_use_imm, e_is_store, e_is_load, e_branch, e_jalr, e_jal, e_auipc, e_lui} <= d_flags;
+                e_late <= (d_flags[5] || d_flags[10]) && d_flags[15] && d_rd != 5'd0;
+            end
+            // ---- E -> M ----
+            if (!gs) begin
+                m_valid <= e_adv;
+                m_pc <= e_pc; m_insn <= e_insn; m_rd <= e_rd; m_funct3 <= e_funct3;
+                m_result <= e_result;
+                m_addr <= e_eff; m_be <= e_be; m_wdata <= e_wdata;
+                m_load <= e_is_load; m_store <= e_is_store;
+                m_trap <= e_trap; m_irq <= e_irq; m_code <= e_code; m_tval <= e_tval;
+                m_wr <= e_writes_nz;
+                m_early <= e_writes_nz && !e_is_load && !e_csr && !e_trap;
+                m_late  <= e_late;
+                m_csr <= e_csr; m_csr_writes <= e_csr_writes; m_mret <= e_mret; m_fencei <= e_fencei;
+                m_csr_src <= e_funct3[2] ? {27'd0, e_rs1} : rs1v;
+            end
+            // ---- M -> W ----
+            if (!gs) begin
+                w_valid <= m_valid && !flush_w;
+                w_pc <= m_pc; w_insn <= m_insn; w_rd <= m_rd; w_funct3 <= m_funct3;
+                w_result <= m_result;
+                w_addr <= m_addr; w_be <= m_be; w_wdata <= m_wdata;
+                w_load <= m_load; w_store <= m_store; w_acc <= m_acc;
+                w_trap <= m_trap; w_irq <= m_irq; w_code <= m_code; w_tval <= m_tval;
+                w_wr <= m_wr; w_early <= m_early;
+                w_csr <= m_csr; w_csr_writes <= m_csr_writes; w_mret <= m_mret; w_fencei <= m_fencei;
+                w_csr_src <= m_csr_src;
+            end
+        end
+    end
+endmodule
+`default_nettype wire
