@@ -19,7 +19,7 @@ from pathlib import Path
 
 import cocotb
 from cocotb.clock import Clock
-from cocotb.triggers import FallingEdge, First, RisingEdge
+from cocotb.triggers import ClockCycles, FallingEdge, First, ReadOnly, RisingEdge
 from cocotb.utils import get_sim_time
 
 from torqueloop.spec import bootproto, regs
@@ -45,6 +45,17 @@ def idle_soc_pins(dut, sw: int = 0) -> None:
     drive(dut, sw=sw, key_n=0xF, estop=0, bridge_fault=0, enc_a=0, enc_b=0, enc_z=0, lim_neg=0, lim_pos=0,
           uart_rx=1, uart_cts_n=0,
           flash_miso=1)          # no flash answering: the line idles high, as an erased one reads
+
+
+async def reset_then_check(dut, reset_out: str, want: int, cycles: int = 3) -> None:
+    """Hold ``rst`` for ``cycles`` clocks, check that output ``reset_out``
+    reads ``want`` in reset, and release at the next falling edge."""
+    dut.rst.value = 1
+    await ClockCycles(dut.clk, cycles)
+    await ReadOnly()
+    assert int(getattr(dut, reset_out).value) == want, f"{reset_out} in reset: want {want:#x}"
+    await FallingEdge(dut.clk)
+    dut.rst.value = 0
 
 
 def drive(dut, **values: int) -> None:

@@ -9,10 +9,12 @@ import random
 import cocotb
 import pytest
 from cocotb.clock import Clock
-from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge
+from cocotb.triggers import FallingEdge, ReadOnly, RisingEdge
 
 from torqueloop.flow.simrun import run, sims_for
 from torqueloop.oracles.sync import DebounceModel
+
+import tbutil
 
 
 @cocotb.test()
@@ -21,12 +23,7 @@ async def follows_model_with_bouncing_input(dut):
     model = DebounceModel(width, stable, reset_val)
     cocotb.start_soon(Clock(dut.clk, 20, unit="ns").start())
     dut.sync_in.value = 0
-    dut.rst.value = 1
-    await ClockCycles(dut.clk, 3)
-    await ReadOnly()
-    assert int(dut.q.value) == model.reset_word, "reset value"
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
+    await tbutil.reset_then_check(dut, "q", model.reset_word)
     level, changes = model.reset_word, 0
     for cycle in range(4000):
         # hold a level for a while, then bounce: runs both shorter and longer than STABLE_CLKS

@@ -7,10 +7,12 @@ import random
 import cocotb
 import pytest
 from cocotb.clock import Clock
-from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Timer
+from cocotb.triggers import FallingEdge, ReadOnly, RisingEdge, Timer
 
 from torqueloop.oracles.sync import Sync2ffModel
 from torqueloop.flow.simrun import run, sims_for
+
+import tbutil
 
 
 @cocotb.test()
@@ -21,12 +23,7 @@ async def follows_model_with_random_async_input(dut):
     cocotb.start_soon(Clock(dut.clk, 20, unit="ns").start())
 
     dut.async_in.value = model.reset_word
-    dut.rst.value = 1
-    await ClockCycles(dut.clk, 3)
-    await ReadOnly()
-    assert int(dut.sync_out.value) == model.reset_word, "reset value"
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
+    await tbutil.reset_then_check(dut, "sync_out", model.reset_word)
 
     current = model.reset_word
     for cycle in range(2000):

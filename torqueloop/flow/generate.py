@@ -1,18 +1,26 @@
 # SPDX-License-Identifier: MIT
-"""Every file generated from a single source, written or checked in one place.
+"""The one registry of the committed files generated from a single source:
+written or checked here and nowhere else.
 
-    python -m torqueloop.flow.generate           # write the stale ones
-    python -m torqueloop.flow.generate --check   # write nothing, exit 1 if any is stale
-    python -m torqueloop.flow.generate --diff    # the same, with what writing would change
+    python -m torqueloop.flow gen           # write the stale ones
+    python -m torqueloop.flow gen --check   # write nothing, exit 1 if any is stale
+    python -m torqueloop.flow gen --diff    # the same, with what writing would change
+
+A new generated file is one more entry in :func:`products`, with the banner
+of flow/licence.py (``Generated from SOURCE by torqueloop.flow.generate``).
+Build outputs under build/ (firmware images, the boot ROM and its
+boot_proto.h, the Quartus project) are written by their builds instead.
 
 Sources and their views:
 
 * ``torqueloop/spec/regmap.toml``   -> Verilog include, VHDL package, C header,
-  docs/registers.md (:mod:`.gen_regmap`), the firmware linker script (:mod:`.gen_linker`)
+  docs/registers.md (:mod:`.gen_regmap`), the linker scripts of the firmware and of
+  the CPU test programs (:mod:`.gen_linker`)
 * ``torqueloop/spec/protocol.toml`` -> C header, docs/protocol.md (:mod:`.gen_protocol`)
 * ``constraints/pins.toml``         -> .qsf, .sdc, the board top's GPIO block, the cable
-  harness of the board test wrappers (torqueloop/sim/harness/de0_cv_cable.v) and docs/hardware.md's wiring
-  table (:mod:`.quartus`), the wiring diagram docs/wiring.svg (:mod:`.wiring`)
+  harness of the board wrappers (torqueloop/sim/harness/de0_cv_cable.v), the Quartus
+  top and docs/hardware.md's wiring table (:mod:`.quartus`), the wiring diagram
+  docs/wiring.svg (:mod:`.wiring`)
 
 ``make lint`` runs the check, so a stale generated file cannot land.
 """
@@ -64,7 +72,7 @@ def main(argv: list[str] | None = None, log: Callable[[str], None] = print) -> i
     bad = stale(prods)
     if args.check or args.diff:
         for rel in bad:
-            log(f"[generate] stale: {rel} (run: python -m torqueloop.flow.generate)")
+            log(f"[generate] stale: {rel} (run: python -m torqueloop.flow gen)")
             if args.diff:
                 log(diff(rel, prods[rel]))
         if not bad:

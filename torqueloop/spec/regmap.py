@@ -102,21 +102,11 @@ class Register:
         """Value read after reset (write-only fields read 0)."""
         return sum((f.reset << f.lsb) for f in self.fields if f.access != "wo")
 
-    @property
-    def rw_mask(self) -> int:
-        return self._mask("rw")
-
-    @property
-    def ro_mask(self) -> int:
-        return self._mask("ro")
-
-    @property
-    def w1c_mask(self) -> int:
-        return self._mask("w1c")
-
-    @property
-    def wo_mask(self) -> int:
-        return self._mask("wo")
+    #: the bits of the fields of one access type
+    rw_mask = property(lambda self: self._mask("rw"))
+    ro_mask = property(lambda self: self._mask("ro"))
+    w1c_mask = property(lambda self: self._mask("w1c"))
+    wo_mask = property(lambda self: self._mask("wo"))
 
     @property
     def readable_mask(self) -> int:
@@ -141,10 +131,7 @@ class Block:
     registers: tuple[Register, ...]
 
     def reg(self, name: str) -> Register:
-        for r in self.registers:
-            if r.name == name:
-                return r
-        raise KeyError(f"{self.name} has no register {name}")
+        return _named(self.registers, name, f"{self.name} has no register {name}")
 
 
 @dataclass(frozen=True)
@@ -164,16 +151,10 @@ class RegMap:
     blocks: tuple[Block, ...]
 
     def block(self, name: str) -> Block:
-        for b in self.blocks:
-            if b.name == name:
-                return b
-        raise KeyError(f"no block {name}")
+        return _named(self.blocks, name, f"no block {name}")
 
     def region(self, name: str) -> Region:
-        for r in self.regions:
-            if r.name == name:
-                return r
-        raise KeyError(f"no region {name}")
+        return _named(self.regions, name, f"no region {name}")
 
     @property
     def kinds(self) -> dict[str, Block]:
@@ -205,6 +186,14 @@ class RegMap:
                     for k, v in f.values:
                         out[f"{kind}_{r.name}_{f.name}_{k}"] = v
         return out
+
+
+def _named(items, name: str, missing: str):
+    """The item called ``name``; KeyError(``missing``) if there is none."""
+    found = next((x for x in items if x.name == name), None)
+    if found is None:
+        raise KeyError(missing)
+    return found
 
 
 class RegMapError(ValueError):
