@@ -9,10 +9,12 @@
 //                two-entry queue when D is stalled.
 //   D  decode  : the answered word (bus or queue): decoded, register file
 //                read (block RAM, registered read) at the edge into E;
-//                a load-use hazard holds it here.
+//                a load-use hazard holds it here.  jal and backward
+//                branches are predicted taken: D redirects the fetch to
+//                their target (1 cycle lost).
 //   E  execute : operands forwarded from M and W, ALU, branch comparator,
-//                jump/branch targets (a taken branch or jump redirects the
-//                fetch from the next cycle: 2 cycles lost, no prediction),
+//                jump/branch targets (jalr, a taken forward branch or a
+//                mispredicted branch redirects the fetch: 2 cycles lost),
 //                effective address, multiply/divide (E waits for the unit),
 //                every exception but a data bus error, and interrupts,
 //                taken before the instruction in E executes.
@@ -56,10 +58,7 @@ module tl_cpu_pipe #(
     input  wire [63:0] mtime,
     output wire        retire
 );
-    // mcause exception codes (privileged spec, table 3.6)
-    localparam [3:0] CAUSE_FETCH_MISALIGNED = 4'd0, CAUSE_FETCH_FAULT = 4'd1, CAUSE_ILLEGAL = 4'd2,
-                     CAUSE_BREAKPOINT = 4'd3, CAUSE_LOAD_MISALIGNED = 4'd4, CAUSE_LOAD_FAULT = 4'd5,
-                     CAUSE_STORE_MISALIGNED = 4'd6, CAUSE_STORE_FAULT = 4'd7, CAUSE_ECALL_M = 4'd11;
+`include "tl_cpu_causes.vh"
 
     // Control signals used before the stage that drives them.
     wire        gs;              // global stall: W waits for its data bus answer
@@ -67,8 +66,11 @@ module tl_cpu_pipe #(
     wire [31:0] redirect_w_pc;
     wire        redirect_e;      // E redirects: taken branch, jal, jalr
     wire [31:0] redirect_e_pc;
-    wire        redirect    = flush_w || redirect_e;
-    wire [31:0] redirect_pc = flush_w ? redirect_w_pc : redirect_e_pc;
+    wire        redirect    = flush_w || redirect_e;   // kills D (and E, M for flush_w)
+    wire        redirect_d;      // D predicts a jump taken: jal, or a branch backwards
+    wire [31:0] redirect_d_pc;
+    wire        refetch     = redirect || redirect_d;
+    wire [31:0] refetch_pc  = flush_w ? redirect_w_pc : (redirect_e ? redirect_e_pc : redirect_d_pc);
 
     // ==== F: instruction fetch =================================================================
     reg         f_out;           // a request is outstanding (presented before, not answered yet)
@@ -112,6 +114,10 @@ module tl_cpu_pipe #(
     wire d_uses_rs1 = d_opcode != 7'b0110111 && d_opcode != 7'b0010111 && d_opcode != 7'b1101111;
     wire d_uses_rs2 = d_opcode == 7'b1100011 || d_opcode == 7'b0100011 || d_opcode == 7'b0110011;
     wire d_fencei   = d_opcode == 7'b0001111 && d_funct3 == 3'b001;
+    // Static prediction: jal always, a conditional branch when it jumps
+    // backwards (a loop); not a target that would trap as misaligned (E
+    // raises that).  E checks every prediction and corrects a wrong one.
+    wire d_pred = (d_opcode == 7'b1101111 || (d_opcode == 7'b1100011 && d_insn[31])) && !d_imm[1];
 
     // Load-use hazard: a load's word (or a CSR's old value) reaches rd only
     // in W, and is not forwarded from there (that would put a block RAM's
@@ -127,6 +133,8 @@ module tl_cpu_pipe #(
 
     wire e_load;                                // E takes a new instruction (or a bubble) this edge
     wire d_go = d_valid && !d_hazard && e_load;    // D moves on (unless a redirect kills it)
+    assign redirect_d    = d_go && d_pred && !redirect;
+    assign redirect_d_pc = d_pc + d_imm;
 
     // ==== register file =====================================================================
     wire        rf_we;
@@ -147,6 +155,7 @@ module tl_cpu_pipe #(
     reg         e_lui, e_auipc, e_jal, e_jalr, e_branch, e_is_load, e_is_store, e_use_imm, e_alt;
     reg         e_md, e_csr, e_csr_writes, e_ecall, e_ebreak, e_mret, e_writes, e_illegal;
     reg         e_md_started, e_md_fin;
+    reg         e_pred;          // D predicted it taken and fetched its target
     wire [4:0]  e_rs2 = e_insn[24:20];
 
     // forwarding: M's and W's early results (ALU, jumps, lui/auipc, multiply/divide)
@@ -231,8 +240,10 @@ module tl_cpu_pipe #(
     wire e_done = !e_md || e_trap || md_done || e_md_fin;
     wire e_adv  = e_valid && e_done && !gs && !flush_w;   // E moves to M
     assign e_load = !gs && (!e_valid || e_done);
-    assign redirect_e    = e_valid && !e_trap && !gs && (e_taken || e_jal || e_jalr);
-    assign redirect_e_pc = e_jtarget;
+    // a jump or taken branch D did not predict, or a predicted branch not taken
+    assign redirect_e    = e_valid && !e_trap && !gs &&
+                           (e_jalr || (e_jal && !e_pred) || (e_branch && e_taken != e_pred));
+    assign redirect_e_pc = (e_branch && !e_taken) ? e_pc4 : e_jtarget;
 
     reg [31:0] e_result;
     always @(*) begin
@@ -333,8 +344,8 @@ module tl_cpu_pipe #(
             // ---- F ----
             f_out      <= ibus_req;
             f_out_addr <= ibus_addr;
-            if (redirect) begin
-                f_pc      <= redirect_pc;
+            if (refetch) begin
+                f_pc      <= refetch_pc;
                 f_discard <= ibus_req;
             end else begin
                 if (f_new)
@@ -343,7 +354,7 @@ module tl_cpu_pipe #(
                     f_discard <= 1'b0;
             end
             // ---- instruction queue: D takes the head (or the answer itself when empty) ----
-            if (redirect) begin
+            if (refetch) begin
                 q_n <= 2'd0;
             end else begin
                 if (q_n == 2'd0) begin
@@ -377,7 +388,7 @@ module tl_cpu_pipe #(
             end
             if (e_load) begin
                 e_pc <= d_pc; e_insn <= d_insn; e_imm <= d_imm; e_rs1 <= d_rs1; e_rd <= d_rd;
-                e_funct3 <= d_funct3; e_ferr <= d_ferr; e_fencei <= d_fencei;
+                e_funct3 <= d_funct3; e_ferr <= d_ferr; e_fencei <= d_fencei; e_pred <= d_pred;
                 {e_illegal, e_writes, e_mret, e_ebreak, e_ecall, e_csr_writes, e_csr, e_md, e_alt,
                  e_use_imm, e_is_store, e_is_load, e_branch, e_jalr, e_jal, e_auipc, e_lui} <= d_flags;
                 e_late <= (d_flags[5] || d_flags[10]) && d_flags[15] && d_rd != 5'd0;
