@@ -22,7 +22,7 @@ export TORQUELOOP_SIM := $(SIM)
 PYTEST_K := $(if $(TB),-k "$(TB)",)
 XDIST    := $(if $(filter 1,$(JOBS)),,-n $(JOBS))
 
-.PHONY: help setup sim lint test unit synth run bench characterize quartus firmware board-sim board-sim-rtl clean
+.PHONY: help setup sim lint test unit synth run bench characterize quartus firmware board-sim board-sim-rtl clean test-durations
 
 help: ## this list
 	@grep -hE '^[a-z][a-zA-Z_-]*:.*## ' $(MAKEFILE_LIST) | \
@@ -40,12 +40,12 @@ sim: $(STAMP) ## all cocotb test benches on every applicable simulator
 	$(PY) -m pytest tb $(PYTEST_K) $(XDIST)
 
 lint: $(STAMP) ## Verilator -Wall, GHDL --std=08, Yosys synth check, VHDL/Verilog equivalence, SAT properties, slang strict front end, Quartus-safety rules, board constraints, generated files, import layers
-	$(PY) scripts/lint.py
-	$(PY) -m torqueloop.flow.strict
-	$(PY) -m torqueloop.flow.hdl_rules
-	$(PY) scripts/check_constraints.py
-	$(PY) -m torqueloop.flow.generate --check
-	$(PY) -m torqueloop.flow.layers
+	$(PY) -m torqueloop.flow lint
+	$(PY) -m torqueloop.flow strict
+	$(PY) -m torqueloop.flow hdl-rules
+	$(PY) -m torqueloop.flow constraints
+	$(PY) -m torqueloop.flow gen --check
+	$(PY) -m torqueloop.flow layers
 
 unit: $(STAMP) ## Python unit tests (plant, reference models, tools)
 	$(PY) -m pytest tests $(PYTEST_K) $(XDIST)
@@ -54,13 +54,16 @@ test: $(STAMP) ## lint + sim + unit: what CI runs
 	$(MAKE) --no-print-directory lint
 	$(PY) -m pytest tb tests $(PYTEST_K) $(XDIST)
 
+test-durations: $(STAMP) ## fold the last test run's wall times into tests/durations.json (the longest tests start first)
+	$(PY) scripts/test_durations.py
+
 synth: $(STAMP) ## Yosys synth_intel_alm (Cyclone V): per-core table in build/synth/, then the board top against the 5CEBA4
 	$(PY) scripts/synth.py
 	$(PY) scripts/bench.py bench_board
 
-# make run QUICK=1: a short version (T = 2 s, a small sweep) for a first look.
+# make run QUICK=1: a short version (T = 2 s, a small sweep) for a first look; CLUSTER=tcp://HOST:8786 runs on Dask workers.
 run: $(STAMP) ## the main job: characterisation, model arm vs experiment arm (RTL in the loop), P/PD/PID, the PWM-frequency sweep -> build/report/
-	$(PY) scripts/run_experiment.py $(if $(filter 1,$(QUICK)),--quick,)
+	$(PY) -m torqueloop.study experiment $(if $(filter 1,$(QUICK)),--quick,) $(if $(CLUSTER),--cluster $(CLUSTER),) $(if $(PLANT_FILE),--experiment-plant-file $(PLANT_FILE),)
 
 bench: $(STAMP) ## benchmarks that print numbers (QUICK=1: shortened)
 	$(PY) scripts/bench.py $(if $(filter 1,$(QUICK)),--quick,)
@@ -68,11 +71,11 @@ bench: $(STAMP) ## benchmarks that print numbers (QUICK=1: shortened)
 # make characterize PLANT=paper (default lab; lab-no-EFFECT switches one off)
 PLANT ?=
 characterize: $(STAMP) ## the characterisation method (steps 1-8) on the simulated lab bench, 10 seeds, each effect off: build/characterize/
-	$(PY) scripts/characterize.py sim --out-dir build/characterize $(if $(PLANT),--plant $(PLANT),)
+	$(PY) -m torqueloop.study characterize sim --out-dir build/characterize $(if $(PLANT),--plant $(PLANT),) $(if $(PLANT_FILE),--plant-file $(PLANT_FILE),)
 
 firmware: $(STAMP) ## servo firmware: build/firmware/servo/{servo.elf,.bin,_ram.hex,_rom.hex}
-	$(PY) -m torqueloop.flow.generate --check
-	$(PY) -m torqueloop.flow.firmware
+	$(PY) -m torqueloop.flow gen --check
+	$(PY) -m torqueloop.flow firmware
 
 board-sim: $(STAMP) ## simulated board (firmware C + plant) on TCP for the torqueloop host tool
 	$(VENV)/bin/torqueloop sim
@@ -80,8 +83,8 @@ board-sim: $(STAMP) ## simulated board (firmware C + plant) on TCP for the torqu
 board-sim-rtl: $(STAMP) ## the same with the co-simulated RTL board image (slow: ~0.01x real time)
 	$(VENV)/bin/torqueloop sim --rtl
 
-quartus: $(STAMP) ## Quartus project for the DE0-CV in build/quartus (compiled when quartus_sh is on PATH)
-	$(PY) scripts/gen_quartus.py --project --compile
+quartus: $(STAMP) ## Quartus project for the DE0-CV in build/quartus (compiled when quartus_sh is on PATH); needs TORQUELOOP_KEY_FILE, or KEYLESS=1
+	$(PY) -m torqueloop.flow quartus --compile $(if $(KEYLESS),--keyless)
 
 clean: ## remove build output (keeps .venv)
 	rm -rf build

@@ -1,8 +1,61 @@
 # SPDX-License-Identifier: MIT
 """pytest, however started (make test, .venv/bin/python -m pytest, pytest in
 an activated environment): the project's tools first on PATH
-(torqueloop/flow/tools.py), so every test sees the same Verilator."""
+(torqueloop/flow/tools.py), so every test sees the same Verilator.
+
+The longest tests start first.  make test spreads the tests over both cores
+(pytest-xdist, ``--dist load``: the scheduler hands them out in collection
+order), so a 4-minute bench collected last leaves one core idle while it
+runs alone.  tests/durations.json holds each test's measured wall time;
+collection sorts by it, longest first (the same order on every worker, as
+xdist requires).  A test it does not know yet counts as the median.  Every
+run writes what it measured to build/test-durations.<worker>.json;
+``make test-durations`` folds that into tests/durations.json.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+from pathlib import Path
 
 from torqueloop.flow.tools import use_project_tools
 
 use_project_tools()
+
+_ROOT = Path(__file__).resolve().parent
+DURATIONS = _ROOT / "tests" / "durations.json"
+MEASURED = _ROOT / "build"
+
+
+def _known() -> dict[str, float]:
+    try:
+        return {str(k): float(v) for k, v in json.loads(DURATIONS.read_text()).items()}
+    except (OSError, ValueError):
+        return {}
+
+
+def pytest_collection_modifyitems(session, config, items):
+    known = _known()
+    if not known:
+        return
+    default = statistics.median(known.values())
+    items.sort(key=lambda item: -known.get(item.nodeid, default))     # stable: ties keep file order
+
+
+_phases: dict[str, float] = {}
+
+
+def pytest_runtest_makereport(item, call):
+    _phases[item.nodeid] = _phases.get(item.nodeid, 0.0) + (call.stop - call.start)
+
+
+def pytest_sessionfinish(session, exitstatus):
+    # one file per process (each xdist worker records the tests it ran); make test-durations folds them
+    if not _phases:
+        return
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
+    MEASURED.mkdir(parents=True, exist_ok=True)
+    path = MEASURED / f"test-durations.{worker}.json"
+    path.write_text(json.dumps({k: round(v, 2) for k, v in sorted(_phases.items())}, indent=0) + "\n")

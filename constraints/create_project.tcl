@@ -8,7 +8,7 @@
 # (de0_cv_top.qpf + a copy of constraints/de0_cv_top.qsf, whose relative
 # paths start there).  Open build/quartus/de0_cv_top.qpf in the GUI
 # afterwards if you like.  `make quartus` does the same through
-# scripts/gen_quartus.py, which first checks that the committed .qsf is in
+# python -m torqueloop.flow.quartus, which first checks that the committed .qsf is in
 # step with constraints/pins.toml and rtl/manifest.toml.
 # The firmware images named in constraints/pins.toml [firmware] must exist
 # first: python3 -m torqueloop.flow.boot_image (needs riscv64-unknown-elf-gcc).

@@ -14,34 +14,21 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import importlib.util
 import sys
 import time
 from pathlib import Path
 from types import ModuleType
 
 BENCH_DIR = Path(__file__).resolve().parent / "benches"
-TB_DIR = Path(__file__).resolve().parent.parent / "tb"
 
 #: set by --quick before any benchmark runs
 QUICK = False
 
 
-def tb_module(folder: str, name: str):
-    """A test bench module (tb/<folder>/<name>.py) whose cocotb tests a
-    benchmark runs: its folder (and tb/, for tbutil) goes on sys.path, where the simulator's Python
-    (which gets this process's path) finds the module by name too."""
-    for d in (str(TB_DIR), str(TB_DIR / folder)):   # tb/ itself for the shared tbutil
-        if d not in sys.path:
-            sys.path.insert(0, d)
-    return importlib.import_module(name)
-
-
 def load(f: Path) -> ModuleType:
-    spec = importlib.util.spec_from_file_location(f.stem, f)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    """A benchmark by name: scripts/benches/ is a namespace package beside
+    this script, which Python puts first on the path."""
+    mod = importlib.import_module(f"{BENCH_DIR.name}.{f.stem}")
     if not callable(getattr(mod, "main", None)):
         raise TypeError(f"{f.name} has no main()")
     return mod

@@ -74,10 +74,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--plant", default="paper", help="plant variant (paper-printed, paper, lab, lab-no-EFFECT) [paper]")
     args = ap.parse_args(argv)
     from sim_models.params import PlantParamError
-    from sim_models.variants import load_variant, parse_plant
+    from sim_models.variants import plant_of
 
     try:
-        params = load_variant(*parse_plant(args.plant))
+        params = plant_of(args.plant).params()
     except PlantParamError as e:
         print(f"plant_step: {e}", file=sys.stderr)
         return 2

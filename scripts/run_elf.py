@@ -38,9 +38,6 @@ if (VENV / "bin" / "python").exists() and Path(sys.prefix).resolve() != VENV.res
     os.execv(str(VENV / "bin" / "python"), [str(VENV / "bin" / "python"), __file__, *sys.argv[1:]])
 os.environ["PATH"] = os.pathsep.join([str(VENV / "tools" / "bin"), str(VENV / "bin"), os.environ.get("PATH", "")])
 
-sys.path.insert(0, str(REPO))
-sys.path.insert(0, str(REPO / "tb" / "cpu"))
-
 from torqueloop.oracles.rv32 import read_elf  # noqa: E402
 
 from torqueloop.spec import regs  # noqa: E402
@@ -107,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
             os.close(fd)
         try:
             run("cpu_sim_top", args.sim, "elf_runner_tb", parameters=CORES[args.core], extra_env=env,
-                build_tag="run_elf")
+                build_tag=f"run_elf_{args.core}", bench="cpu")
             error = None
         except (AssertionError, SystemExit, RuntimeError) as e:
             error = e

@@ -13,7 +13,7 @@ State vector (SI), ``N_STATE`` = 13 entries::
     7..12    the six velocities, same order
 
 Within one *mode* the right-hand side is affine, dx/dt = A x + b.  A mode is
-``(se, cg, cn, sl, sm, gd)``:
+``(se, cg, cn, sl, sm, gd, bm)``:
 
 - ``se`` electrical: +1 / -1 = conducting with that current sign (decides which
   diode conducts while a bridge side floats), 0 = current held at zero
@@ -30,6 +30,9 @@ Within one *mode* the right-hand side is affine, dx/dt = A x + b.  A mode is
 - ``gd`` sign of the mesh torque, which with ``sm`` says whether the motor
   drives the load or the load back-drives the motor (asymmetric gear
   efficiency, ``lab``); always +1 when the efficiency is symmetric.
+- ``bm`` brush region of the continuous brush law (``brush_knee_A`` > 0):
+  0 = ohmic band |i| < i_k (drop R_b i), +1 / -1 = beyond the knee (drop
+  +/- V_b); always 0 with the hard drop, which the terminal levels carry.
 
 Two loads share the motor, brush, rotor friction and gear mesh: ``stage``,
 the paper's coupling, screw, nut and table (eq 8-17); and ``dyno``, the
@@ -71,6 +74,7 @@ class Mode(NamedTuple):
     sl: int
     sm: int = 1
     gd: int = 1
+    bm: int = 0
 
 
 @dataclass(frozen=True)
@@ -100,6 +104,7 @@ class AxisConsts:
     tc_m: float = 0.0    # rotor Coulomb friction (motor shaft)
     ts_m: float = 0.0    # rotor breakaway torque
     vb: float = 0.0      # brush drop
+    ib: float = 0.0      # brush knee current (0: the hard drop V_b while current flows)
     xi_b: float | None = None   # back-driving efficiency (None: the paper's symmetric form)
     load: str = "stage"  # "stage" or "dyno"
     r_w: float = 0.0     # dyno: wheel radius
@@ -148,7 +153,7 @@ class AxisConsts:
                    bn=a.nut_damping_N_s_per_m, psi=a.nut_clearance_m,
                    fc=a.table_coulomb_N, grav=a.table_mass_kg * a.gravity_m_s2,
                    inertia=inertia, tc_m=a.motor_coulomb_N_m, ts_m=a.motor_static_N_m,
-                   vb=a.brush_drop_V, xi_b=a.gear_efficiency_back)
+                   vb=a.brush_drop_V, ib=a.brush_knee_A, xi_b=a.gear_efficiency_back)
 
 
 def gear_slip(c: AxisConsts, x: np.ndarray) -> tuple[float, float]:
@@ -246,7 +251,11 @@ def rhs(c: AxisConsts, x: np.ndarray, mode: Mode, e_pos: float, e_neg: float) ->
         dx[0] = 0.0                  # no diode conducts: i stays 0
     else:
         e = e_pos if mode.se > 0 else e_neg
-        dx[0] = (e - c.R * x[I_] - c.ke * x[W_M]) / c.L     # eq (6)-(7)
+        if c.ib > 0.0:               # continuous brush law: ohmic, then V_b beyond the knee
+            vbr = mode.bm * c.vb if mode.bm else (c.vb / c.ib) * x[I_]
+            dx[0] = (e - c.R * x[I_] - c.ke * x[W_M] - vbr) / c.L
+        else:
+            dx[0] = (e - c.R * x[I_] - c.ke * x[W_M]) / c.L     # eq (6)-(7)
     return dx
 
 
@@ -298,8 +307,9 @@ def terminal_levels(c: AxisConsts, e_pos: float, e_neg: float) -> tuple[float, f
     brush drop, which opposes the current while it flows: every function of
     this module takes these levels.  With a drop the current can stop at zero
     even with both bridge sides driven (discontinuous conduction), exactly as
-    while a side floats."""
-    if c.vb == 0.0:
+    while a side floats.  The continuous brush law (``ib`` > 0) is not a
+    level: :func:`rhs` applies it by the brush region ``bm``."""
+    if c.vb == 0.0 or c.ib > 0.0:
         return e_pos, e_neg
     return e_pos - c.vb, e_neg + c.vb
 
@@ -376,6 +386,14 @@ def guards(c: AxisConsts, mode: Mode, e_pos: float, e_neg: float) -> list[Guard]
             band = c.ts_m + ROTOR_BREAKAWAY_MARGIN
             out.append(Guard("rotor", 0, _linear_row(lambda z: band - rotor_hold_torque(c, z, mode, 1), c), 1e-12))
             out.append(Guard("rotor", 1, _linear_row(lambda z: band + rotor_hold_torque(c, z, mode, -1), c), 1e-12))
+    if c.ib > 0.0 and mode.se != 0:
+        if mode.bm > 0:
+            out.append(Guard("brush", 0, _linear_row(lambda z: z[I_] - c.ib, c), 1e-9))
+        elif mode.bm < 0:
+            out.append(Guard("brush", 0, _linear_row(lambda z: -z[I_] - c.ib, c), 1e-9))
+        else:
+            out.append(Guard("brush", 0, _linear_row(lambda z: c.ib - z[I_], c), 1e-9))
+            out.append(Guard("brush", 1, _linear_row(lambda z: z[I_] + c.ib, c), 1e-9))
     if c.xi_b is not None and mode.cg != 0:
         # the mesh torque changing sign turns driving into back-driving
         out.append(Guard("mesh", 0, _linear_row(lambda z: mode.gd * mesh_torque(c, z, mode), c), 1e-12))
@@ -407,7 +425,7 @@ def initial_mode(c: AxisConsts, x: np.ndarray, e_pos: float, e_neg: float) -> Mo
     e = nut_slip(c, x)[0]
     cg = 1 if c.delta == 0 else (1 if d > c.delta else (-1 if d < -c.delta else 0))
     cn = 1 if c.psi == 0 else (1 if e > c.psi else (-1 if e < -c.psi else 0))
-    m = Mode(elec_mode(c, x, e_pos, e_neg), cg, cn, 0)
+    m = Mode(elec_mode(c, x, e_pos, e_neg), cg, cn, 0, bm=brush_region(c, x))
     m = m._replace(gd=_mesh_sign(c, x, m))
     if c.rotor_modes:
         m = m._replace(sm=_sign(x[W_M]) if x[W_M] != 0.0 else rotor_stick_or_slide(c, x, m))
@@ -417,6 +435,14 @@ def initial_mode(c: AxisConsts, x: np.ndarray, e_pos: float, e_neg: float) -> Mo
         return m._replace(sl=_sign(x[V_L]))
     h = table_hold_force(c, x, m)
     return m._replace(sl=0 if abs(h) <= c.fc + TABLE_BREAKAWAY_MARGIN else _sign(h))
+
+
+def brush_region(c: AxisConsts, x: np.ndarray) -> int:
+    """bm for a state: 0 in the ohmic band (or with the hard drop), else the
+    current's sign."""
+    if c.ib <= 0.0 or abs(x[I_]) < c.ib:
+        return 0
+    return _sign(x[I_])
 
 
 def _mesh_sign(c: AxisConsts, x: np.ndarray, mode: Mode) -> int:
@@ -443,6 +469,10 @@ def next_mode(c: AxisConsts, x: np.ndarray, mode: Mode, g: Guard,
         return m._replace(gd=_mesh_sign(c, x, m))
     if g.part == "mesh":
         return mode._replace(gd=-mode.gd)   # the mesh torque changed sign
+    if g.part == "brush":
+        if mode.bm != 0:
+            return mode._replace(bm=0)      # back into the ohmic band
+        return mode._replace(bm=1 if g.index == 0 else -1)
     if g.part == "rotor":
         x[W_M] = 0.0
         if mode.sm == 0:             # broke away: guard 0 forwards, guard 1 backwards

@@ -97,8 +97,20 @@ class RopeBenchConfig:
     # an undamped bench (150 N s/m, 0.04) is a row of the sensitivity table.
     rope_N_s_per_m: float = 4000.0
     ramp_s: float = 0.3                       # soft start: the on-time rises from 0 over this
-    settle_s: float = 0.3                     # then held this long before the reading
+    settle_s: float = 0.3                     # then held this long before the reading ("fixed")
     window_s: float = 0.1                     # the gauge's and ammeter's averaging window (10 Hz display)
+    # How long the lab waits before it writes a reading down: "fixed" waits
+    # settle_s; "converged" watches the gauge window by window and reads once
+    # the window mean has changed by less than ``converge_frac`` of the
+    # motor's stall force against the window ``converge_span_s`` earlier, for
+    # ``converge_windows`` windows in a row, or gives up after
+    # ``max_settle_s`` (the trace says so).  Comparing across a span, not
+    # neighbouring windows, catches a slow creep that each window hides.
+    settle_rule: str = "fixed"
+    converge_frac: float = 0.001
+    converge_span_s: float = 1.0
+    converge_windows: int = 3
+    max_settle_s: float = 20.0
     gauge: GaugeConfig = field(default_factory=GaugeConfig)
     ammeter: AmmeterConfig = field(default_factory=AmmeterConfig)
 
@@ -116,6 +128,8 @@ class Trace:
     periods: int
     events: int
     stuck_frac: float        # of the window's samples with the rotor held by its friction
+    settle_s: float = 0.0    # the time held at the setting before the reading window
+    converged: bool = True   # "converged" rule: whether the criterion was met within max_settle_s
 
 
 @dataclass(frozen=True)
@@ -150,8 +164,10 @@ class RopeDynamometer:
     rest) the drive is brought up softly - the waveform's on-time rising
     from zero over ``ramp_s``, as a lab turns up its drive - so the motor
     winds the rope quasi-statically instead of overshooting into the
-    stiction band; the pin waveform is then repeated for ``settle_s`` and
-    read over whole periods spanning ``window_s``.  The physics of a
+    stiction band; the pin waveform is then repeated for ``settle_s`` (or,
+    with ``settle_rule = "converged"``, until the gauge's window mean has
+    stopped moving; the trace records the time held) and read over whole
+    periods spanning ``window_s``.  The physics of a
     setting is simulated once and cached; each call draws new instrument
     noise from ``rng``, so repeated readings (and seeds) cost nothing."""
 
@@ -188,10 +204,7 @@ class RopeDynamometer:
             for p, dt in soft_start(pins, lengths, (k + 1) / n_ramp):
                 fa.set_pins(p)
                 fa.advance(dt, [])
-        for _ in range(n_settle):
-            for p, dt in zip(pins, lengths):
-                fa.set_pins(p)
-                fa.advance(dt, [])
+        settled, converged = self._settle(fa, pins, lengths, period_s, n_settle, n_win)
         x0 = fa.x.copy()
         ev0 = fa.events
         sub = max(1, math.ceil(period_s * cfg.gauge.peak_sample_hz / max(1, len(pins))))
@@ -210,9 +223,48 @@ class RopeDynamometer:
         tr = Trace(force_mean_N=float((x1[ax.PHI_S] - x0[ax.PHI_S]) / t_win),
                    force_peak_N=float(peak), force_min_N=float(low),
                    current_mean_A=float((x1[ax.PHI_C] - x0[ax.PHI_C]) / t_win),
-                   periods=n_ramp + n_settle + n_win, events=fa.events - ev0, stuck_frac=stuck / samples)
+                   periods=n_ramp + settled + n_win, events=fa.events - ev0, stuck_frac=stuck / samples,
+                   settle_s=settled * period_s, converged=converged)
         self._cache[key] = tr
         return tr
+
+    def stall_force_N(self) -> float:
+        """The motor's stall force on the gauge, k_m V / R over the wheel: the
+        scale of the "converged" rule."""
+        a, b = self.axis, self.plant.bridge
+        return a.km_N_m_per_A * b.supply_V / (a.resistance_ohm + path_resistance(b)) / self.torque_per_newton()
+
+    def _settle(self, fa, pins: Sequence[Pins], lengths: Sequence[float], period_s: float,
+                n_settle: int, n_win: int) -> tuple[int, bool]:
+        """Hold the setting until the reading may be taken (the config's
+        settle rule); returns the periods held and whether it converged."""
+        cfg = self.config
+
+        def periods(n: int) -> None:
+            for _ in range(n):
+                for p, dt in zip(pins, lengths):
+                    fa.set_pins(p)
+                    fa.advance(dt, [])
+
+        if cfg.settle_rule == "fixed":
+            periods(n_settle)
+            return n_settle, True
+        if cfg.settle_rule != "converged":
+            raise ValueError(f"settle_rule {cfg.settle_rule!r}: 'fixed' or 'converged'")
+        tol = cfg.converge_frac * self.stall_force_N()
+        n_max = max(1, math.ceil(cfg.max_settle_s / period_s))
+        span = max(1, round(cfg.converge_span_s / (n_win * period_s)))
+        held, quiet, means = 0, 0, []
+        while held < n_max:
+            q0 = fa.x[ax.PHI_S]
+            periods(n_win)
+            held += n_win
+            means.append((fa.x[ax.PHI_S] - q0) / (n_win * period_s))
+            ok = len(means) > span and abs(means[-1] - means[-1 - span]) < tol
+            quiet = quiet + 1 if ok else 0
+            if quiet >= cfg.converge_windows:
+                return held, True
+        return held, False
 
     def measure(self, segments: Sequence[tuple[float, Pins]], period_s: float,
                 rng: random.Random | None = None) -> RopeReading:

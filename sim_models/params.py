@@ -30,6 +30,14 @@ class BridgeParams:
     k_ilis: float = 8500.0
     turn_on_delay_s: float = 3.6e-6
     turn_off_delay_s: float = 2.9e-6
+    # --- the bridge's switching in the plant (the ``lab`` variant's
+    # bridge_timing effect; off: the plant switches exactly at the pin edges) ---
+    timing_in_plant: bool = False
+    """Delay each output edge by turn_on_delay_s / turn_off_delay_s and drop
+    driving pulses shorter than min_pulse_s (sim_models.stepper.FastAxis)."""
+    min_pulse_s: float = 0.0
+    """Shortest driving phase (at the pins) the outputs reproduce; shorter
+    ones never reach the rail and are dropped."""
 
 
 @dataclass(frozen=True)
@@ -80,6 +88,17 @@ class AxisParams:
     gear_efficiency_back: float | None = None
     """Efficiency while the load back-drives the motor; None is the paper's
     symmetric form (xi on the output side in both directions of power flow)."""
+    brush_knee_A: float = 0.0
+    """Brush voltage-current law: 0 is the hard drop (brush_drop_V whenever
+    current flows); > 0 makes the brushes ohmic (brush_drop_V / brush_knee_A)
+    below this current and brush_drop_V above it."""
+    winding_alpha_per_K: float = 0.0
+    """Winding resistance temperature coefficient: R = R_20 (1 + alpha theta),
+    theta the winding's rise over ambient (0: R constant)."""
+    winding_thermal_K_per_W: float = 0.0
+    """Winding-to-ambient thermal resistance (0: no heating)."""
+    winding_thermal_tau_s: float = 0.0
+    """Time constant of the winding's first-order thermal model."""
 
     # --- derived quantities (one place for model, tests and docs) ---
     @property
@@ -96,6 +115,11 @@ class AxisParams:
     @property
     def electrical_tau_s(self) -> float:
         return self.inductance_H / self.resistance_ohm
+
+    @property
+    def heats(self) -> bool:
+        """Whether the winding's resistance follows its temperature."""
+        return self.winding_thermal_K_per_W > 0.0 and self.winding_alpha_per_K > 0.0
 
     def stall_current_A(self, volts: float) -> float:
         return volts / self.resistance_ohm
@@ -133,7 +157,8 @@ class AxisParams:
                     "screw_axial_N_per_m", "screw_mass_kg", "lead_m", "nut_stiffness_N_per_m", "table_mass_kg")
         non_negative = ("gear_damping_N_m_s_per_rad", "gear_backlash_rad", "screw_axial_damping_N_s_per_m",
                         "nut_damping_N_s_per_m", "nut_clearance_m", "table_coulomb_N", "gravity_m_s2",
-                        "motor_coulomb_N_m", "motor_static_N_m", "brush_drop_V")
+                        "motor_coulomb_N_m", "motor_static_N_m", "brush_drop_V", "brush_knee_A",
+                        "winding_alpha_per_K", "winding_thermal_K_per_W", "winding_thermal_tau_s")
         for k in positive + non_negative:
             v = getattr(self, k)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
@@ -153,6 +178,9 @@ class AxisParams:
         if self.motor_static_N_m >= stall:
             raise PlantParamError(f"{w}motor_static_N_m = {self.motor_static_N_m}: friction at or above the "
                                   f"stall torque {stall:.4g} N m (the motor could never turn)")
+        if self.winding_thermal_K_per_W > 0 and not self.winding_thermal_tau_s > 0:
+            raise PlantParamError(f"{w}winding_thermal_tau_s = {self.winding_thermal_tau_s}: a heated winding "
+                                  "needs a positive thermal time constant")
         if self.brush_drop_V >= bridge.supply_V:
             raise PlantParamError(f"{w}brush_drop_V = {self.brush_drop_V}: at or above the {bridge.supply_V} V supply")
 
@@ -187,6 +215,9 @@ def params_from_dict(d: dict, source: str = "") -> PlantParams:
     for k in ("supply_V", "k_ilis"):
         if not getattr(bridge, k) > 0:
             raise PlantParamError(f"{where}bridge.{k} = {getattr(bridge, k)}: must be positive")
+    if not 0 <= bridge.min_pulse_s <= bridge.turn_off_delay_s:
+        raise PlantParamError(f"{where}bridge.min_pulse_s = {bridge.min_pulse_s}: must be in [0, turn_off_delay_s] "
+                              "(a pulse is dropped before its output has started)")
     axes = tuple(_make(AxisParams, d[k], f"{where}{k}.") for k in ("axis1", "axis2"))
     for a in axes:
         a.validate(bridge, where)  # type: ignore[attr-defined]

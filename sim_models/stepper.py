@@ -92,6 +92,18 @@ class FastAxis:
         # consts: another load for the same motor (AxisConsts.build_dyno)
         self.c = consts or ax.AxisConsts.build(a, plant.bridge)
         self.encoder = encoder
+        # the winding's temperature rise over ambient (K) and the winding
+        # resistance the mode matrices were built with (heats: R(T))
+        self.heats = a.heats
+        self.theta = 0.0
+        self._r_wind = a.resistance_ohm
+        if self.heats:
+            energy = True            # the heating is the exact integral of i^2 R
+        # the bridge's output edges, delayed (bridge_timing): pending
+        # (tick, pins) changes of the outputs, and the pins the outputs show
+        self.timing = plant.bridge.timing_in_plant
+        self._sched: tuple[tuple[int, Pins], ...] = ()
+        self._cmd_pins = COAST
         # energy: keep the exact integrals of the current and of its square
         # (copper loss, ripple) through every flow, events included
         self.energy = energy
@@ -106,7 +118,7 @@ class FastAxis:
         self.h_mesh_ticks = max(1, min(self.h_max_ticks, round(h_mesh_s / tick_s)))
         self.z = np.zeros(NZ)
         self.z[ax.N_STATE] = 1.0
-        self.pins = COAST
+        self.pins = COAST           # what the bridge's outputs show
         self.e_pos, self.e_neg = ax.terminal_levels(self.c, *armature_voltages(COAST, self.bridge))
         self.mode = ax.initial_mode(self.c, self.z[:ax.N_STATE], self.e_pos, self.e_neg)
         self.count = count_of(0.0, self.enc)
@@ -127,7 +139,8 @@ class FastAxis:
         self.count = count_of(float(x[ax.PHI_M]), self.enc)
 
     #: what advance() changes besides the state vector (snapshot / restore)
-    _STATE_FIELDS = ("pins", "e_pos", "e_neg", "mode", "count", "events", "_t_req", "_ticks", "q_i", "q_i2")
+    _STATE_FIELDS = ("pins", "e_pos", "e_neg", "mode", "count", "events", "_t_req", "_ticks", "q_i", "q_i2",
+                     "theta", "_sched", "_cmd_pins", "_r_wind", "c", "_systems")
 
     def snapshot(self) -> tuple:
         """Everything :meth:`advance` changes, to undo a speculative step."""
@@ -154,6 +167,35 @@ class FastAxis:
             self._systems.clear()
 
     def set_pins(self, pins: Pins) -> None:
+        if self.timing:
+            self._command(pins)
+            return
+        self._apply_pins(pins)
+
+    def _command(self, pins: Pins) -> None:
+        """A pin change at the bridge's inputs, now (bridge_timing): the
+        outputs follow after the turn-on delay when the change starts a
+        driving phase, after the turn-off delay otherwise; a driving phase
+        whose output would be shorter than the minimum pulse is dropped."""
+        prev = self._cmd_pins
+        if pins == prev:
+            return
+        self._cmd_pins = pins
+        b = self.bridge
+        now = self._ticks
+        starts = _driving(pins) and not _driving(prev)
+        at = now + round((b.turn_on_delay_s if starts else b.turn_off_delay_s) / self.tick)
+        sched = [e for e in self._sched if e[0] < at]   # a later edge overtakes the pending ones
+        if _driving(prev) and not _driving(pins):
+            ons = [k for k, (t, p) in enumerate(sched) if _driving(p)]
+            if ons and (at - sched[ons[-1]][0]) * self.tick < b.min_pulse_s:
+                del sched[ons[-1]:]                     # the pulse never reaches the rail
+                self._sched = tuple(sched)
+                return
+        sched.append((at, pins))
+        self._sched = tuple(sched)
+
+    def _apply_pins(self, pins: Pins) -> None:
         if pins == self.pins:
             return
         self.pins = pins
@@ -471,9 +513,53 @@ class FastAxis:
         # round the running total, not each dt, so rounding never accumulates
         self._t_req += dt
         target = round(self._t_req / self.tick)
-        remaining = target - self._ticks
-        self._ticks = target
-        t = t_offset
+        q2 = self.q_i2
+        start = self._ticks
+        if self.timing:
+            t = t_offset
+            while self._sched and self._sched[0][0] <= target:
+                at, pins = self._sched[0]
+                self._sched = self._sched[1:]
+                if at > self._ticks:
+                    t = self._run(at - self._ticks, out, t)
+                    self._ticks = at
+                self._apply_pins(pins)
+            remaining = target - self._ticks
+            self._ticks = target
+            self._run(remaining, out, t)
+        else:
+            remaining = target - self._ticks
+            self._ticks = target
+            self._run(remaining, out, t_offset)
+        if self.heats and target > start:
+            self._heat((target - start) * self.tick, self.q_i2 - q2)
+
+    #: the winding resistance is rebuilt into the mode matrices when the
+    #: temperature has moved it by more than this fraction (0.25 K of copper)
+    R_REBUILD_FRAC = 1e-3
+
+    def _heat(self, dt: float, q2: float) -> None:
+        """The winding's first-order thermal model over ``dt`` with the
+        copper loss of that time (its exact i^2 integral ``q2`` times R(T)),
+        held constant over the step: exact for a constant loss."""
+        a = self.params
+        r = a.resistance_ohm * (1.0 + a.winding_alpha_per_K * self.theta)
+        rise = a.winding_thermal_K_per_W * r * q2 / dt
+        self.theta = rise + (self.theta - rise) * math.exp(-dt / a.winding_thermal_tau_s)
+        r = a.resistance_ohm * (1.0 + a.winding_alpha_per_K * self.theta)
+        if abs(r - self._r_wind) > self.R_REBUILD_FRAC * self._r_wind:
+            import dataclasses
+            self._r_wind = r
+            self.c = dataclasses.replace(self.c, R=r + 2.0 * self.bridge.r_on_ohm)
+            self._systems = {}
+
+    @property
+    def winding_ohm(self) -> float:
+        """The winding resistance the plant runs with now (R(T))."""
+        return self._r_wind
+
+    def _run(self, remaining: int, out: list[Edge], t: float) -> float:
+        """Integrate ``remaining`` ticks with the outputs as they are."""
         while remaining > 0:
             s = self._system()
             k = min(remaining, s.h_ticks)
@@ -507,6 +593,12 @@ class FastAxis:
             else:
                 raise RuntimeError(f"axis {self.index}: more than {self.MAX_EVENTS_PER_CHUNK} "
                                    f"mode switches in one chunk (Zeno?) mode={self.mode}")
+        return t
+
+
+def _driving(p: Pins) -> bool:
+    """Whether the pins switch a high side on (a driving phase)."""
+    return bool((p[0] and p[2]) or (p[1] and p[3]))
 
 
 def expm_balanced(mb: np.ndarray, bal: np.ndarray, tau: float) -> np.ndarray:
@@ -578,16 +670,14 @@ class TwoAxisPlant:
 
     def __init__(self, params: PlantParams | None = None, h_max_s: float = 1e-3,
                  tick_s: float = 1e-8, glitch_rate_hz: float = 0.0,
-                 glitch_width_s: float = 200e-9, seed: int | None = None, energy: bool = False) -> None:
+                 glitch_width_s: float = 200e-9, seed: int = 0, energy: bool = False) -> None:
         self.params = params or load_params()
         self.axes = [FastAxis(a, self.params, i, h_max_s, tick_s, energy=energy)
                      for i, a in enumerate(self.params.axes)]
         self.t = 0.0
         self.glitch_rate_hz = glitch_rate_hz
         self.glitch_width_s = glitch_width_s
-        if seed is None:
-            seed = random.SystemRandom().randrange(2**32)
-        self.seed = seed
+        self.seed = seed              # the encoder glitches' generator: the same seed, the same run
         self._rng = random.Random(seed)
         self._pin_state = {i: (0, 0, 0) for i in range(len(self.axes))}
         for i, a in enumerate(self.axes):
@@ -660,6 +750,16 @@ class TwoAxisPlant:
 
     def count(self, axis: int) -> int:
         return self.axes[axis].count
+
+    def table_counts(self, axis: int) -> float:
+        """The table's position in encoder counts (chi_l through the nominal
+        lead and gear ratio, as the motor-side encoder would count a rigid
+        drivetrain): the error at the table is the target less this, beside
+        the encoder's target less :meth:`count`.  They differ by the
+        drivetrain's deflection and the gear backlash, which the encoder
+        cannot see."""
+        a = self.axes[axis]
+        return float(a.z[ax.CHI_L]) / a.c.rn * a.c.G / self.params.encoder.rad_per_count
 
     def charge(self, axis: int) -> float:
         """Integral of the armature current since the start, A s (energy=True)."""

@@ -1,15 +1,18 @@
 # SPDX-License-Identifier: MIT
-"""Named plant variants: ``paper-printed``, ``paper`` (the default) and ``lab``.
+"""Named plant variants: ``paper-printed``, ``paper`` (the default), ``lab-2025`` and ``lab``.
 
 Each variant is the paper's Table 2 (params/table2.toml) with overlays
 (params/variants.toml): ``paper`` reads I_m2 as a misprint, ``lab`` adds what
 a real bench has and Table 2 leaves out, one switchable effect at a time
-(docs/plant.md argues every value)::
+(docs/plant.md argues every value); ``lab-2025`` is ``lab`` as first built,
+before NEW_EFFECTS::
 
     from sim_models.variants import load_variant
     p = load_variant("lab")                               # every effect on
     p = load_variant("lab", off=("brush_drop",))          # one effect off
     p = load_variant("lab", off=EFFECTS)                  # == load_variant("paper")
+    p = plant_of("lab-no-brush_drop").params()            # a command line's choice, parsed once
+    p = load_variant("lab", off=NEW_EFFECTS)              # == load_variant("lab-2025")
 
 An unknown name, an unknown effect or a non-physical value raises
 :class:`PlantVariantError` with one line naming the key and the rule.
@@ -22,13 +25,18 @@ import math
 from pathlib import Path
 from typing import Iterable
 
-from sim_models.params import (DEFAULT_FILE, AxisParams, PlantParamError, PlantParams, params_from_dict,
-                               read_toml)
+from sim_models.params import (DEFAULT_FILE, AxisParams, BridgeParams, PlantParamError, PlantParams,
+                               params_from_dict, read_toml)
 
 VARIANTS_FILE = Path(__file__).resolve().parent / "params" / "variants.toml"
 DEFAULT_VARIANT = "paper"
 #: the lab variant's effects, in the order they are applied
-EFFECTS = ("motor_friction", "brush_drop", "gear_efficiency", "energy_consistent")
+EFFECTS = ("motor_friction", "brush_drop", "gear_efficiency", "energy_consistent",
+           "bridge_timing", "brush_law", "winding_thermal", "gear_backlash")
+#: the effects lab-2025 does not have
+NEW_EFFECTS = EFFECTS[4:]
+#: effects on the bridge (one for both axes) rather than on each axis
+BRIDGE_EFFECTS = ("bridge_timing",)
 
 
 class PlantVariantError(PlantParamError):
@@ -117,6 +125,14 @@ def apply_effect(a: AxisParams, eff: str, cfg: dict, supply_V: float, r_path_ohm
         return a.replace(gear_efficiency_back=back)
     if eff == "energy_consistent":
         return a.replace(ke_V_s_per_rad=a.kt_motor_N_m_per_A)
+    if eff == "brush_law":
+        return a.replace(brush_knee_A=_num(eff, cfg, "knee_A", 0.0, 1e3, lo_open=True))
+    if eff == "winding_thermal":
+        return a.replace(winding_alpha_per_K=_num(eff, cfg, "alpha_per_K", 0.0, 0.1),
+                         winding_thermal_K_per_W=_num(eff, cfg, "thermal_K_per_W", 0.0, 1e3),
+                         winding_thermal_tau_s=_num(eff, cfg, "tau_s", 0.0, 1e5, lo_open=True))
+    if eff == "gear_backlash":
+        return a.replace(gear_backlash_rad=math.radians(_num(eff, cfg, "play_deg", 0.0, 30.0)) / 2.0)
     raise PlantVariantError(f"unknown effect {eff!r} (known: {', '.join(EFFECTS)})")
 
 
@@ -135,6 +151,7 @@ def load_variant(name: str = DEFAULT_VARIANT, off: Iterable[str] = (),
             raise PlantVariantError(f"unknown effect {e!r} (known: {', '.join(EFFECTS)})")
     base = params_from_dict(_base_dict(name), f"variant {name}")
     axes = list(base.axes)
+    bridge = base.bridge
     for eff, cfg in _effects(name).items():
         enabled = cfg.get("enabled", True)
         if not isinstance(enabled, bool):
@@ -142,10 +159,21 @@ def load_variant(name: str = DEFAULT_VARIANT, off: Iterable[str] = (),
         if not enabled or eff in off:
             continue
         cfg = {**cfg, **tweak.get(eff, {})}
-        axes = [apply_effect(a, eff, cfg, base.bridge.supply_V, 2 * base.bridge.r_on_ohm) for a in axes]
+        if eff in BRIDGE_EFFECTS:
+            bridge = apply_bridge_effect(bridge, eff, cfg)
+            continue
+        axes = [apply_effect(a, eff, cfg, bridge.supply_V, 2 * bridge.r_on_ohm) for a in axes]
     for a in axes:
-        a.validate(base.bridge, f"variant {name}: ")
-    return dataclasses.replace(base, axes=tuple(axes))
+        a.validate(bridge, f"variant {name}: ")
+    return dataclasses.replace(base, axes=tuple(axes), bridge=bridge)
+
+
+def apply_bridge_effect(b: BridgeParams, eff: str, cfg: dict) -> BridgeParams:
+    """One lab effect on the bridge."""
+    if eff == "bridge_timing":
+        mp = _num(eff, cfg, "min_pulse_us", 0.0, b.turn_off_delay_s * 1e6) * 1e-6
+        return dataclasses.replace(b, timing_in_plant=True, min_pulse_s=mp)
+    raise PlantVariantError(f"unknown bridge effect {eff!r} (known: {', '.join(BRIDGE_EFFECTS)})")
 
 
 def effects_of(name: str) -> tuple[str, ...]:
@@ -153,9 +181,65 @@ def effects_of(name: str) -> tuple[str, ...]:
     return tuple(k for k, v in _effects(name).items() if v.get("enabled", True))
 
 
-def parse_plant(text: str) -> tuple[str, tuple[str, ...]]:
-    """A command-line plant choice: ``NAME`` or ``NAME-no-EFFECT[-no-EFFECT...]``
-    (``lab-no-brush_drop``), checked."""
+@dataclasses.dataclass(frozen=True)
+class PlantSpec:
+    """A plant variant with some of its effects switched off, or a plant file
+    (sim_models/plantfile.py): what a study passes around instead of the name
+    (:func:`plant_of` parses and checks the name once, at the edge;
+    :meth:`from_file` reads and checks a file once)."""
+
+    name: str = DEFAULT_VARIANT
+    off: tuple[str, ...] = ()
+    file: str | None = None
+    digest: str = ""          # a plant file's content digest (caches keyed by the plant see an edit)
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> "PlantSpec":
+        from sim_models.plantfile import load_plant_file
+        import hashlib
+
+        load_plant_file(path)          # refuses a bad file in one line (PlantParamError) before anything runs
+        text = Path(path).read_bytes()
+        return cls(name="file", file=str(Path(path).resolve()), digest=hashlib.sha256(text).hexdigest()[:16])
+
+    @property
+    def label(self) -> str:
+        """The name a command line gives it: ``NAME[-no-EFFECT...]``, or the plant file's path."""
+        if self.file is not None:
+            return f"{self.file} ({self.digest})"
+        return self.name + "".join(f"-no-{e}" for e in self.off)
+
+    def params(self, tweak: dict[str, dict] | None = None) -> PlantParams:
+        if self.file is not None:
+            from sim_models.plantfile import load_plant_file
+
+            if tweak:
+                raise PlantVariantError(f"{self.file}: a plant file has no effects to tweak; edit the file")
+            return load_plant_file(self.file)
+        return load_variant(self.name, self.off, tweak)
+
+    def without(self, effect: str) -> "PlantSpec":
+        if self.file is not None:
+            raise PlantVariantError(f"{self.file}: a plant file has no effects to switch off; edit the file")
+        return PlantSpec(self.name, (*self.off, effect))
+
+
+def plant_choice(name: str | None, file: str | None, default: str = DEFAULT_VARIANT) -> PlantSpec:
+    """The plant a command line chose with ``--plant NAME`` or ``--plant-file
+    FILE`` (not both), checked once."""
+    if file is not None:
+        if name is not None:
+            raise PlantVariantError("give --plant or --plant-file, not both")
+        return PlantSpec.from_file(file)
+    return plant_of(name if name is not None else default)
+
+
+def plant_of(text: "str | PlantSpec") -> PlantSpec:
+    """A command-line plant choice, ``NAME`` or ``NAME-no-EFFECT[-no-EFFECT...]``
+    (``lab-no-brush_drop``), checked (:class:`PlantVariantError` names what is
+    unknown); a :class:`PlantSpec` is returned as it is."""
+    if isinstance(text, PlantSpec):
+        return text
     name, *offs = text.split("-no-")
     load_variant(name, offs)   # refuses an unknown name or effect
-    return name, tuple(offs)
+    return PlantSpec(name, tuple(offs))

@@ -42,17 +42,14 @@ def idle_soc_pins(dut, sw: int = 0) -> None:
     """The SoC's (and soc_fabric's) board inputs at rest: keys released
     (active low), no e-stop, no bridge fault, encoders still, limit switches
     closed, UART line idle and the peer ready (CTS_N low); switches at ``sw``."""
-    dut.sw.value = sw
-    dut.key_n.value = 0xF
-    dut.estop.value = 0
-    dut.bridge_fault.value = 0
-    dut.enc_a.value = 0
-    dut.enc_b.value = 0
-    dut.enc_z.value = 0
-    dut.lim_neg.value = 0
-    dut.lim_pos.value = 0
-    dut.uart_rx.value = 1
-    dut.uart_cts_n.value = 0
+    drive(dut, sw=sw, key_n=0xF, estop=0, bridge_fault=0, enc_a=0, enc_b=0, enc_z=0, lim_neg=0, lim_pos=0,
+          uart_rx=1, uart_cts_n=0)
+
+
+def drive(dut, **values: int) -> None:
+    """Set each named input of ``dut`` to its value."""
+    for name, v in values.items():
+        getattr(dut, name).value = v
 
 
 def uart_models(rx_pin, tx_pin, baud: int, quiet: bool = False):

@@ -25,7 +25,7 @@ from torqueloop.spec.repo import REPO_ROOT
 FW = REPO_ROOT / "firmware"
 OUT = REPO_ROOT / "build" / "firmware" / "host"
 SOURCES = [FW / "tests" / "crypto_cli.c", FW / "crypto" / "tl_sha256.c", FW / "crypto" / "tl_siphash.c",
-           FW / "crypto" / "tl_keyslot.c", FW / "protocol" / "tl_auth.c", FW / "protocol" / "tl_link.c"]
+           FW / "protocol" / "tl_keyslot.c", FW / "protocol" / "tl_auth.c", FW / "protocol" / "tl_link.c"]
 SAN = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all"]
 
 # RFC 4231 section 4: (key, data, HMAC-SHA-256); case 5's result is truncated to 128 bits.

@@ -208,7 +208,9 @@ def test_only_firmware_for_this_board_is_uploaded(tmp_path):
 
 
 def test_c_header_carries_the_protocol():
-    h = bp.c_header()
+    from torqueloop.flow.boot_image import boot_proto_header
+
+    h = boot_proto_header()
     assert "#define BOOT_WINDOW_CYCLES 25000000u" in h
     assert "#define BOOT_SYNC_BYTES {0xA5u, 0x5Au, 0xB0u, 0x07u}" in h
     assert f"#define BOOT_MAX_IMAGE_BYTES {bp.MAX_IMAGE_BYTES}u" in h

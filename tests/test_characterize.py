@@ -343,3 +343,21 @@ def test_duty_sweep_needs_its_frequency_and_enough_points():
         parse_sweep(head + "# freq_hz = 450\nduty_pct,force_n,current_a\n" + "\n".join(rows.splitlines()[:5]), "d.csv")
     with pytest.raises(DataError, match="outside 0..100"):
         parse_sweep(head + "# freq_hz = 450\nduty_pct,force_n,current_a\n" + rows + "\n101,1,1", "d.csv")
+
+
+def test_the_numpy_line_fit_is_scipys_linregress() -> None:
+    """The host install fits lines without scipy; where scipy exists, the two agree."""
+    stats = pytest.importorskip("scipy.stats")
+    from torqueloop.characterize.method import line_fit
+
+    seed = 26
+    print(f"seed {seed}")
+    rng = np.random.default_rng(seed)
+    for _ in range(50):
+        n = int(rng.integers(3, 40))
+        x = np.sort(rng.uniform(0, 100, n))
+        y = rng.normal(0, 1) * x + rng.normal(0, 5) + rng.normal(0, rng.uniform(0.01, 20), n)
+        ours, ref = line_fit(x, y), stats.linregress(x, y)
+        assert ours.slope == pytest.approx(ref.slope, rel=1e-9, abs=1e-12)
+        assert ours.intercept == pytest.approx(ref.intercept, rel=1e-9, abs=1e-9)
+        assert ours.rvalue == pytest.approx(ref.rvalue, rel=1e-9, abs=1e-12)

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from torqueloop.characterize import BenchConstants, Sweep, load_config, write_sweep
-from torqueloop.characterize.cli import EXIT_ERROR, EXIT_FAIL, EXIT_NEED_SWEEP, EXIT_OK, main
+from torqueloop.study.characterize_cli import EXIT_ERROR, EXIT_FAIL, EXIT_NEED_SWEEP, EXIT_OK, main
 
 BENCH = BenchConstants(wheel_radius_m=0.02, theta_deg=90.0, supply_v=12.0)
 

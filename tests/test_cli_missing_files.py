@@ -19,11 +19,11 @@ URL = "socket://127.0.0.1:9"
 CASES = {
     "torqueloop config load": [PY, "-m", "torqueloop.cli", "-u", URL, "config", "load", MISSING + ".json"],
     "torqueloop upload": [PY, "-m", "torqueloop.cli", "-u", URL, "upload", MISSING + ".elf"],
-    "characterize run": [PY, "scripts/characterize.py", "run", MISSING],
-    "characterize step5": [PY, "scripts/characterize.py", "step5", MISSING + ".csv"],
-    "characterize check": [PY, "scripts/characterize.py", "check", MISSING + ".csv"],
-    "characterize show": [PY, "scripts/characterize.py", "show", MISSING + ".json"],
-    "characterize export": [PY, "scripts/characterize.py", "export", MISSING + ".json", "--out", "x.h"],
+    "characterize run": [PY, "-m", "torqueloop.study", "characterize", "run", MISSING],
+    "characterize step5": [PY, "-m", "torqueloop.study", "characterize", "step5", MISSING + ".csv"],
+    "characterize check": [PY, "-m", "torqueloop.study", "characterize", "check", MISSING + ".csv"],
+    "characterize show": [PY, "-m", "torqueloop.study", "characterize", "show", MISSING + ".json"],
+    "characterize export": [PY, "-m", "torqueloop.study", "characterize", "export", MISSING + ".json", "--out", "x.h"],
     "run_elf": [PY, "scripts/run_elf.py", MISSING + ".elf"],
     "upload": [PY, "scripts/upload.py", "--port", URL, MISSING + ".elf"],
 }

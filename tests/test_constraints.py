@@ -296,7 +296,7 @@ def test_readmemh_image_check(tmp_path):
 # --- the repository as committed ------------------------------------------------------------------
 
 def test_repository_constraints_are_consistent():
-    """What CI runs (scripts/check_constraints.py): every check on the committed files."""
+    """What CI runs (python -m torqueloop.flow constraints): every check on the committed files."""
     cores = load_manifest()
     t = board.load_pin_table()
     if t.board.top not in cores:
@@ -368,14 +368,9 @@ def test_timing_verdict_reads_the_summary_and_fails_on_negative_slack(tmp_path):
 
 def test_compile_without_quartus_prints_the_commands(tmp_path, monkeypatch, capsys):
     """make quartus on a machine without Quartus: the exact commands, exit 0."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("gen_quartus", REPO_ROOT / "scripts" / "gen_quartus.py")
-    gq = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(gq)
-    monkeypatch.setattr(gq.shutil, "which", lambda name: None)
+    monkeypatch.setattr(quartus.shutil, "which", lambda name: None)
     qpf = REPO_ROOT / "build" / "quartus" / "de0_cv_top.qpf"
-    assert gq.compile_project(qpf) == 0
+    assert quartus.compile_project(qpf) == 0
     out = capsys.readouterr().out
     assert "cd build/quartus && quartus_sh --flow compile de0_cv_top" in out
     assert "sta.summary" in out and "quartus_pgm" in out

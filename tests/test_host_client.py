@@ -464,7 +464,7 @@ def test_random_lossy_link_never_runs_a_command_twice() -> None:
     c = Client(LossyLink(board, rng, clock, 0.08), LinkInfo("loop://", "other", 115200),
                timeout=0.3, retries=8, clock=clock, key=KEY)
     c.connect()
-    link = c.link
+    link = c.transport
     value = c.get_param("FOLLOW_LIMIT", 0)
     for k in range(60):
         value += 1

@@ -2,7 +2,9 @@
 """A lab installs the host tool alone: ``pip install .[host]`` in a clean
 virtual environment gives a working ``torqueloop`` client, without cocotb,
 Verilator or scipy.  The client in that environment talks to a simulated
-board that this (full) environment serves."""
+board that this (full) environment serves, and ``torqueloop characterize``
+there turns a lab's sweep files into the configuration (numpy's least
+squares, no scipy)."""
 
 from __future__ import annotations
 
@@ -67,15 +69,39 @@ def test_the_host_only_client_drives_a_simulated_board(host_env: Path) -> None:
         assert call("info")["axis_count"] == 2
         call("set", "pwm_freq", "1000", "--axis", "0")
         assert abs(call("get", "pwm_freq", "--axis", "0")["pwm_freq"]["value"] - 1000) < 10
-        # each call below is a new process: on a loaded machine more than the
-        # default 0.5 s link watchdog can pass between `enable` and `move`
-        call("set", "link_timeout", "10")
-        call("enable", "--axis", "0")
+        # a move that enables the axis itself and ends disabled: no watchdog to outrun between processes
         call("home", "here", "--axis", "0")
-        call("move", "1000", "--axis", "0")
+        moved = call("move", "1000", "--axis", "0", "--enable", "--wait", "10")
+        assert moved["settled"] is True and moved["disabled"] is True
         st = call("status", "--axis", "0")
-        assert "0" in st
-        call("disable", "--all")
+        assert st["0"]["fault_names"] == [] and not st["0"]["enabled"]
+
+
+def test_the_host_install_characterises_without_scipy(host_env: Path, tmp_path: Path) -> None:
+    import numpy as np
+
+    from torqueloop.characterize import BenchConstants, Sweep, load_config, write_sweep
+
+    bench = BenchConstants(wheel_radius_m=0.02, theta_deg=90.0, supply_v=12.0)
+    f = np.arange(50.0, 501.0, 50.0)
+    t = 2.4 / 2 * (1 + 0.3 * (450.0 - f) / 450.0)       # tau_max / 2 crossed at 450 Hz (step 5)
+    write_sweep(tmp_path / "data" / "x" / "freq_sweep.csv",
+                Sweep("frequency", "bench motor", bench, f, t, t / 1.1, duty_pct=50.0, stall_torque_nm=2.4,
+                      stall_current_a=2.4 / 1.1, force_given=True))
+    d = np.arange(1.0, 100.0, 3.0)
+    write_sweep(tmp_path / "data" / "x" / "duty_448hz.csv",
+                Sweep("duty", "bench motor", bench, d, np.maximum(0.0, 2.4 * (d - 11.0) / 89.0), 0.02 * d,
+                      freq_hz=448.4, force_given=True))
+    tl = str(host_env / "bin" / "torqueloop")
+    out = tmp_path / "cfg.json"
+    r = _run(host_env, tl, "characterize", "run", str(tmp_path / "data"), "--out", str(out),
+             "--plots", str(tmp_path / "plots"), timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    x = load_config(out).axes["x"]
+    assert x.count_max == 109 and x.pw0_counts == 113       # 448.4 Hz; PW0 11 % of 1023, rounded up
+    assert (tmp_path / "plots" / "x_fig10_torque_vs_freq.png").stat().st_size > 1000
+    r = _run(host_env, tl, "characterize", "sim", "--out-dir", str(tmp_path / "simout"))
+    assert r.returncode != 0 and "Traceback" not in r.stderr and "torqueloop[sim]" in r.stderr, r.stderr
 
 
 def test_host_only_sim_says_what_is_missing(host_env: Path) -> None:

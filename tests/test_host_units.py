@@ -135,7 +135,7 @@ def test_config_round_trip_and_validation() -> None:
 
 
 def test_write_order_satisfies_the_firmware_soft_limit_rule() -> None:
-    # firmware (servo.c set_param): SOFT_MIN <= SOFT_MAX must hold after every write
+    # firmware (params.c param_allowed): SOFT_MIN <= SOFT_MAX must hold after every write
     d = _doc()
     d["axes"][0].update(SOFT_MIN=2_000_000, SOFT_MAX=3_000_000)
     d["axes"][1].update(SOFT_MIN=-3_000_000, SOFT_MAX=-2_000_000)
@@ -147,3 +147,47 @@ def test_write_order_satisfies_the_firmware_soft_limit_rule() -> None:
             board[axis] = new
     assert board == [{"SOFT_MIN": 2_000_000, "SOFT_MAX": 3_000_000},
                      {"SOFT_MIN": -3_000_000, "SOFT_MAX": -2_000_000}]
+
+
+@pytest.mark.parametrize("text,dim,counts", [("5mm/s", 1, 10_500), ("1rev/s", 1, 8400), ("-90deg", 0, -2100),
+                                             ("50mm/s^2", 2, 105_000), ("50 mm/s2", 2, 105_000),
+                                             ("8400counts/s", 1, 8400), ("700", 1, 700), ("10mm", 0, 21_000)])
+def test_positions_speeds_and_accelerations_take_every_unit(text: str, dim: int, counts: int) -> None:
+    assert units.parse_quantity(text, MECH, dim) == counts
+
+
+def test_a_quantity_of_the_wrong_kind_is_refused() -> None:
+    for text, dim in (("5mm", 1), ("5mm/s", 0), ("5mm/s", 2), ("1rev/s^2", 1)):
+        with pytest.raises(units.BadValue, match="is not a"):
+            units.parse_quantity(text, MECH, dim)
+    # limits and speeds through `set`: the board's mechanics convert them
+    assert units.to_raw("soft_max", "40mm", mech=MECH) == ("SOFT_MAX", 84_000)
+    assert units.to_raw("vmax", "2rev/s", mech=MECH) == ("VMAX", 16_800)
+    with pytest.raises(units.BadValue, match="not a speed"):
+        units.to_raw("home_vel", "3mm", mech=MECH)
+
+
+def test_a_carrier_the_divider_cannot_make_is_refused_unless_nearest() -> None:
+    with pytest.raises(units.BadValue) as e:
+        units.to_raw("pwm_freq", "20000")
+    assert "16292 Hz (FDIV 3)" in str(e.value) and "24438 Hz (FDIV 2)" in str(e.value)
+    assert units.to_raw("pwm_freq", "20000", nearest=True) == ("FDIV", 3)
+    assert units.to_raw("pwm_freq", "24438") == ("FDIV", 2)
+    # below about 1 kHz every request is within PWM_FREQ_TOL of a carrier the divider makes
+    for f in range(50, 1000, 7):
+        param, div = units.to_raw("pwm_freq", str(f))
+        assert abs(units.carrier_hz(div) - f) <= units.PWM_FREQ_TOL * f
+
+
+def test_the_terminal_plot_puts_each_series_where_it_belongs() -> None:
+    from torqueloop.host import termplot
+
+    recs = [{"time_us": 25_000 * k, "axes": [{"position": 100 * k, "setpoint": 1000, "error": 1000 - 100 * k,
+                                              "pwm_cmd": 5 * (10 - k)}, {}]} for k in range(11)]
+    text = termplot.frame(recs, 0, "counts", float, n=3, width=11, height=5)
+    lines = text.splitlines()
+    assert lines[0].startswith("frame 3  axis 0  t 0.250 s  (11 records)")
+    chart = [ln.split("|")[1] for ln in lines[2:7]]          # the position chart, newest on the right
+    assert chart[4][0] == "*" and chart[0][10] == "*"        # from the bottom-left to the top-right
+    assert set(chart[0][:9]) == {"-"}                        # the set-point on the top row
+    assert "* position 1000" in lines[1] and "- set-point 1000" in lines[1]

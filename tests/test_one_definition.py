@@ -36,7 +36,7 @@ def _characterised_at(f_opt: float):
 
 @pytest.mark.parametrize("f", [50.0, 200.0, 450.0, 1000.0, 20_000.0])
 def test_set_pwm_freq_and_the_characterisation_export_agree(f: float) -> None:
-    param, host_div = units.to_raw("pwm_freq", f"{f:g}")
+    param, host_div = units.to_raw("pwm_freq", f"{f:g}", nearest=True)
     exported = _characterised_at(f)
     assert param == "FDIV"
     assert exported.pwm_freq_hz == pytest.approx(f, rel=1e-6)

@@ -120,7 +120,7 @@ def test_current_integrals_are_exact_through_events() -> None:
     taken in whole PWM phases, equal a 0.1 us trapezoid of the same run."""
     from sim_models.variants import load_variant
 
-    p = load_variant("lab")
+    p = load_variant("lab-2025")
     coarse = FastAxis(p.axes[0], p, 0, energy=True)
     fine = FastAxis(p.axes[0], p, 0, energy=True)
     ts, iv, t = [0.0], [0.0], 0.0

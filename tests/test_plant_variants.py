@@ -15,15 +15,16 @@ from sim_models.bridge import Pins
 from sim_models.dyno import DynamometerBench, RopeBenchConfig, RopeDynamometer
 from sim_models.params import PlantParamError, load_params, params_from_dict, read_toml
 from sim_models.stepper import FastAxis, TwoAxisPlant
-from sim_models.variants import EFFECTS, PlantVariantError, load_variant, names, parse_plant
+from sim_models.variants import EFFECTS, NEW_EFFECTS, PlantSpec, PlantVariantError, load_variant, names, plant_of
 
 FWD, BRAKE = Pins(1, 0, 1, 1), Pins(0, 0, 1, 1)
 ON, OFF = (1, 0, 1, 1), (0, 0, 1, 1)
 
 
-def test_the_three_variants_and_what_distinguishes_them() -> None:
-    assert names() == ("paper-printed", "paper", "lab")
-    printed, paper, lab = (load_variant(n) for n in names())
+def test_the_variants_and_what_distinguishes_them() -> None:
+    assert names() == ("paper-printed", "paper", "lab-2025", "lab")
+    printed, paper, lab2025, lab = (load_variant(n) for n in names())
+    assert lab2025 == load_variant("lab", NEW_EFFECTS)
     assert printed == load_params()                      # Table 2 as printed
     assert printed.axes[1].rotor_inertia_kg_m2 == 9.655e-5
     assert paper.axes[1].rotor_inertia_kg_m2 == 9.655e-6
@@ -67,7 +68,7 @@ def _dc_axis(p, axis: int, volts: float, t: float, **changes) -> np.ndarray:
 def test_motor_friction_no_motion_below_breakaway_and_motion_above() -> None:
     """DC drive: the rotor stays put while k_t V / R is below the breakaway
     torque T_s and turns once it is above (brush drop off, table free)."""
-    p = load_variant("lab", ("brush_drop", "gear_efficiency", "energy_consistent"))
+    p = load_variant("lab-2025", ("brush_drop", "gear_efficiency", "energy_consistent"))
     a = p.axes[0]
     c = ax.AxisConsts.build(a, p.bridge)
     v_break = a.motor_static_N_m * c.R / c.kt
@@ -82,7 +83,7 @@ def test_motor_friction_no_motion_below_breakaway_and_motion_above() -> None:
 def test_pwm_ripple_lowers_the_apparent_breakaway() -> None:
     """The same mean voltage that cannot start the motor as DC starts it as a
     200 Hz PWM: each pulse reaches the full supply current, above T_s."""
-    p = load_variant("lab", ("brush_drop", "gear_efficiency", "energy_consistent"))
+    p = load_variant("lab-2025", ("brush_drop", "gear_efficiency", "energy_consistent"))
     a = p.axes[0].replace(table_coulomb_N=0.0)
     c = ax.AxisConsts.build(a, p.bridge)
     duty = 0.5 * a.motor_static_N_m * c.R / c.kt / p.bridge.supply_V     # half the DC breakaway
@@ -99,7 +100,7 @@ def test_pwm_ripple_lowers_the_apparent_breakaway() -> None:
 
 def test_brush_drop_lowers_the_stall_current_by_vb_over_r() -> None:
     """Rotor held (the paper's closed form), DC: i = (V - V_b) / R."""
-    for name in ("paper", "lab"):
+    for name in ("paper", "lab-2025"):
         p = load_variant(name, () if name == "paper" else ("motor_friction", "gear_efficiency", "energy_consistent"))
         a = p.axes[1]
         c = ax.AxisConsts.build(a, p.bridge)
@@ -148,8 +149,10 @@ def test_unknown_variant_and_effect_are_refused_in_one_line() -> None:
     with pytest.raises(PlantVariantError, match=r"unknown plant variant 'lbа'|unknown plant variant"):
         load_variant("lbа")
     with pytest.raises(PlantVariantError, match="unknown effect 'brushes'"):
-        parse_plant("lab-no-brushes")
-    assert parse_plant("lab-no-brush_drop-no-motor_friction") == ("lab", ("brush_drop", "motor_friction"))
+        plant_of("lab-no-brushes")
+    p = plant_of("lab-no-brush_drop-no-motor_friction")
+    assert p == PlantSpec("lab", ("brush_drop", "motor_friction")) and p.label == "lab-no-brush_drop-no-motor_friction"
+    assert plant_of(p) is p and p.without("gear_efficiency").label == p.label + "-no-gear_efficiency"
 
 
 @pytest.mark.parametrize("section, key, value, rule", [

@@ -77,7 +77,10 @@ def test_replies_decode_by_name() -> None:
     c = P.COMMANDS["GET_PARAM"]
     f = P.Frame(5, c.cmd | P.REPLY_FLAG, struct.pack(c.rep_fmt, 0, -42))
     assert P.decode_reply(f) == {"status": 0, "value": -42}
-    assert P.decode_reply(P.Frame(5, c.cmd | P.REPLY_FLAG, b"\x07")) == {"status": P.STATUS["RANGE"]}
+    assert P.decode_reply(P.Frame(5, c.cmd | P.REPLY_FLAG, b"\x07")) == {"status": P.STATUS["RANGE"],
+                                                                       "why": P.REFUSAL["NONE"]}
+    assert P.decode_reply(P.Frame(5, c.cmd | P.REPLY_FLAG, bytes([P.STATUS["RANGE"], P.REFUSAL["PW_ORDER"]]))) == \
+        {"status": P.STATUS["RANGE"], "why": P.REFUSAL["PW_ORDER"]}
 
 
 def test_decoder_stopping_early_never_repeats_or_merges_frames():

@@ -19,7 +19,6 @@ from __future__ import annotations
 import pytest
 
 from torqueloop.sim.model_loop import TABLE1
-from torqueloop.host.client import UNTAGGED
 from torqueloop.sim.simboard import LIM_POS, SimBoard
 from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
@@ -45,7 +44,7 @@ class Host:
 
     def cmd(self, name: str, **fields: int) -> dict[str, int]:
         self.seq += 1
-        tagged = name not in UNTAGGED       # as the host tool: everything but the reads carries a MAC
+        tagged = not P.COMMANDS[name].untagged   # as the host tool: everything but the reads carries a MAC
         self.b.write(self.sess.request(name, self.seq, **fields) if tagged else P.request(name, self.seq, **fields))
         return self._reply(name)
 

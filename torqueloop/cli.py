@@ -8,10 +8,14 @@ or the simulated board.  docs/host.md is the user's guide.
 
 The link URL comes from ``--url`` or ``$TORQUELOOP_URL``; the link key from
 the file ``--key-file`` or ``$TORQUELOOP_KEY_FILE`` names (never the command
-line itself; docs/security.md).  Every command can print ``--json`` for
-scripts.  Exit status: 0 done, 1 refused by the board, a fault during the
-command, or a missing, unreadable or wrong key, 2 bad input (refused before
-anything was sent, one line, never a traceback), 3 no answer.
+line itself; docs/security.md).  When ``torqueloop serve`` runs for that
+board (or ``--server ADDR`` / ``$TORQUELOOP_SERVER`` names one), every
+command goes through it instead: the server holds the link and the key.
+Every command can print ``--json`` for scripts.  Exit status: 0 done, 1
+refused by the board in its state, a fault during the command, or a missing,
+unreadable or wrong key, 2 bad input (a value refused before anything was
+sent or by the board's rules, one line naming the rule, never a traceback),
+3 no answer.
 """
 
 from __future__ import annotations
@@ -20,31 +24,59 @@ import argparse
 import json
 import math
 import os
+import re
+import signal
 import sys
 import time
 from pathlib import Path
 from typing import Any, Callable
 
+import torqueloop
 from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
 from torqueloop.host import analysis
 from torqueloop.spec import units
 from torqueloop.spec.pwm import carrier_hz
 from torqueloop.host import config as hconfig
-from torqueloop.host.client import Client, NoAnswer, ProtocolError, decode_faults, describe_faults, key_missing
+from torqueloop.host.client import (Client, CommandRejected, NoAnswer, ProtocolError, decode_faults, describe_faults,
+                                    key_missing)
+from torqueloop.host import serve as hserve
+from torqueloop.host.remote import RemoteClient
+from torqueloop.host.session import HOMED, HOMING, KEEPALIVE_S, Session
 from torqueloop.host.transport import DEFAULT_BAUD, LinkOpenError, open_link
 from torqueloop.host.upload import ImageRefused
 from torqueloop.spec.units import BadValue
 
 DEFAULT_URL = "socket://127.0.0.1:2000"
-KEEPALIVE_S = 0.15   # a HEARTBEAT this often keeps the firmware's link watchdog (>= 10 ms, default 0.5 s) quiet
-HOMED = 2            # STATUS.home (docs/protocol.md, HOME)
+#: what to do about a refusal, by its rule (protocol.toml [[refusal]] says what the rule is)
+REFUSAL_HINT = {
+    "DISABLED": "add --enable: the command enables the axis itself and keeps the link watchdog fed",
+    "FAULT": "`torqueloop status` names the fault; remove its cause, then `torqueloop clear-fault`",
+    "NOT_HOMED": "`torqueloop home neg --enable` (or pos; `home here` without switches) first, or --unhomed to "
+                 "move relative to where it was at power-up",
+    "FOLLOW": "use --trapezoid, a smaller step, or raise follow_limit",
+    "LIMIT": "only moves away from that end",
+    "CARRIER": "lower pwm_freq (a larger FDIV), or raise PWM_MAX_HZ within the bridge's rating",
+    "GAIN": f"the largest physical gain is {P.PARAMS['KP_UNM_RAD'].max / 1e6:g} N m/rad",
+    "PW_ORDER": "set the other end first",
+    "SOFT_ORDER": "set the other end first",
+    "NO_SWITCHES": "`torqueloop home here`",
+    "CAUSE": "`torqueloop status` shows what is still present",
+}
 
 
 class Ctx:
     def __init__(self, args: argparse.Namespace) -> None:
         self.args = args
-        self._client: Client | None = None
+        self._client: Client | RemoteClient | None = None
+        self.shared = False                       # the client belongs to a shell: leave it open
+        self.tick: Callable[[], None] = lambda: None
+
+    def server(self) -> str | None:
+        """The address of the ``torqueloop serve`` the commands go through, or None (a link of their own)."""
+        if getattr(self.args, "no_server", False):
+            return None
+        return self.args.server or os.environ.get(hserve.SERVER_ENV) or hserve.find_server(self.args.url)
 
     def key(self) -> tuple[bytes | None, str, str]:
         """(key, where it came from, why there is none).  A missing or bad key
@@ -61,13 +93,19 @@ class Ctx:
     def require_key(self, command: str, **fields: int) -> None:
         """A command that changes the machine (auth.needs_key) is refused here,
         before the link is opened, when the tool has no usable key."""
-        if auth.needs_key(command, fields):
+        if auth.needs_key(command, fields) and self.server() is None:   # a server holds its own key
             key, _, err = self.key()
             if key is None:
                 raise key_missing(command, err)
 
     @property
-    def client(self) -> Client:
+    def session(self) -> Session:
+        return Session(self.client)
+
+    @property
+    def client(self) -> Client | RemoteClient:
+        if self._client is None and (addr := self.server()):
+            self._client = RemoteClient(addr, timeout=max(5.0, self.args.timeout))
         if self._client is None:
             key, src, err = self.key()
             link, info = open_link(self.args.url, self.args.baud)
@@ -87,7 +125,7 @@ class Ctx:
             print(text() if callable(text) else text)
 
     def close(self) -> None:
-        if self._client is not None:
+        if self._client is not None and not self.shared:
             self._client.close()
 
 
@@ -99,12 +137,27 @@ def _jsonable(o: Any) -> Any:
     return str(o)
 
 
+def direct_client(ctx: "Ctx", what: str) -> Client:
+    """The board's own link, for commands that cannot go through a server."""
+    if ctx.server() is not None:
+        raise ProtocolError(f"{what} needs the board's link to itself, and a torqueloop server "
+                            f"({ctx.server()}) holds it: stop `torqueloop serve` first, or --no-server")
+    c = ctx.client
+    assert isinstance(c, Client)
+    return c
+
+
 def _axes(args: argparse.Namespace) -> list[int]:
     return list(range(P.AXIS_COUNT)) if getattr(args, "all", False) else [args.axis]
 
 
 def _mask(axes: list[int]) -> int:
     return sum(1 << a for a in axes)
+
+
+def _unit_out(args: argparse.Namespace, default: str) -> str:
+    """The unit a command prints positions in: its --unit, else ``default``."""
+    return getattr(args, "unit", None) or default
 
 
 def progress(done: float, total: float, label: str, width: int = 30) -> None:
@@ -182,67 +235,30 @@ def cmd_get(ctx: Ctx) -> int:
 
 def cmd_set(ctx: Ctx) -> int:
     a = ctx.args
-    units.to_raw(a.name, a.value)          # a bad value is refused before the link is opened
+    units.to_raw(a.name, a.value, nearest=True)   # a bad value is refused before the link is opened
     ctx.require_key("SET_PARAM")
     clk = (ctx.client.identity or {}).get("clk_hz", units.CLK_HZ)
-    param, raw = units.to_raw(a.name, a.value, clk)
-    _check_pair(ctx, param, raw, a.axis, clk)
+    fr = units.FRIENDLY.get(a.name.lower())
+    mech = ctx.mech(a.axis) if fr is not None and fr.dim is not None else None
+    param, raw = units.to_raw(a.name, a.value, clk, mech, a.nearest)
     if param == "BAUD_DIV":
         print("warning: the board changes its baud rate after this reply; reconnect with --baud",
               file=sys.stderr)
-    stored = ctx.client.set_param(param, raw, a.axis)
+    try:
+        stored = ctx.client.set_param(param, raw, a.axis)
+    except CommandRejected as e:
+        if e.rule == "CARRIER" and param == "FDIV":
+            e.args = (f"{e} (FDIV {raw}: {carrier_hz(raw, clk):.0f} Hz; PWM_MAX_HZ "
+                      f"{ctx.client.get_param('PWM_MAX_HZ')} Hz)",)
+        raise
     val, unit = units.from_raw(a.name, stored, clk)
-    ctx.out({"name": a.name, "param": param, "raw": stored, "value": val, "unit": unit},
-            f"{a.name} = {val} {unit}   ({param} = {stored})")
+    obj = {"name": a.name, "param": param, "raw": stored, "value": val, "unit": unit}
+    text = f"{a.name} = {val} {unit}   ({param} = {stored})"
+    if param == "FDIV" and a.name.lower() == "pwm_freq":
+        obj["requested"] = units.number(a.value.lower().removesuffix("hz").strip(), a.name)
+        text = f"pwm_freq: requested {obj['requested']:g} Hz, stored {val} Hz   (FDIV = {stored})"
+    ctx.out(obj, text)
     return 0
-
-
-def _check_pair(ctx: Ctx, param: str, raw: int, axis: int, clk: int) -> None:
-    """Bounds between parameters, checked before sending (the firmware checks them too)."""
-    c = ctx.client
-    if param == "FDIV":
-        ceiling = c.get_param("PWM_MAX_HZ")
-        if carrier_hz(raw, clk) > ceiling:
-            raise BadValue(f"the nearest carrier the divider makes is {carrier_hz(raw, clk):.0f} Hz (FDIV {raw}), "
-                           f"above PWM_MAX_HZ = {ceiling} Hz, the bridge's rating")
-    elif param == "PWM_MAX_HZ":
-        for ax in range(P.AXIS_COUNT):
-            f = carrier_hz(c.get_param("FDIV", ax), clk)
-            if f > raw:
-                raise BadValue(f"axis {ax} runs its PWM at {f:.0f} Hz, above {raw} Hz: lower its pwm_freq first")
-    elif param in P.RAW_GAIN_OF or param in P.RAW_GAIN_OF.values() or param in ("TAU_MAX_MNM", "COUNTS_PER_REV"):
-        _check_gains(ctx, param, raw, axis)
-    elif param == "PW0" and raw > (pwmax := c.get_param("PWMAX", axis)):
-        raise BadValue(f"PW0 {raw} above PWMAX {pwmax} (eq. 1 needs PW0 <= PW_F)")
-    elif param == "PWMAX" and raw < (pw0 := c.get_param("PW0", axis)):
-        raise BadValue(f"PWMAX {raw} below PW0 {pw0} (eq. 1 needs PW0 <= PW_F)")
-
-
-def _check_gains(ctx: Ctx, param: str, raw: int, axis: int) -> None:
-    """The firmware keeps every raw gain within its physical gain's range, so
-    that `get` reads back what `set` wrote (a raw gain 1000x the
-    largest physical one read back as 100 N m/rad)."""
-    c = ctx.client
-    tau, cpr = c.get_param("TAU_MAX_MNM", axis), c.get_param("COUNTS_PER_REV", axis)
-    phys_max = P.PARAMS["KP_UNM_RAD"].max
-    if param == "TAU_MAX_MNM":
-        tau = raw
-    elif param == "COUNTS_PER_REV":
-        cpr = raw
-    raw_max = P.gain_raw_from_phys(phys_max, tau, cpr)
-    if param in P.RAW_GAIN_OF.values():      # a physical gain: its raw gain must not saturate
-        g = P.gain_raw_from_phys(raw, tau, cpr)
-        if g >= 0x7FFF_FFFF and P.gain_phys_from_raw(g, tau, cpr) < raw:
-            raise BadValue(f"{param} {raw}: beyond what the raw q16 gain can hold at TAU_MAX_MNM {tau}, "
-                           f"COUNTS_PER_REV {cpr}")
-        return
-    gains = {k: c.get_param(k, axis) for k in P.RAW_GAIN_OF}
-    if param in gains:
-        gains = {param: raw}
-    for k, v in gains.items():
-        if v > raw_max:
-            raise BadValue(f"{k} {v} would be above {raw_max}, the raw gain of {phys_max / 1e6:g} N m/rad "
-                           f"(the largest physical gain) at TAU_MAX_MNM {tau}, COUNTS_PER_REV {cpr}")
 
 
 def cmd_enable(ctx: Ctx, on: bool) -> int:
@@ -252,92 +268,117 @@ def cmd_enable(ctx: Ctx, on: bool) -> int:
     ctx.out({"axes": axes, "enabled": on}, f"axes {axes} {'enabled' if on else 'disabled'}")
     if on and not ctx.args.json:
         timeout = ctx.client.get_param("LINK_TIMEOUT_MS")
-        print(f"note: the board disables an axis after {timeout} ms without a command (LINK_TIMEOUT_MS); "
-              "`move --wait`, `monitor`, `plot` and `step-test` keep the link busy", file=sys.stderr)
+        print(f"note: an enabled axis stays enabled only while a host keeps commanding it: the board "
+              f"disables it after {timeout} ms without a command (LINK fault), and a `torqueloop serve` "
+              "disables it when this command ends. To move, `move TARGET --enable --wait S` and "
+              "`home neg --enable` enable the axis themselves and disable it when done; "
+              "`torqueloop shell` keeps it enabled between commands", file=sys.stderr)
     return 0
 
 
-def _wait_settled(ctx: Ctx, axis: int, limit_s: float, tol: int) -> dict[str, int]:
+def _hold(ctx: Ctx, axis: int) -> int:
+    """--hold: keep ``axis`` enabled, feeding the link watchdog, until Ctrl-C or
+    a fault; then disable it.  Returns the exit status (1 after a fault)."""
+    c = ctx.client
+    print(f"holding axis {axis} (Ctrl-C disables it and ends)", file=sys.stderr, flush=True)
+    rc = 0
+    try:
+        while True:
+            c.heartbeat()
+            s = c.status(axis)
+            if s["faults"] or not s["enabled"]:
+                print(f"axis {axis} {'faulted: ' + describe_faults(s['faults']) if s['faults'] else 'was disabled'}",
+                      file=sys.stderr)
+                rc = 1
+                break
+            time.sleep(KEEPALIVE_S)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        c.enable(1 << axis, False)
+    return rc
+
+
+SETTLE_HOLD_S = 0.3   # "settled": the profile done and the position within the tolerance this long
+
+
+def _wait_settled(ctx: Ctx, axis: int, limit_s: float, tol: int, start: int, target: int
+                  ) -> tuple[dict[str, int], bool]:
+    """Poll until the axis has settled - its profile done and its position
+    within ``tol`` counts of the set-point for SETTLE_HOLD_S, as a settling
+    time is defined - or ``limit_s`` has passed, feeding the link watchdog;
+    (status, settled)."""
     c = ctx.client
     t0 = time.monotonic()
+    span = abs(target - start)
+    shown = False
+    inside_since: float | None = None
     try:
-        return _poll_settled(ctx, axis, limit_s, tol, t0)
+        while True:
+            s = c.status(axis)
+            now = time.monotonic()
+            if s["faults"]:
+                raise ProtocolError(f"axis {axis} faulted during the move: {describe_faults(s['faults'])}")
+            if not s["moving"] and abs(s["setpoint"] - s["position"]) <= tol:
+                inside_since = now if inside_since is None else inside_since
+                if now - inside_since >= SETTLE_HOLD_S:
+                    return s, True
+            else:
+                inside_since = None
+            if now - t0 > limit_s:
+                return s, False
+            if not ctx.args.json and span:      # how much of the way it has come, not of the wait
+                progress(span - min(span, abs(target - s["position"])), span, f"axis {axis} moving")
+                shown = True
+            c.heartbeat()
+            ctx.tick()
+            time.sleep(KEEPALIVE_S)
     finally:
-        if not ctx.args.json:
+        if shown:
             sys.stderr.write("\n")
-
-
-def _poll_settled(ctx: Ctx, axis: int, limit_s: float, tol: int, t0: float) -> dict[str, int]:
-    c = ctx.client
-    while True:
-        s = c.status(axis)
-        if s["faults"]:
-            raise ProtocolError(f"axis {axis} faulted during the move: {describe_faults(s['faults'])}")
-        if not s["moving"] and abs(s["setpoint"] - s["position"]) <= tol and abs(s["velocity_q8"]) < 256 * 50:
-            return s
-        if time.monotonic() - t0 > limit_s:
-            return s
-        if not ctx.args.json:
-            progress(min(time.monotonic() - t0, limit_s), limit_s, f"axis {axis} moving")
-        c.heartbeat()
-        time.sleep(KEEPALIVE_S)
-
-
-def _check_move(ctx: Ctx, axis: int, target: int, trapezoid: bool, unhomed: bool, st: dict[str, int]) -> None:
-    """Everything the firmware would refuse about a move, checked before the
-    axis is enabled: a refused move must not leave it enabled."""
-    c = ctx.client
-    lo, hi = c.get_param("SOFT_MIN", axis), c.get_param("SOFT_MAX", axis)
-    if not lo <= target <= hi:
-        raise BadValue(f"target {target} counts is outside axis {axis}'s soft limits [{lo}, {hi}]"
-                       + ("" if st["home"] == HOMED else " (relative to where it was at power-up: not homed)"))
-    step = target - st["position"]
-    if not trapezoid and abs(step) > (fl := c.get_param("FOLLOW_LIMIT", axis)):
-        raise BadValue(f"a step of {step} counts is larger than FOLLOW_LIMIT = {fl} counts: the following-error "
-                       "fault would trip at once; use --trapezoid, a smaller step, or raise follow_limit")
-    if st["home"] != HOMED and not unhomed:
-        raise ProtocolError(f"axis {axis} is not homed: `torqueloop home --axis {axis} neg|pos|here` first, "
-                            "or --unhomed to move relative to where it was at power-up")
-    blocking = st["faults"] & ~P.DIRECTIONAL_FAULTS
-    if blocking:
-        raise ProtocolError(f"axis {axis} has latched faults: {describe_faults(blocking)}; "
-                            "`torqueloop clear-fault` first")
-    lim = st["limits"] | (P.LIMIT_BITS["neg"] if st["faults"] & P.FAULT["LIMIT_NEG"] else 0) \
-        | (P.LIMIT_BITS["pos"] if st["faults"] & P.FAULT["LIMIT_POS"] else 0)
-    if (lim & P.LIMIT_BITS["pos"] and step > 0) or (lim & P.LIMIT_BITS["neg"] and step < 0):
-        raise ProtocolError(f"axis {axis}: the limit switch at that end is tripped; only moves away from it")
 
 
 def cmd_move(ctx: Ctx) -> int:
     a = ctx.args
-    units.parse_position(a.target, units.Mechanics(), a.unit)   # refused before the link is opened
+    units.parse_position(a.target, units.Mechanics(), a.unit or "counts")   # refused before the link is opened
     ctx.require_key("MOVE")
     mech = ctx.mech(a.axis)
-    target = units.parse_position(a.target, mech, a.unit if a.unit != "counts" else "counts")
+    target = units.parse_position(a.target, mech, a.unit or "counts")
     st = ctx.client.status(a.axis)
     if a.relative:
         target += st["position"]
         if not units.INT32_MIN <= target <= units.INT32_MAX:
             raise BadValue(f"{a.target} from {st['position']} is beyond the encoder's 32-bit range")
-    _check_move(ctx, a.axis, target, a.trapezoid, a.unhomed, st)
-    enabled_here = a.enable and not st["enabled"]
-    if enabled_here:
-        ctx.client.enable(1 << a.axis, True)
-    try:
-        ctx.client.move(a.axis, target, a.trapezoid, a.unhomed)
-    except ProtocolError:
-        if enabled_here:
-            ctx.client.enable(1 << a.axis, False)
-        raise
+    ctx.session.move(a.axis, target, a.trapezoid, a.unhomed, enable=a.enable, st=st)
     res: dict[str, Any] = {"axis": a.axis, "target_counts": target, "mode": "trapezoid" if a.trapezoid else "step"}
-    text = f"axis {a.axis} -> {target} counts ({mech.from_counts(target, a.unit):.4f} {a.unit})"
+    shown = _unit_out(a, "counts")
+    text = f"axis {a.axis} -> {target} counts" + ("" if shown == "counts" else
+                                                  f" ({mech.from_counts(target, shown):.4f} {shown})")
+    rc = 0
     if a.wait:
-        s = _wait_settled(ctx, a.axis, a.wait, a.tolerance)
-        res["position_counts"] = s["position"]
-        res["error_counts"] = target - s["position"]
-        text += f"; at {s['position']} counts (error {target - s['position']})"
+        try:
+            s, settled = _wait_settled(ctx, a.axis, a.wait, a.tolerance, st["position"], target)
+        except ProtocolError:
+            if not a.hold:
+                ctx.client.enable(1 << a.axis, False)
+            raise
+        res.update(position_counts=s["position"], error_counts=target - s["position"], settled=settled)
+        text += (f"; {'settled' if settled else 'not settled'} at {s['position']} counts "
+                 f"(error {target - s['position']}, tolerance {a.tolerance})")
+        if not settled:
+            text += f" after {a.wait:g} s"
+            rc = EXIT_REFUSED
+    if a.wait and not a.hold:
+        ctx.client.enable(1 << a.axis, False)
+        res["disabled"] = True
+        text += f"; axis {a.axis} disabled (--hold keeps it enabled)"
     ctx.out(res, text)
-    return 0
+    if a.hold:
+        return _hold(ctx, a.axis) or rc
+    if not a.wait and not a.json and ctx.server() is None:
+        print(f"note: without --wait or --hold this command ends now, and the board disables axis {a.axis} "
+              "after LINK_TIMEOUT_MS without a command (LINK fault)", file=sys.stderr)
+    return rc
 
 
 def cmd_home(ctx: Ctx) -> int:
@@ -346,31 +387,47 @@ def cmd_home(ctx: Ctx) -> int:
     c = ctx.client
     st = c.status(a.axis)
     if a.mode != "here":
-        if not st["enabled"]:
-            raise ProtocolError(f"axis {a.axis} is disabled: homing to a switch moves it (`torqueloop enable`)")
-        if not c.get_param("LIMIT_SW", a.axis):
-            raise ProtocolError(f"axis {a.axis} has no limit switches (LIMIT_SW 0): `torqueloop home here`")
-    c.home(a.axis, a.mode, a.index)
+        if not st["enabled"] and not a.enable:
+            raise ProtocolError(f"axis {a.axis} is disabled: homing to a switch moves it; "
+                                f"`torqueloop home {a.mode} --enable` enables it for the homing")
+    if a.enable and not st["enabled"]:
+        if blocking := st["faults"] & ~P.DIRECTIONAL_FAULTS:
+            raise ProtocolError(f"axis {a.axis} has latched faults: {describe_faults(blocking)}; "
+                                "`torqueloop clear-fault` first")
+        c.enable(1 << a.axis, True)
+    try:
+        c.home(a.axis, a.mode, a.index)
+    except ProtocolError:
+        c.enable(1 << a.axis, False)
+        raise
     t0 = time.monotonic()
     while a.mode != "here" and time.monotonic() - t0 < a.wait:
         st = c.status(a.axis)
-        if st["home"] != 1 or st["faults"]:
+        if st["home"] != HOMING or st["faults"]:
             break
         c.heartbeat()
+        ctx.tick()
         if not a.json:
             progress(time.monotonic() - t0, a.wait, f"axis {a.axis} homing")
         time.sleep(KEEPALIVE_S)
     if a.mode != "here" and not a.json:
         sys.stderr.write("\n")
     st = c.status(a.axis)
+    if not a.hold and st["enabled"]:
+        c.enable(1 << a.axis, False)
     obj = {"axis": a.axis, "mode": a.mode, "index": a.index, "home_state": P.HOME_STATE.get(st["home"], "?"),
-           "position_counts": st["position"], "faults": decode_faults(st["faults"])}
+           "position_counts": st["position"], "faults": decode_faults(st["faults"]),
+           "enabled": bool(a.hold and st["enabled"])}
     ctx.out(obj, f"axis {a.axis}: {obj['home_state']}, position {st['position']} counts; "
-                 f"faults: {describe_faults(st['faults'])}")
+                 f"faults: {describe_faults(st['faults'])}"
+                 + ("" if a.hold or not st["enabled"] else f"; axis {a.axis} disabled (--hold keeps it enabled)"))
     if st["faults"]:
         return 1
     if a.mode != "here" and a.wait and st["home"] != HOMED:
-        raise ProtocolError(f"axis {a.axis} still {obj['home_state']} after {a.wait:g} s")
+        raise ProtocolError(f"axis {a.axis} still {obj['home_state']} after {a.wait:g} s "
+                            f"(HOME_VEL {c.get_param('HOME_VEL', a.axis)} counts/s; --wait S waits longer)")
+    if a.hold:
+        return _hold(ctx, a.axis)
     return 0
 
 
@@ -396,46 +453,13 @@ def cmd_clear_fault(ctx: Ctx) -> int:
 
 def capture(ctx: Ctx, duration: float, every: int = 1, on_record: Callable[[dict], None] | None = None,
             label: str = "capture", trigger: tuple[float, Callable[[], None]] | None = None) -> list[dict]:
-    """Stream telemetry for ``duration`` seconds of *board* time (the records'
-    time_us, so a co-simulation slower than real time is captured just as
-    long), feeding the link watchdog; ``trigger`` = (t, fn) calls fn once the
-    capture spans t seconds.  Returns the records."""
-    c = ctx.client
-    c.take_telemetry()
-    c.set_telemetry(every)
-    records: list[dict] = []
-    show = not ctx.args.json and on_record is None
-    span = 0.0
-    try:
-        last_keep = last_new = time.monotonic()
-        while span < duration:
-            c.pump(0.02)
-            new = c.take_telemetry()
-            now = time.monotonic()
-            if new:
-                records += new
-                last_new = now
-                span = ((records[-1]["time_us"] - records[0]["time_us"]) % (1 << 32)) / 1e6
-                if on_record:
-                    for r in new:
-                        on_record(r)
-                if trigger and span >= trigger[0]:
-                    trigger[1]()
-                    trigger = None
-            elif now - last_new > max(5.0, 10 * ctx.args.timeout):
-                raise ProtocolError(f"no telemetry for {now - last_new:.0f} s (board streaming every {every} "
-                                    "periods was requested); check `torqueloop info` counters")
-            if now - last_keep > KEEPALIVE_S:
-                c.heartbeat()
-                last_keep = now
-            if show and math.isfinite(duration):
-                progress(span, duration, label)
-        if show and math.isfinite(duration):
-            progress(duration, duration, label)
-    finally:
-        c.set_telemetry(0)
-        c.pump(0.05)
-        records += c.take_telemetry()
+    """Session.capture with a progress bar (none with --json, on_record or no end)."""
+    show = not ctx.args.json and on_record is None and math.isfinite(duration)
+    records = ctx.session.capture(duration, every, on_record, trigger,
+                                  on_progress=(lambda span: progress(span, duration, label)) if show else None,
+                                  silence_s=max(5.0, 10 * ctx.args.timeout))
+    if show:
+        progress(duration, duration, label)
     return records
 
 
@@ -466,8 +490,20 @@ def cmd_monitor(ctx: Ctx) -> int:
     return 0
 
 
+def _need_display() -> None:
+    """A live window needs a display; without one, say what works instead (before the link is opened)."""
+    import matplotlib
+
+    headless = sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    if headless or matplotlib.get_backend().lower() in ("agg", "pdf", "ps", "svg", "cairo", "template"):
+        raise BadValue("plot: no display for a window; `plot --save PREFIX --duration S` writes PNG and CSV, "
+                       "and `torqueloop shell` plots in the terminal while moves run")
+
+
 def cmd_plot(ctx: Ctx) -> int:
     a = ctx.args
+    if not a.save:
+        _need_display()
     mech = ctx.mech(a.axis)
     if a.save:
         records = capture(ctx, a.duration, a.every)
@@ -502,18 +538,20 @@ def cmd_plot(ctx: Ctx) -> int:
 
 def cmd_step_test(ctx: Ctx) -> int:
     a = ctx.args
-    units.parse_position(a.target, units.Mechanics(), a.unit)   # refused before the link is opened
+    bare = a.unit or "counts"          # a bare number is counts, as everywhere (torqueloop/spec/units.py)
+    a.unit = _unit_out(a, "rad")
+    units.parse_position(a.target, units.Mechanics(), bare)   # refused before the link is opened
     ctx.require_key("MOVE")
     c = ctx.client
     mech = ctx.mech(a.axis)
     s0 = c.status(a.axis)
     start = s0["position"]
-    target = units.parse_position(a.target, mech, a.unit)
+    target = units.parse_position(a.target, mech, bare)
     if a.relative:
         target += start
         if not units.INT32_MIN <= target <= units.INT32_MAX:
             raise BadValue(f"{a.target} from {start} is beyond the encoder's 32-bit range")
-    _check_move(ctx, a.axis, target, a.trapezoid, a.unhomed, s0)
+    ctx.session.check_move(a.axis, target, a.trapezoid, a.unhomed, s0, enabling=not s0["enabled"])
     if s0["faults"]:
         raise ProtocolError(f"axis {a.axis} has latched faults: {describe_faults(s0['faults'])}; "
                             "`torqueloop clear-fault` first")
@@ -535,7 +573,7 @@ def cmd_step_test(ctx: Ctx) -> int:
         [k for k in range(cap.n) if sp[k] == target]
     if not moved:
         raise ProtocolError("the capture holds no sample after the move command (telemetry lost?)")
-    k0 = max(0, moved[0] - 1) if not a.trapezoid else max(0, moved[0] - 1)
+    k0 = max(0, moved[0] - 1)   # the sample before the first that shows the move
     t = cap.t[k0:] - cap.t[k0]
     x = cap.data["position"][k0:, a.axis]
     fig = analysis.step_figures(t, x, sp[k0:], start, target, a.band / 100)
@@ -618,7 +656,7 @@ def cmd_upload(ctx: Ctx) -> int:
 
     image = upload.load_image(ctx.args.file, raw_ok=ctx.args.raw)   # before the link is opened
     show = None if ctx.args.json else (lambda done, total: progress(done, total, "upload"))
-    r = upload.run_upload(ctx.client, image, show, window_s=ctx.args.window)
+    r = upload.run_upload(direct_client(ctx, "upload"), image, show, window_s=ctx.args.window)
     obj = {"ok": r.ok, "message": r.message, "bytes": r.bytes, "crc32": f"0x{r.crc32:08x}",
            "old_build_id": f"0x{r.old_build_id:08x}",
            "new_build_id": None if r.new_build_id is None else f"0x{r.new_build_id:08x}",
@@ -637,7 +675,13 @@ def cmd_key(ctx: Ctx) -> int:
         if not a.file:
             raise auth.KeyFileError("key new needs the FILE to create")
         key = auth.new_key()
-        auth.write_key_file(a.file, key)
+        folder = Path(a.file).expanduser().parent
+        if not folder.exists():
+            try:
+                folder.mkdir(parents=True, mode=0o700)   # only its owner may list the keys
+            except OSError as e:
+                raise auth.KeyFileError(f"cannot create the folder {folder}: {e.strerror}") from None
+        auth.write_key_file(Path(a.file).expanduser(), key)
         ctx.out({"file": a.file, "key_id": auth.key_id(key)},
                 f"wrote a new link key to {a.file} (key id {auth.key_id(key)}); keep it off the network. "
                 "Next: build the board's boot ROM with it (docs/security.md, 'Key provisioning')")
@@ -655,11 +699,11 @@ def cmd_sim(ctx: Ctx) -> int:
         from torqueloop.sim.server import BoardServer
         from torqueloop.sim.simboard import SimBoard
         import sim_models.stepper  # noqa: F401  (the plant; SimBoard imports it when built)
-        from sim_models.variants import parse_plant
+        from sim_models.variants import plant_choice
     except ImportError as e:   # a host-only install (pip install torqueloop[host])
         raise SimStackMissing(f"the simulated board needs the simulation stack ({e.name} is missing): "
                               f"pip install 'torqueloop[sim]'") from None
-    parse_plant(ctx.args.plant)      # an unknown variant: one line (PlantParamError is a ValueError)
+    plant = plant_choice(ctx.args.plant, ctx.args.plant_file)   # a bad name or file: one line (a ValueError)
 
     a = ctx.args
     # The simulated board is provisioned with the tool's own key (the file it names)
@@ -671,10 +715,12 @@ def cmd_sim(ctx: Ctx) -> int:
     if a.rtl:
         from torqueloop.sim.rtlboard import RtlBoard
 
-        board: Any = RtlBoard(seed=a.seed, plant=a.plant, key=key)
+        board: Any = RtlBoard(seed=a.seed, plant=plant, key=key)
         what = f"RTL board image (Verilator) + plant model, far below real time, {keyed}"
     else:
-        board = SimBoard(build_id=a.build_id, seed=a.seed, plant=a.plant, key=key)
+        board = SimBoard(build_id=a.build_id, seed=a.seed, plant=plant, key=key)
+        if a.switches is not None:
+            board.limit_counts = [(-a.switches, a.switches)] * P.AXIS_COUNT
         what = f"servo firmware + plant model, build id 0x{board.build_id:08x}, {keyed}"
     srv = BoardServer(board, a.host, a.port, speed=a.speed, hello=a.hello)
     print(f"simulated board on socket://{a.host}:{srv.port} ({what}); Ctrl-C stops it", flush=True)
@@ -683,6 +729,82 @@ def cmd_sim(ctx: Ctx) -> int:
     except KeyboardInterrupt:
         pass
     return 0
+
+
+def cmd_serve(ctx: Ctx) -> int:
+    """``torqueloop serve``: torqueloop/host/serve.py (the wire protocol is in docs/host.md)."""
+    a = ctx.args
+    other = a.server or os.environ.get(hserve.SERVER_ENV) or hserve.find_server(a.url)
+    if other:
+        raise ProtocolError(f"a torqueloop server already holds {a.url}: {other}")
+    key, src, err = ctx.key()
+    if err and src:
+        raise auth.KeyFileError(err)      # a key file named but unusable: say so, do not serve keyless
+    a.no_server = True
+    c = direct_client(ctx, "serve")
+    srv = hserve.SessionServer(c, a.url, a.host, a.port,
+                               log=None if a.quiet else (lambda m: print(m, file=sys.stderr, flush=True)))
+    hserve.write_state(a.url, srv.addr)
+    keyed = f"key id {auth.key_id(key)} from {src}" if key else "NO KEY: reading, stop and disable only"
+    print(f"torqueloop server for {a.url} on {srv.addr} ({keyed}); clients: any torqueloop command "
+          "on this machine, or `torqueloop shell`; Ctrl-C stops it", flush=True)
+    if a.host not in ("127.0.0.1", "localhost", "::1"):
+        print(f"warning: listening on {a.host}: anyone who reaches this port commands the machine "
+              "without a key", file=sys.stderr)
+    signal.signal(signal.SIGTERM, lambda *_: srv.stop())     # `kill` stops it as cleanly as Ctrl-C
+    try:
+        srv.serve_forever()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        srv.stop()
+        hserve.remove_state(a.url)
+    return 0
+
+
+def cmd_characterize(ctx: Ctx) -> int:
+    """``torqueloop characterize ...``: the characterisation method's own command
+    (torqueloop/characterize/command.py; docs/characterization.md), which a
+    host-only install runs too (``sim`` is the study's: torqueloop-study)."""
+    from torqueloop.characterize import command
+
+    rest = list(ctx.args.rest)
+    try:
+        return command.main(rest)
+    except ImportError as e:   # `characterize sim` in a host-only install
+        raise SimStackMissing(f"characterize {rest[0] if rest else ''}: needs the simulation stack "
+                              f"({e.name} is missing): pip install 'torqueloop[sim]'") from None
+
+
+def cmd_plant(ctx: Ctx) -> int:
+    """``torqueloop plant export``: a plant variant or plant file as a plant
+    file, with what an encoder-only identification can see of each axis
+    (sim_models/plantfile.py; docs/identification.md).  Needs no board."""
+    from sim_models.params import PlantParamError
+    from sim_models.plantfile import export_text
+    from sim_models.variants import describe, plant_choice
+
+    a = ctx.args
+    try:
+        plant = plant_choice(a.variant, a.plant_file)
+    except PlantParamError as e:
+        raise BadValue(str(e)) from None
+    carrier = a.pwm_freq
+    if not (math.isfinite(carrier) and 0 < carrier <= P.SYSTEM.bridge_max_hz):
+        raise BadValue(f"--pwm-freq {carrier:g} Hz: give a carrier in (0, {P.SYSTEM.bridge_max_hz}] Hz")
+    text = export_text(plant.params(), plant.label, "" if plant.file else describe(plant.name), carrier)
+    if a.out:
+        Path(a.out).write_text(text)
+        print(f"wrote {a.out} (plant {plant.label}, identifiable dead zones at {carrier:g} Hz)", file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+def cmd_shell(ctx: Ctx) -> int:
+    from torqueloop.host.shell import Shell
+
+    return Shell(ctx, main, parser()).run()
 
 
 class SimStackMissing(Exception):
@@ -708,7 +830,12 @@ def _bounded(kind: type, lo: float, hi: float, what: str) -> Callable[[str], Any
 
 
 class _Parser(argparse.ArgumentParser):
-    """A usage error is one line on stderr and exit status 2."""
+    """A usage error is one line on stderr and exit status 2.  A negative
+    number with a unit (``-1mm``, ``-90deg``) is an argument, not an option."""
+
+    def __init__(self, *a: Any, **kw: Any) -> None:
+        super().__init__(*a, **kw)
+        self._negative_number_matcher = re.compile(r"^-(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?[a-z/^0-9]*$")
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(2, f"{self.prog}: {message} (see {self.prog} -h)\n")
@@ -729,6 +856,11 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("-k", "--key-file", metavar="FILE", default=None,
                    help=f"the link key (docs/security.md); never the key itself [${auth.KEY_FILE_ENV}]")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--server", metavar="ADDR", default=None,
+                   help=f"go through the `torqueloop serve` at HOST:PORT [${hserve.SERVER_ENV}, or the one "
+                        "serving --url found in its state file]")
+    p.add_argument("--no-server", action="store_true", help="talk to the board directly even when a server runs")
+    p.add_argument("--version", action="version", version=f"torqueloop {torqueloop.__version__}")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     def axis_opts(sp: argparse.ArgumentParser, all_ok: bool = True) -> None:
@@ -736,9 +868,13 @@ def parser() -> argparse.ArgumentParser:
         if all_ok:
             sp.add_argument("--all", action="store_true", help="both axes")
 
-    def unit_opt(sp: argparse.ArgumentParser, default: str = "rad") -> None:
-        sp.add_argument("--unit", default=default, choices=["rad", "mm", "rev", "deg", "counts"],
-                        help=f"position unit for output and bare numbers [{default}]")
+    def unit_opt(sp: argparse.ArgumentParser, default: str | None = "rad") -> None:
+        if default is None:      # a command that takes a position: bare numbers are counts unless --unit
+            sp.add_argument("--unit", default=None, choices=units.POSITION_UNITS,
+                            help="unit of bare numbers and of the output [bare numbers: counts]")
+        else:
+            sp.add_argument("--unit", default=default, choices=units.POSITION_UNITS,
+                            help=f"position unit of the output [{default}]")
 
     sp = sub.add_parser("info", help="firmware identity, build id and link counters")
     sp.set_defaults(fn=cmd_info)
@@ -750,28 +886,37 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("names", nargs="*", help="kp, kd, ki, law, pwm_freq, pw0, period ... or protocol names")
     axis_opts(sp, False)
     sp.set_defaults(fn=cmd_get)
-    sp = sub.add_parser("set", help="write one parameter in physical units (kp 0.82, pwm_freq 450, law pid)")
-    sp.add_argument("name")
-    sp.add_argument("value")
+    sp = sub.add_parser("set", help="write one parameter in physical units (kp 0.82, pwm_freq 450, law pid, "
+                                    "soft_max 40mm, vmax 5mm/s)")
+    sp.add_argument("name", help="kp, kd, ki, law, pwm_freq, period, soft_min, soft_max, vmax, amax, home_vel, "
+                                 "... (`get` lists them) or a protocol name")
+    sp.add_argument("value", help="positions and limits in mm, rev, rad, deg or counts (a bare number), "
+                                  "speeds per second (5mm/s), pwm_freq in Hz")
+    sp.add_argument("--nearest", action="store_true",
+                    help=f"pwm_freq: store the nearest carrier the divider makes even when it is more than "
+                         f"{units.PWM_FREQ_TOL:.0%} from the request")
     axis_opts(sp, False)
     sp.set_defaults(fn=cmd_set)
     for name, on in (("enable", True), ("disable", False)):
         sp = sub.add_parser(name, help=f"{name} the drive of an axis")
         axis_opts(sp)
         sp.set_defaults(fn=lambda ctx, on=on: cmd_enable(ctx, on))
-    sp = sub.add_parser("move", help="new target: 6.28rad, 4mm, 1rev or counts")
+    sp = sub.add_parser("move", help="new target: 6.28rad, 4mm, -1mm, 1rev, 90deg or counts (a bare number)")
     sp.add_argument("target")
     axis_opts(sp, False)
-    unit_opt(sp, "counts")
+    unit_opt(sp, None)
     sp.add_argument("--trapezoid", action="store_true", help="trapezoidal profile (VMAX, AMAX) instead of a step")
     sp.add_argument("--relative", action="store_true", help="target is relative to the present position")
     sp.add_argument("--enable", action="store_true", help="enable the axis first (after the move is checked)")
     sp.add_argument("--unhomed", action="store_true",
                     help="move although the axis is not homed (positions relative to power-up)")
     sp.add_argument("--wait", type=_bounded(float, 0, 86400, "--wait"), default=0.0, metavar="S",
-                    help="wait up to S seconds for the axis to settle, keeping the link alive")
+                    help="wait up to S seconds for the axis to settle, keeping the link alive; prints "
+                         "settled or not settled (exit 1), then disables the axis unless --hold")
+    sp.add_argument("--hold", action="store_true",
+                    help="afterwards keep the axis enabled, sending heartbeats, until Ctrl-C (then disable)")
     sp.add_argument("--tolerance", type=_bounded(int, 0, 2**31 - 1, "--tolerance"), default=20,
-                    help="settled within this many counts [20]")
+                    help="settled: within this many counts of the target for 0.3 s [20]")
     sp.set_defaults(fn=cmd_move)
     sp = sub.add_parser("home", help="home an axis: to its negative or positive limit switch, or here")
     sp.add_argument("mode", nargs="?", default="neg", choices=list(P.HOME_MODES),
@@ -779,6 +924,9 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("--index", action="store_true", help="after the switch, go on to the next encoder index pulse")
     sp.add_argument("--wait", type=_bounded(float, 0, 86400, "--wait"), default=60.0, metavar="S",
                     help="wait up to S seconds for homing to finish, keeping the link alive [60]")
+    sp.add_argument("--enable", action="store_true", help="enable the axis for the homing (disabled at the end)")
+    sp.add_argument("--hold", action="store_true",
+                    help="afterwards keep the axis enabled, sending heartbeats, until Ctrl-C (then disable)")
     axis_opts(sp, False)
     sp.set_defaults(fn=cmd_home)
     sp = sub.add_parser("stop", help="hold the present position")
@@ -805,9 +953,9 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("--save", metavar="PREFIX")
     sp.set_defaults(fn=cmd_plot)
     sp = sub.add_parser("step-test", help="step, capture, plot + CSV + overshoot/settling/RMSE")
-    sp.add_argument("target", help="6.28rad, 4mm, 1rev, counts")
+    sp.add_argument("target", help="6.28rad, 4mm, 1rev, 90deg or counts (a bare number)")
     axis_opts(sp, False)
-    unit_opt(sp)
+    unit_opt(sp, None)
     sp.add_argument("--relative", action="store_true", help="step relative to the present position")
     sp.add_argument("--trapezoid", action="store_true")
     sp.add_argument("--unhomed", action="store_true",
@@ -838,6 +986,14 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("action", choices=["new", "id"])
     sp.add_argument("file", nargs="?")
     sp.set_defaults(fn=cmd_key)
+    sp = sub.add_parser("plant", help="plant files: `plant export VARIANT > my.toml` (docs/identification.md)")
+    sp.add_argument("action", choices=["export"])
+    sp.add_argument("variant", nargs="?", default=None, help="plant variant: paper-printed, paper, lab, ... [paper]")
+    sp.add_argument("--plant-file", default=None, metavar="FILE", help="re-export a plant file (fresh identifiable part)")
+    sp.add_argument("--pwm-freq", type=float, default=float(P.SYSTEM.working_hz), metavar="HZ",
+                    help=f"the carrier the identifiable dead zones are given at [{P.SYSTEM.working_hz}]")
+    sp.add_argument("--out", default=None, metavar="FILE", help="write here instead of to stdout")
+    sp.set_defaults(fn=cmd_plant)
     sp = sub.add_parser("sim", help="run the simulated board on a local TCP port (with the --key-file key)")
     sp.add_argument("--host", default="127.0.0.1")
     sp.add_argument("--port", type=_bounded(int, 0, 65535, "--port"), default=2000,
@@ -848,26 +1004,66 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("--build-id", type=_bounded(lambda t: int(t, 0), 0, 0xFFFF_FFFF, "--build-id"),
                     default=0x51B0_0001, help="build id the board reports [0x51b00001]")
     sp.add_argument("--seed", type=_bounded(int, 0, 2**32 - 1, "--seed"), default=0, help="plant random seed")
-    sp.add_argument("--plant", default="paper",
+    sp.add_argument("--plant", default=None,
                     help="plant variant: paper-printed, paper or lab (lab-no-EFFECT switches one off) [paper]")
+    sp.add_argument("--plant-file", default=None, metavar="FILE",
+                    help="a plant file instead of a variant (`torqueloop plant export`, `torqueloop identify`)")
+    sp.add_argument("--switches", type=_bounded(int, 100, 2**30, "--switches"), default=None, metavar="COUNTS",
+                    help="the simulated stage's limit switches open beyond +-COUNTS from the power-up position "
+                         "[400000, about +-190 mm: homing at the default HOME_VEL takes minutes]")
     sp.add_argument("--rtl", action="store_true",
                     help="serve the RTL co-simulation (torqueloop/cosim) instead of the firmware-in-the-loop board")
     sp.set_defaults(fn=cmd_sim)
+    sp = sub.add_parser("serve", help="hold the board's link and session for several clients at once "
+                                      "(monitor in one terminal, move in another)")
+    sp.add_argument("--host", default="127.0.0.1", help="address to listen on [127.0.0.1: this machine only]")
+    sp.add_argument("--port", type=_bounded(int, 0, 65535, "--port"), default=hserve.DEFAULT_PORT,
+                    help=f"TCP port (0 = any free one) [{hserve.DEFAULT_PORT}]")
+    sp.add_argument("--quiet", action="store_true", help="do not log clients coming and going")
+    sp.set_defaults(fn=cmd_serve)
+    sp = sub.add_parser("characterize", add_help=False,
+                        help="the paper's characterisation method on your sweeps: run, step5, check, show, "
+                             "export (and sim, with the simulation stack); `characterize -h`")
+    sp.add_argument("rest", nargs=argparse.REMAINDER)
+    sp.set_defaults(fn=cmd_characterize)
+    sp = sub.add_parser("shell", help="interactive session: the commands above, history, completion, "
+                                      "a live text plot while moves run")
+    sp.add_argument("--plot-file", metavar="FILE", help="also append every live-plot frame to FILE")
+    sp.add_argument("--script", metavar="FILE", help="read the commands from FILE instead of the terminal")
+    sp.set_defaults(fn=cmd_shell)
     return p
 
 
 #: exit status (module docstring)
 EXIT_REFUSED, EXIT_BAD_INPUT, EXIT_NO_ANSWER = 1, 2, 3
+#: a value the board refuses as such is bad input, whoever checked it (the tool before sending, or the board)
+BAD_INPUT_STATUSES = frozenset({P.STATUS["BAD_ARG"], P.STATUS["RANGE"]})
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = parser().parse_args(argv)      # a usage error exits 2 with one line
+def main(argv: list[str] | None = None, *, client: Client | RemoteClient | None = None,
+         tick: Callable[[], None] | None = None) -> int:
+    """Run one command.  ``client``: an open session to run it on (the shell's;
+    left open); ``tick``: called while a move or homing is waited for (the
+    shell's live plot)."""
+    ap = parser()
+    args, extra = ap.parse_known_args(argv)      # a usage error exits 2 with one line
+    if extra and args.command != "characterize":
+        ap.error(f"unrecognized arguments: {' '.join(extra)}")
+    if args.command == "characterize":           # its options are its own: `characterize -h`
+        args.rest = extra + list(args.rest)
     ctx = Ctx(args)
+    if client is not None:
+        ctx._client, ctx.shared = client, True
+    ctx.tick = tick or (lambda: None)
     try:
         return args.fn(ctx)
     except NoAnswer as e:
         print(f"torqueloop: {e}", file=sys.stderr)
         return EXIT_NO_ANSWER
+    except CommandRejected as e:
+        hint = REFUSAL_HINT.get(e.rule)
+        print(f"torqueloop: {e}" + (f"; {hint}" if hint else ""), file=sys.stderr)
+        return EXIT_BAD_INPUT if e.status in BAD_INPUT_STATUSES else EXIT_REFUSED
     except (BadValue, hconfig.HostConfigError, ImageRefused) as e:
         print(f"torqueloop: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT

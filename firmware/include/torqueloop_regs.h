@@ -74,7 +74,7 @@
 #define TL_GPIO_HEX_HI TL_REG32(TL_GPIO_HEX_HI_ADDR)
 #define TL_GPIO_HEX_HI_RESET 0x00000000u
 
-/* UART: The RN-XV WiFi link (paper section V.A): rtl/uart/uart, 8N1 with 16-byte RX and TX FIFOs, run-time baud divisor, optional RTS/CTS flow control and error counting. */
+/* UART: The RN-XV WiFi link (paper section V.A): rtl/uart/tl_uart, 8N1 with 16-byte RX and TX FIFOs, run-time baud divisor, optional RTS/CTS flow control and error counting. */
 #define TL_UART_BASE 0x40003000u
 #define TL_UART_TX_DATA_ADDR 0x40003000u
 #define TL_UART_TX_DATA TL_REG32(TL_UART_TX_DATA_ADDR)

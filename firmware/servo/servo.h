@@ -1,9 +1,10 @@
 /* SPDX-License-Identifier: MIT */
 /* The servo application without its hardware: parameters, two axes under
  * control.c, the safety state machine and the command handler of the link
- * protocol.  servo/main.c calls tl_servo_tick() from the machine-timer
- * interrupt and feeds received bytes to tl_servo_rx_byte(); everything else
- * goes through hal.h, so the host tests and the fuzzer run this very code. */
+ * protocol (servo_internal.h says which file holds what).  servo/main.c calls
+ * tl_servo_tick() from the machine-timer interrupt and feeds received bytes to
+ * tl_servo_rx_byte(); everything else goes through hal.h, so the host tests,
+ * the fuzzer and the simulated board run this very code. */
 #ifndef TL_SERVO_H
 #define TL_SERVO_H
 

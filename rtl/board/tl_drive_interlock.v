@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// drive_interlock: the last gate between the SoC and the H-bridge pins.
+// tl_drive_interlock: the last gate between the SoC and the H-bridge pins.
 //
 // The IBT-2 modules (BTS7960B, paper Sec. V.A) must never be driven while
 // the emergency stop is pressed, after an H-bridge fault, or before the

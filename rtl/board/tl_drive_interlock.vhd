@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- drive_interlock: the last gate between the SoC and the H-bridge pins.
+-- tl_drive_interlock: the last gate between the SoC and the H-bridge pins.
 -- VHDL twin of rtl/board/tl_drive_interlock.v (same generics, ports and
 -- register names, proven equivalent by make lint); see that file for the
 -- reasoning.

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// estop_gate: the bridge pins' very last stage - the emergency stop without a clock.
+// tl_estop_gate: the bridge pins' very last stage - the emergency stop without a clock.
 //
 // tl_drive_interlock's outputs are registered (its gating logic must not
 // glitch onto the pins), so by themselves they need CLOCK_50 to drop after

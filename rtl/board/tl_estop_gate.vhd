@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- estop_gate: the bridge pins' very last stage - the emergency stop without a clock.
+-- tl_estop_gate: the bridge pins' very last stage - the emergency stop without a clock.
 -- VHDL twin of rtl/board/tl_estop_gate.v (same generics and ports; proven
 -- equivalent by make lint); see that file for the reasoning.
 library ieee;

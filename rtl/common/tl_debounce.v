@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// debounce: WIDTH independent debounce filters for synchronised inputs.
+// tl_debounce: WIDTH independent debounce filters for synchronised inputs.
 //
 // A switch contact bounces for a few milliseconds when it opens or closes;
 // a limit switch read straight would trip and release many times.  Each bit

@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- debounce: WIDTH independent debounce filters for synchronised inputs.
+-- tl_debounce: WIDTH independent debounce filters for synchronised inputs.
 -- VHDL twin of rtl/common/tl_debounce.v (same generics, ports and register
 -- names; proven equivalent by make lint); see that file for the reasoning.
 library ieee;

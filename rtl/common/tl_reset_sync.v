@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// reset_sync: asynchronous assertion, synchronous release of reset.
+// tl_reset_sync: asynchronous assertion, synchronous release of reset.
 //
 // The board's reset button (RESET_N) and the PLL-locked signal are
 // asynchronous to CLOCK_50.  Asserting reset must not wait for a clock (the

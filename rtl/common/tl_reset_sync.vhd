@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- reset_sync: asynchronous assertion, synchronous release of reset.
+-- tl_reset_sync: asynchronous assertion, synchronous release of reset.
 -- VHDL twin of rtl/common/tl_reset_sync.v; see that file for the reasoning.
 library ieee;
 use ieee.std_logic_1164.all;

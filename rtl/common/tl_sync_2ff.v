@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// sync_2ff: WIDTH independent two-flop synchronisers for asynchronous inputs.
+// tl_sync_2ff: WIDTH independent two-flop synchronisers for asynchronous inputs.
 //
 // Every board input (encoder channels, UART RX, keys, switches, bridge fault
 // comparators) enters the clock domain through one of these.  The bits are

@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- sync_2ff: WIDTH independent two-flop synchronisers for asynchronous inputs.
+-- tl_sync_2ff: WIDTH independent two-flop synchronisers for asynchronous inputs.
 -- VHDL twin of rtl/common/tl_sync_2ff.v (same generics and ports); see that
 -- file for the reasoning.  Proven equivalent by scripts/equiv.py.
 library ieee;

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// freq_div: the frequency generator block of the paper's PWM module
+// tl_freq_div: the frequency generator block of the paper's PWM module
 // (section II.C, eq. 2-4, Fig. 5).
 //
 // Makes a one-clock enable `tick` every `div` clocks.  pwm_torque advances

@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- freq_div: the frequency generator block of the paper's PWM module
+-- tl_freq_div: the frequency generator block of the paper's PWM module
 -- (section II.C, eq. 2-4, Fig. 5).
 -- VHDL twin of rtl/motion/tl_freq_div.v (same generics, ports and register
 -- names, proven equivalent by make lint); see that file for the reasoning.

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// pwm_torque: the PWM torque block of the paper's PWM module (section II.C,
+// tl_pwm_torque: the PWM torque block of the paper's PWM module (section II.C,
 // Fig. 6): a signed torque command to H-bridge pins, with the dead-zone
 // compensation of eq. (1) and the saturation of eq. (19)/(25).
 //

@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- pwm_torque: the PWM torque block of the paper's PWM module (section II.C,
+-- tl_pwm_torque: the PWM torque block of the paper's PWM module (section II.C,
 -- Fig. 6): dead-zone compensation (eq. 1), saturation (eq. 19/25),
 -- double-buffered duty and direction, registered bridge pins with a safe
 -- state within one clock of enable low or fault high.

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// quad_decoder: 4x quadrature decoder for one optical encoder (A, B, index Z).
+// tl_quad_decoder: 4x quadrature decoder for one optical encoder (A, B, index Z).
 //
 // The paper's decoder block (Sec. V.A, Fig. 8) counts encoder pulses into
 // the position x that the controllers of eq. (20)-(22) close the loop on.

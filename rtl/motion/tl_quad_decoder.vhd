@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- quad_decoder: 4x quadrature decoder for one optical encoder (A, B, index Z).
+-- tl_quad_decoder: 4x quadrature decoder for one optical encoder (A, B, index Z).
 -- VHDL twin of rtl/motion/tl_quad_decoder.v (same generics, ports and internal
 -- register names, which the equivalence proof matches); see that file and
 -- docs/quad_decoder.md for the reasoning.

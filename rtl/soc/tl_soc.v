@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// soc: the torqueloop system on chip - the RV32IM CPU (rtl/cpu) on the
+// tl_soc: the torqueloop system on chip - the RV32IM CPU (rtl/cpu) on the
 // fabric of rtl/soc/tl_soc_fabric.v (interconnect, boot ROM, RAM, machine
 // timer, interrupt controller, GPIO, UART, two motor axes, safety latch).
 //

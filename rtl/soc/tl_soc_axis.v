@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// soc_axis: one motor axis as a register page (AXIS layout of
+// tl_soc_axis: one motor axis as a register page (AXIS layout of
 // torqueloop/spec/regmap.toml): the paper's PWM module - frequency generator
 // (freq_div, eq. 2-4) and PWM torque block (pwm_torque, eq. 1) - driving one
 // IBT-2 bridge, and the quadrature decoder of that axis's encoder.

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// soc_fabric: everything of the SoC except the CPU - the interconnect of the
+// tl_soc_fabric: everything of the SoC except the CPU - the interconnect of the
 // CPU's two bus masters, boot ROM, RAM and the peripheral pages - with the
 // CPU's bus and interrupt signals as ports, so bus-master test benches can
 // drive it exactly as the CPU does (tb/soc_fabric).  soc.v adds the CPU.

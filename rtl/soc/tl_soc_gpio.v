@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// soc_gpio: the DE0-CV's LEDs, slide switches, push buttons and six
+// tl_soc_gpio: the DE0-CV's LEDs, slide switches, push buttons and six
 // 7-segment digits as registers (GPIO block of torqueloop/spec/regmap.toml).
 //
 // SW and KEY are asynchronous to the clock and enter through sync_2ff.  The

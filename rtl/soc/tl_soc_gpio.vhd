@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- soc_gpio: LEDR, SW, KEY and HEX0..HEX5 as registers.
+-- tl_soc_gpio: LEDR, SW, KEY and HEX0..HEX5 as registers.
 -- VHDL twin of rtl/soc/tl_soc_gpio.v (same entity, ports and register names;
 -- proven equivalent by make lint); see that file for the reasoning.
 -- Register constants from rtl/soc/regmap_pkg.vhd (generated).

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// soc_intc: interrupt controller for the peripherals -> the CPU's irq_external.
+// tl_soc_intc: interrupt controller for the peripherals -> the CPU's irq_external.
 //
 // Sources are pulses or levels; a rising edge sets the source's PENDING bit,
 // so a one-cycle event (PWM period start, encoder index) is never lost while

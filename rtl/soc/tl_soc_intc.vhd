@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- soc_intc: interrupt controller for the peripherals -> irq_external.
+-- tl_soc_intc: interrupt controller for the peripherals -> irq_external.
 -- VHDL twin of rtl/soc/tl_soc_intc.v (same entity, ports and register names;
 -- proven equivalent by make lint); see that file for the reasoning.
 -- Register constants from rtl/soc/regmap_pkg.vhd (generated).

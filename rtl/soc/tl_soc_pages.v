@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// soc_pages: the peripheral region's decode, combinational - one request
+// tl_soc_pages: the peripheral region's decode, combinational - one request
 // bundle per 4 KiB page, and the addressed page's response.
 //
 // Every page sees the same request fields (docs/soc.md, Bus); only the

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// soc_ram: program/data RAM, true dual-port block RAM initialised from a hex file.
+// tl_soc_ram: program/data RAM, true dual-port block RAM initialised from a hex file.
 //
 // Port A serves the CPU data bus (read/write with byte enables), port B the
 // instruction bus (read only), so a fetch never waits for a load/store.

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// soc_rom: boot ROM (reset vector at 0), block RAM without a write port,
+// tl_soc_rom: boot ROM (reset vector at 0), block RAM without a write port,
 // initialised from a hex file, readable by both buses in the same cycle.
 // Intel template: "Dual-Port Synchronous ROM Using readmemb" (Quartus Prime
 // Recommended HDL Coding Styles, Inferring ROM Functions from HDL Code),

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// soc_safety_gate: the last stage before the bridge pins.  It forces every
+// tl_soc_safety_gate: the last stage before the bridge pins.  It forces every
 // PWM pin low while the SoC is in reset, while soc_sys says `safe`, or while
 // the raw e-stop pin is high - the last one combinationally, without a
 // clock, so a pressed e-stop cuts the drive even before its synchroniser

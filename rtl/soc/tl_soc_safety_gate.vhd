@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- soc_safety_gate: forces every PWM output low in reset, while `safe`, or while
+-- tl_soc_safety_gate: forces every PWM output low in reset, while `safe`, or while
 -- the raw e-stop input is high (combinationally); the enables pass.
 -- VHDL twin of rtl/soc/tl_soc_safety_gate.v (proven equivalent by make lint);
 -- see that file for the reasoning.

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// soc_sys: identification registers, the hardware watchdog and the safety latch.
+// tl_soc_sys: identification registers, the hardware watchdog and the safety latch.
 //
 // A stage that moves unasked is the worst failure of this machine, so the
 // path that stops the drives does not depend on firmware: the e-stop input,

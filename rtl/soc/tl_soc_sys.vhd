@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- soc_sys: identification registers, watchdog and the safety latch.
+-- tl_soc_sys: identification registers, watchdog and the safety latch.
 -- VHDL twin of rtl/soc/tl_soc_sys.v (same entity, generics, ports and register
 -- names; proven equivalent by make lint); see that file for the reasoning.
 -- Register constants from rtl/soc/regmap_pkg.vhd (generated).

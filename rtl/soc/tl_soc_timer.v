@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// soc_timer: RISC-V machine timer (mtime, mtimecmp) and software interrupt (msip).
+// tl_soc_timer: RISC-V machine timer (mtime, mtimecmp) and software interrupt (msip).
 //
 // mtime counts clock cycles (CLOCK_50: 20 ns), so control-loop periods and
 // encoder timestamps share one time base.  irq_timer is the level

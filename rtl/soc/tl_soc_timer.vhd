@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- soc_timer: RISC-V machine timer (mtime, mtimecmp) and software interrupt.
+-- tl_soc_timer: RISC-V machine timer (mtime, mtimecmp) and software interrupt.
 -- VHDL twin of rtl/soc/tl_soc_timer.v (same entity, ports and register names;
 -- proven equivalent by make lint); see that file for the reasoning.
 -- Register constants from rtl/soc/regmap_pkg.vhd (generated).

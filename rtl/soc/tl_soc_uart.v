@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-// soc_uart: the RN-XV WiFi link (paper section V.A) as a register page
-// (UART layout of torqueloop/spec/regmap.toml) around rtl/uart/uart.
+// tl_soc_uart: the RN-XV WiFi link (paper section V.A) as a register page
+// (UART layout of torqueloop/spec/regmap.toml) around rtl/uart/tl_uart.
 //
 // The core does the line work; this block moves bytes between the bus and
 // its FIFOs, holds the baud divisor and flow-control switch, turns the

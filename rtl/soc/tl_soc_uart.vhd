@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- soc_uart: the RN-XV WiFi link as a register page around rtl/uart/uart.
+-- tl_soc_uart: the RN-XV WiFi link as a register page around rtl/uart/tl_uart.
 -- VHDL twin of rtl/soc/tl_soc_uart.v (same entity, generics, ports and register
 -- names; proven equivalent by make lint); see that file for the reasoning.
 -- Register constants from rtl/soc/regmap_pkg.vhd (generated).

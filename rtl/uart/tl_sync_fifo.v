@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// sync_fifo: single-clock first-word-fall-through FIFO with valid/ready on
+// tl_sync_fifo: single-clock first-word-fall-through FIFO with valid/ready on
 // both sides (the UART's RX and TX buffers).
 //
 // DEPTH entries (a power of two); the pointers carry one extra bit so that

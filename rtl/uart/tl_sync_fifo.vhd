@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- sync_fifo: single-clock first-word-fall-through FIFO, valid/ready on both
+-- tl_sync_fifo: single-clock first-word-fall-through FIFO, valid/ready on both
 -- sides.  VHDL twin of rtl/uart/tl_sync_fifo.v (same generics, ports and
 -- register names, matched by the equivalence proof); see that file.
 library ieee;

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// uart: the RN-XV link - 8N1 receiver and transmitter with FIFOs, run-time
+// tl_uart: the RN-XV link - 8N1 receiver and transmitter with FIFOs, run-time
 // baud divisor, overrun counting and optional RTS/CTS flow control.
 //
 //   rxd --> uart_rx --> rx FIFO --> m_rx_*      (firmware reads)

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// uart_rx: 8N1 receiver with a run-time bit period, three-sample majority
+// tl_uart_rx: 8N1 receiver with a run-time bit period, three-sample majority
 // vote, framing-error and break detection.
 //
 // rxd is asynchronous (the RN-XV's TX pin) and enters through sync_2ff with

@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- uart_rx: 8N1 receiver, run-time bit period, three-sample majority vote,
+-- tl_uart_rx: 8N1 receiver, run-time bit period, three-sample majority vote,
 -- framing-error and break detection.  VHDL twin of rtl/uart/tl_uart_rx.v (same
 -- ports and register names, matched by the equivalence proof); see that file.
 library ieee;

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// uart_tx: 8N1 transmitter with a run-time bit period.
+// tl_uart_tx: 8N1 transmitter with a run-time bit period.
 //
 // One bit lasts baud_div + 1 clocks (baud = CLK_HZ / (baud_div + 1)); a new
 // value of baud_div takes effect at the next bit boundary.  A byte is taken

@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- uart_tx: 8N1 transmitter with a run-time bit period (baud_div + 1 clocks).
+-- tl_uart_tx: 8N1 transmitter with a run-time bit period (baud_div + 1 clocks).
 -- VHDL twin of rtl/uart/tl_uart_tx.v (same ports and register names); see that file.
 library ieee;
 use ieee.std_logic_1164.all;

@@ -27,7 +27,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from torqueloop.flow import boot_image, firmware
+from torqueloop.flow import boot_image, firmware, tb_images
 from torqueloop.flow.simrun import run
 from torqueloop.spec import auth, bootproto, regs
 from torqueloop.spec.repo import REPO_ROOT as REPO
@@ -75,11 +75,9 @@ def primitives(opt: str) -> dict:
 
 
 def in_firmware() -> dict:
-    from bench import tb_module
-    T = tb_module("firmware", "test_firmware")
-    img = firmware.build("servo_tb", {k: str(v) for k, v in T.DEFINES.items()}, key=T.KEY)
+    img = tb_images.servo_tb_image()
     out = REPO / "build" / "firmware" / "auth_measure.json"
-    run("soc", "verilator", "test_firmware",
+    run("soc", "verilator", "test_firmware", bench="firmware",
         parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'},
         testcase="measure_authentication",
         extra_env={"TL_AUTH_MEASURE": "1", "TL_AUTH_MEASURE_OUT": str(out)})
@@ -87,13 +85,11 @@ def in_firmware() -> dict:
 
 
 def in_bootloader() -> tuple[int, int, float]:
-    from bench import tb_module
-    tbm = tb_module("bootloader", "test_bootloader")
-    app, factory = tbm.build_prog("app"), tbm.build_prog("factory")
-    rom = boot_image.build_rom(factory, tbm.TB_CFG, name="tb_rom", key=tbm.KEY)
+    app, factory = tb_images.boot_tb_prog("app"), tb_images.boot_tb_prog("factory")
+    rom = boot_image.build_rom(factory, tb_images.BOOT_TB_CFG, name="tb_rom", key=tb_images.TB_KEY)
     with tempfile.TemporaryDirectory() as d:
         out = Path(d) / "times"
-        run("soc", "verilator", "test_bootloader", parameters={"ROM_INIT": f'"{rom}"'}, build_tag="bootloader",
+        run("soc", "verilator", "test_bootloader", parameters={"ROM_INIT": f'"{rom}"'}, build_tag="bootloader", bench="bootloader",
             testcase="measure_upload_mac",
             extra_env={"TB_APP_HEX": app.hex(), "TB_FACTORY_HEX": factory.hex(), "TB_MEASURE": str(out)})
         a, b, per = out.read_text().split()

@@ -16,8 +16,8 @@ import time
 from pathlib import Path
 
 from torqueloop.characterize import load_config
-from torqueloop.characterize.cli import EXIT_OK
-from torqueloop.characterize.cli import main as characterize
+from torqueloop.characterize.conclude import EXIT_OK
+from torqueloop.study.characterize_cli import main as characterize
 from torqueloop.flow.manifest import REPO_ROOT
 from torqueloop.oracles import freq_div
 

@@ -81,10 +81,8 @@ def logic_depth(netlist: Path, top: str, skip_prefix: str | None = None) -> int:
 
 
 def main() -> int:
-    from bench import tb_module   # scripts/bench.py, which runs this (importing needs no simulator)
+    from torqueloop.flow.cpu_progs import PROGS, build
 
-    cpu_progs = tb_module("cpu", "cpu_progs")
-    PROGS, build = cpu_progs.PROGS, cpu_progs.build
     elf = build("bench", [PROGS / "bench.c"], tag="bench", opt="-O2")
     with tempfile.TemporaryDirectory() as tmp:
         src = Path(tmp) / "classes.S"

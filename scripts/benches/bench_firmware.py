@@ -15,6 +15,7 @@ import time
 
 from torqueloop.flow.firmware import build
 from torqueloop.flow.simrun import run
+from torqueloop.flow.tb_images import servo_tb_image
 from torqueloop.spec.regs import CLK_HZ
 from torqueloop.spec.repo import REPO_ROOT as REPO
 
@@ -28,12 +29,10 @@ BUDGET_CYCLES = 1250
 def _measure(period_us: int, move_mode: int = 1, short: bool = False, cpu_pipelined: int = 0) -> dict:
     """The firmware test bench's worst-case measurement on the SoC (tl_soc's
     CPU_PIPELINED picks the core: scripts/benches/bench_cpu.py runs it on both)."""
-    from bench import tb_module
-    T = tb_module("firmware", "test_firmware")
-    img = build("servo_tb", {k: str(v) for k, v in T.DEFINES.items()}, key=T.KEY)
+    img = servo_tb_image()
     out = REPO / "build" / "firmware" / (f"measure_{period_us}_{move_mode}{'_short' if short else ''}"
                                          f"{'_pipe' if cpu_pipelined else ''}.json")
-    run("soc", "verilator", "test_firmware",
+    run("soc", "verilator", "test_firmware", bench="firmware",
         parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"',
                     **({"CPU_PIPELINED": 1} if cpu_pipelined else {})},
         testcase="measure_control_iteration",

@@ -15,7 +15,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from sim_models.dyno import RopeBenchConfig
-from torqueloop.characterize.simbench import LabBench, Plant, Waveforms, simulate_lab
+from sim_models.variants import PlantSpec
+from torqueloop.characterize.simbench import LabBench, Waveforms, simulate_lab
 
 B = RopeBenchConfig()
 ROWS: list[tuple[str, dict, RopeBenchConfig]] = [
@@ -43,7 +44,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         for k, (label, tweak, cfg) in enumerate(rows):
             t0 = time.monotonic()
-            bench = LabBench(Plant("lab"), cfg, tweak)
+            bench = LabBench(PlantSpec("lab"), cfg, tweak)
             res = simulate_lab(Path(tmp) / f"r{k}", bench, seed=0, wf=wf, quiet=True)
             cells = []
             for a in ("x", "z"):

@@ -58,19 +58,19 @@ def _driver() -> Path:
     return DRIVER
 
 
-def _alone(v: native.Variant, clocks: int) -> float:
+def _alone(v: native.HarnessBuild, clocks: int) -> float:
     """Clocks per CPU second of the board image alone (firmware idle loop)."""
-    out = subprocess.run([str(_driver()), str(native.build(variant=v)), str(clocks)],
+    out = subprocess.run([str(_driver()), str(native.build(harness=v)), str(clocks)],
                          capture_output=True, text=True, check=True)
     return float(out.stdout)
 
 
-def _ir_per_clock(v: native.Variant, clocks: int) -> float | None:
+def _ir_per_clock(v: native.HarnessBuild, clocks: int) -> float | None:
     """Instructions per clock of the board alone (callgrind: two lengths, the
     difference), or None without valgrind."""
     if shutil.which("valgrind") is None:
         return None
-    lib = str(native.build(variant=v))
+    lib = str(native.build(harness=v))
     ir = []
     for n in (clocks, 2 * clocks):
         r = subprocess.run(["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
@@ -82,9 +82,9 @@ def _ir_per_clock(v: native.Variant, clocks: int) -> float | None:
     return (ir[1] - ir[0]) / clocks
 
 
-def _closed(v: native.Variant, t_end_s: float) -> experiment.RtlRun:
+def _closed(v: native.HarnessBuild, t_end_s: float) -> experiment.RtlRun:
     cfg = experiment.ExperimentConfig(law="P", t_end_s=t_end_s, progress=False)
-    return experiment.run_rtl(cfg, board_factory=lambda rom, ram: native.NativeBoard.create(rom, ram, variant=v))
+    return experiment.run_rtl(cfg, board_factory=lambda rom, ram: native.NativeBoard.create(rom, ram, harness=v))
 
 
 def _line(name: str, r: experiment.RtlRun) -> None:
@@ -110,7 +110,7 @@ def main() -> int:
     img = experiment.firmware_image()
     native.install_images(img.rom_hex, img.ram_hex)
     for v in (native.DEFAULT, native.BASELINE):
-        native.build(variant=v)
+        native.build(harness=v)
 
     # ---- board alone, the two builds alternately ------------------------------------------
     n_alone, reps = (2_000_000, 2) if quick else (4_000_000, 5)

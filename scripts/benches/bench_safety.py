@@ -6,7 +6,7 @@ no longer switch (firmware faults: the axis disabled, its bridge braked or
 coasting) - and, where the hardware acts, to all four IBT-2 inputs low.
 
 The whole board image (rtl/board/de0_cv_top.v: CPU, SoC, drive interlock,
-e-stop gate) runs on the native Verilator harness (torqueloop/sim/native)
+e-stop gate) runs on the native Verilator harness (torqueloop/sim/harness/harness.cpp)
 with the real servo firmware, started by the boot-ROM stub that arms the
 hardware watchdog as the boot ROM does; the host talks the link protocol on
 the UART pins.  Axis 0 holds a step of 300 counts at a 24.4 kHz carrier
@@ -29,7 +29,7 @@ import numpy as np
 
 from torqueloop.flow.firmware import CC, CFLAGS, boot_stub_words, build
 from torqueloop.sim import native
-from torqueloop.sim.link import Link
+from torqueloop.sim.link import SimTransport, sim_client
 from torqueloop.spec import auth, bootproto, regs
 from torqueloop.spec import protocol as P
 from torqueloop.spec.repo import REPO_ROOT as REPO
@@ -84,25 +84,26 @@ class Bench:
         self.b.set_board(1, 1, 1)            # SW[0] up: arms the drive interlock (watchdog alive)
         self.run(1_000)
         if link:
-            self.link = Link(self.b.uart_send, self.b.uart_recv, lambda n: self.run(n), lambda: self.b.cycle)
-            self.link.call("IDENTIFY")
-            self.link.open_session(auth.TEST_KEY)
+            self.link = sim_client(SimTransport(self.b.uart_send, self.b.uart_recv, lambda n: self.run(n),
+                                                lambda: self.b.cycle), auth.TEST_KEY)
+            self.link.connect()
+            self.link.open_session()
 
     def run(self, n: int) -> None:
         self.b.run(self.b.cycle + n, False)
 
-    def set(self, axis: int, name: str, value: int) -> None:
-        self.link.set_param(P.GLOBAL_AXIS if P.PARAMS[name].scope == "global" else axis, name, value)
+    def set(self, name: str, value: int, axis: int = 0) -> None:
+        self.link.set_param(name, value, axis)
 
     def drive_axis0(self, kp_q16: int | None = None) -> None:
         """Axis 0 enabled, homed here, holding a 300-count step: RPWM switching."""
-        self.set(0, "FDIV", FDIV)
-        self.set(P.GLOBAL_AXIS, "LINK_TIMEOUT_MS", 60_000)
+        self.set("FDIV", FDIV, 0)
+        self.set("LINK_TIMEOUT_MS", 60_000)
         if kp_q16 is not None:
-            self.set(0, "KP_Q16", kp_q16)
-        self.link.call("HOME", axis=0, mode=P.HOME_MODES["here"], index=0)
-        self.link.call("ENABLE", mask=1, enable=1)
-        self.link.call("MOVE", axis=0, mode=0, target=300)
+            self.set("KP_Q16", kp_q16, 0)
+        self.link.home(0, "here")
+        self.link.enable(1)
+        self.link.move(0, 300)
         self.run(3 * PERIOD_US * CLK // 1_000_000)
         assert self.driving(), "axis 0 does not drive before the fault"
 
@@ -192,7 +193,7 @@ def main() -> int:
     # Following error: the encoder slips 600 counts back (FOLLOW_LIMIT 500)
     period = PERIOD_US * CLK // 1_000_000
     s = Bench(rom, ram)
-    s.set(0, "FOLLOW_LIMIT", 500)
+    s.set("FOLLOW_LIMIT", 500, 0)
     s.drive_axis0()
     s.encoder(0, -600, spacing=STEP)
     t0 = s.b.cycle + 201 * STEP                # the 501st count of error (the step holds 300)
@@ -202,7 +203,7 @@ def main() -> int:
     # Soft limit: the encoder runs past SOFT_MAX = 350
     s = Bench(rom, ram)
     s.drive_axis0()
-    s.set(0, "SOFT_MAX", 350)
+    s.set("SOFT_MAX", 350, 0)
     s.encoder(0, 360, spacing=STEP)
     t0 = s.b.cycle + 351 * STEP
     record("soft limit", "encoder pins: position > max", s.stop_time(t0), period + 1000, "axis disabled")
@@ -224,27 +225,27 @@ def main() -> int:
     s.b.set_limits(0, 0b01)                      # the positive switch of axis 0 opens
     record("limit switch (+), RPWM", "switch pin opens", s.stop_time(t0), 50_010, "RPWM held low (SoC block)")
     s.run(2 * period)
-    st = s.link.call("STATUS", axis=0)
+    st = s.link.status(0)
     assert st["faults"] == P.FAULT["LIMIT_POS"] and not st["enabled"], st
     s.close()
 
     # Runaway: the encoder never moves under a command of 300 steps (STALL_MS 50)
     s = Bench(rom, ram)
-    s.set(0, "STALL_MS", 50)
+    s.set("STALL_MS", 50, 0)
     s.drive_axis0(kp_q16=65536)
     # the move is the last command of drive_axis0; its reply came before the 3 periods it waits
     t0 = s.b.cycle - 3 * period
     t = s.stop_time(t0)
     record("runaway (frozen encoder)", "command >= STALL_CMD, no motion", t, 50 * CLK // 1000 + 3 * period,
            "axis disabled")
-    assert s.link.call("STATUS", axis=0)["faults"] == P.FAULT["RUNAWAY"]
+    assert s.link.status(0)["faults"] == P.FAULT["RUNAWAY"]
     s.close()
 
     # Link watchdog: silence after the last MOVE (LINK_TIMEOUT_MS 20; polls do not feed it)
     s = Bench(rom, ram)
     s.drive_axis0()
-    s.set(P.GLOBAL_AXIS, "LINK_TIMEOUT_MS", 20)
-    s.link.call("HEARTBEAT")
+    s.set("LINK_TIMEOUT_MS", 20)
+    s.link.heartbeat()
     t0 = s.b.cycle
     t = s.stop_time(t0, limit=5 * CLK // 100)
     record("link watchdog (20 ms)", "last HEARTBEAT", t, 20 * CLK // 1000 + 2 * period, "axis disabled")

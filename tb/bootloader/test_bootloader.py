@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import os
 import random
-import subprocess
 from pathlib import Path
 
 import cocotb
@@ -31,43 +30,26 @@ from cocotb.triggers import ClockCycles, FallingEdge, Timer, with_timeout
 
 from torqueloop.spec import auth
 from torqueloop.spec import bootproto as bp
-from torqueloop.flow.manifest import REPO_ROOT
-from torqueloop.flow.simrun import BUILD_ROOT, run
+from torqueloop.flow.simrun import run
 from torqueloop.flow import boot_image as build_boot
+from torqueloop.flow.tb_images import BOOT_TB_BAUD_DIV, BOOT_TB_CFG, TB_KEY, boot_tb_prog
 
 import tbutil
 
-PROG = Path(__file__).resolve().parent / "prog"
 CLK_NS = 20
-BAUD_DIV = 49                      # 50 clocks per bit: 1 Mbaud
+BAUD_DIV = BOOT_TB_BAUD_DIV        # 50 clocks per bit: 1 Mbaud
 BAUD = 50_000_000 // (BAUD_DIV + 1)
 BYTE_CYCLES = 10 * (BAUD_DIV + 1)
-TB_CFG = build_boot.BootConfig(window_cycles=40_000, gap_cycles=20_000, baud_div=BAUD_DIV)
+TB_CFG = BOOT_TB_CFG
 FACTORY_LEDS, DIRTY_LEDS, APP_LEDS = 0x0F0, 0x3FF, 0x2A5
-KEY = auth.TEST_KEY
+KEY = TB_KEY
 
 
 def signed(image: bytes, key: bytes = KEY) -> bytes:
     return bp.encode_frame(image, key)
 
 
-def build_prog(name: str) -> bytes:
-    """Compile prog/<name>.c as a RAM-linked firmware image; the flat image
-    comes from bootproto.load_image (the host tool's ELF conversion)."""
-    out = BUILD_ROOT / "bootloader" / "prog"
-    out.mkdir(parents=True, exist_ok=True)
-    elf = out / f"{name}.{os.getpid()}.elf"
-    fw = REPO_ROOT / "firmware"
-    subprocess.run(
-        ["riscv64-unknown-elf-gcc", "-march=rv32im_zicsr", "-mabi=ilp32", "-Os", "-nostdlib", "-ffreestanding",
-         "-static", "-std=c11", "-Wall", "-Wextra", "-Werror", "-I", str(fw / "include"),
-         "-T", str(fw / "common" / "link.ld"), "-Wl,--no-warn-rwx-segments", "-o", str(elf),
-         str(fw / "common" / "crt0.S"), str(PROG / f"{name}.c")],
-        check=True, capture_output=True, text=True)
-    try:
-        return bp.load_image(elf)
-    finally:
-        elf.unlink()
+build_prog = boot_tb_prog
 
 
 class TB:

@@ -76,7 +76,7 @@ def test_char_bench_simulated_lab(sim, tmp_path):
     the command runs the method and writes the configuration, and that
     configuration on the RTL's pins gives the chosen frequency."""
     from torqueloop.characterize import load_config
-    from torqueloop.characterize.cli import EXIT_OK, main
+    from torqueloop.study.characterize_cli import EXIT_OK, main
     from torqueloop.characterize.simbench import model_waveform, rtl_waveforms
 
     # the "model" pin source is what the RTL does, pin change for pin change

@@ -1,66 +1,17 @@
 # SPDX-License-Identifier: MIT
-"""Build test programs for the CPU and run them on the ISS oracle.
-
-Programs are compiled at test time with Debian's riscv64-unknown-elf-gcc
-for rv32im_zicsr / ilp32 (with the register header, firmware/include, on the
-include path) and linked with tb/cpu/progs/link.ld into build/cpu_progs/<tag>/.
-"""
+"""The CPU test programs for the benches in this folder: built by
+torqueloop.flow.cpu_progs, run on the ISS oracle (torqueloop.oracles.rv32)."""
 
 from __future__ import annotations
 
-import os
-import subprocess
-from dataclasses import dataclass
 from pathlib import Path
 
-from torqueloop.flow.manifest import REPO_ROOT
-from torqueloop.spec import regs
-from torqueloop.oracles.rv32 import Memory, Rv32, load_elf, read_elf, run_to_tohost
+from torqueloop.flow.cpu_progs import BUILD, PROGS, RAM_BASE, RAM_BYTES, build
+from torqueloop.oracles.rv32 import IssResult, run_iss as _run_iss
 
-PROGS = Path(__file__).resolve().parent / "progs"
-BUILD = REPO_ROOT / "build" / "cpu_progs"
-GCC = "riscv64-unknown-elf-gcc"
-ARCH = ["-march=rv32im_zicsr", "-mabi=ilp32"]
-RAM_BASE = regs.RAM_BASE      # the SoC's memory map, as cpu_sim_top decodes it
-RAM_BYTES = regs.RAM_SIZE     # cpu_sim_top's RAM_BYTES default
-
-
-def build(name: str, sources: list[Path], tag: str = "", opt: str = "-O2",
-          crt0: bool = True) -> Path:
-    """Compile and link ``sources`` (C or assembly) into an ELF; return its path."""
-    out_dir = BUILD / (tag or "default")
-    out_dir.mkdir(parents=True, exist_ok=True)
-    elf = out_dir / f"{name}.elf"
-    tmp = out_dir / f"{name}.{os.getpid()}.elf"
-    srcs = ([PROGS / "crt0.S"] if crt0 else []) + list(sources)
-    cmd = [GCC, *ARCH, opt, "-nostdlib", "-ffreestanding", "-static", "-std=c11",
-           "-Wall", "-Werror", "-I", str(PROGS), "-I", str(REPO_ROOT / "firmware" / "include"), "-T", str(PROGS / "link.ld"), "-Wl,--no-warn-rwx-segments",
-           "-o", str(tmp), *map(str, srcs), "-lgcc"]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)}\n{proc.stderr}")
-    tmp.replace(elf)  # atomic: parallel pytest workers may build the same name
-    return elf
-
-
-@dataclass
-class IssResult:
-    tohost: int
-    instructions: int
-    signature: list[int]
+__all__ = ["BUILD", "PROGS", "IssResult", "build", "run_iss"]
 
 
 def run_iss(elf_path: Path, max_steps: int = 5_000_000) -> IssResult:
     """Run an ELF on the ISS from its entry point until tohost is written."""
-    elf = read_elf(elf_path)
-    mem = Memory()
-    mem.add_ram(RAM_BASE, RAM_BYTES)
-    load_elf(mem, elf)
-    sim = Rv32(mem, pc=elf.entry)
-    value, steps = run_to_tohost(sim, elf.symbols["tohost"], max_steps)
-    return IssResult(value, steps, signature_words(mem, elf.symbols))
-
-
-def signature_words(mem: Memory, symbols: dict[str, int]) -> list[int]:
-    begin, end = symbols["begin_signature"], symbols["end_signature"]
-    return [mem.load(a, 4) or 0 for a in range(begin, end, 4)]
+    return _run_iss(elf_path, RAM_BASE, RAM_BYTES, max_steps)

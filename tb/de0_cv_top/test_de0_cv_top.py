@@ -46,7 +46,7 @@ from cocotb.simtime import get_sim_time
 from cocotb.triggers import ClockCycles, FallingEdge, First, Timer
 
 from torqueloop.spec import regs
-from torqueloop.flow.board_files import load_pin_table
+from torqueloop.flow.board_files import CABLE_V, load_pin_table
 from torqueloop.flow.simrun import BUILD_ROOT, run, sims_for
 
 import tbutil
@@ -408,7 +408,7 @@ def build_rom_image(name: str) -> Path:
 def test_de0_cv_top(sim):
     rom = build_rom_image("careless")
     run("de0_cv_top", sim, "test_de0_cv_top", toplevel="de0_cv_top_tb",
-        extra_verilog=[HERE / "de0_cv_cable.v", HERE / "de0_cv_top_tb.v"], testcase="board_interlock_and_uart_on_the_header_pins",
+        extra_verilog=[CABLE_V, HERE / "de0_cv_top_tb.v"], testcase="board_interlock_and_uart_on_the_header_pins",
         parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"'})
 
 
@@ -416,5 +416,5 @@ def test_de0_cv_top(sim):
 def test_de0_cv_top_servo_firmware(sim):
     rom, ram = build_servo_images()
     run("de0_cv_top", sim, "test_de0_cv_top", toplevel="de0_cv_top_tb",
-        extra_verilog=[HERE / "de0_cv_cable.v", HERE / "de0_cv_top_tb.v"], testcase="servo_firmware_answers_the_protocol_on_the_header",
+        extra_verilog=[CABLE_V, HERE / "de0_cv_top_tb.v"], testcase="servo_firmware_answers_the_protocol_on_the_header",
         parameters={"RAM_BYTES": regs.RAM_SIZE, "ROM_INIT": f'"{rom}"', "RAM_INIT": f'"{ram}"'})

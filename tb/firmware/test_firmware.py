@@ -36,21 +36,20 @@ from cocotb.utils import get_sim_time
 from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
 from torqueloop.oracles import servo as ref
+from torqueloop.flow.tb_images import SERVO_TB_BAUD_DIV, SERVO_TB_PERIOD_US, TB_KEY, servo_tb_image
 
 import tbutil
 
 CLK_NS = 20
 BAUD = 1_000_000
-BAUD_DIV = 49                      # 50 MHz / 1 Mbaud - 1: 500 clocks a byte, the 16-byte RX FIFO outlasts a control iteration
-PERIOD_US = 500
-DEFINES = {"TL_DEFAULT_PERIOD_US": PERIOD_US, "TL_DEFAULT_BAUD_DIV": BAUD_DIV}
+BAUD_DIV = SERVO_TB_BAUD_DIV       # 50 MHz / 1 Mbaud - 1 (flow/tb_images.py)
+PERIOD_US = SERVO_TB_PERIOD_US
 STEP_NS = 4000                     # encoder state time: well above the 3 us filter
 QUAD = [(0, 0), (1, 0), (1, 1), (0, 1)]   # A leads B: counts up
 FAST_FDIV = 2                      # 24.4 kHz: the fastest carrier under the IBT-2's 25 kHz rating (PWM_MAX_HZ)
 PWM_PERIOD_US = FAST_FDIV * 1023 * CLK_NS / 1000
 U = P.MOVE_UNHOMED                 # positions relative to power-up: these tests do not home
-KEY = auth.TEST_KEY
-READS = {"IDENTIFY", "GET_PARAM", "STATUS", "COUNTERS", "SESSION", "TELEMETRY"}   # sent without a MAC
+KEY = TB_KEY
 
 
 def now_ns() -> float:
@@ -112,7 +111,7 @@ class TB:
                   **fields) -> dict:
         """One command and its reply; with the session's MAC unless it is a read (tagged overrides)."""
         self.seq = (self.seq + 1) & 0xFFFF
-        tag = (self.sess is not None and name not in READS) if tagged is None else tagged
+        tag = (self.sess is not None and not P.COMMANDS[name].untagged) if tagged is None else tagged
         wire = self.sess.request(name, self.seq, **fields) if tag else P.request(name, self.seq, **fields)
         self.sent.append(wire)
         await self.send_raw(wire)
@@ -681,21 +680,19 @@ async def no_key_board_refuses_motion(dut):
 
 @pytest.mark.parametrize("sim", ["verilator"])
 def test_firmware(sim):
-    from torqueloop.flow.firmware import build
     from torqueloop.flow.simrun import run, sims_for
     if sim not in sims_for("soc"):
         pytest.skip(f"{sim} not selected")
-    defines = {k: str(v) for k, v in DEFINES.items()}
-    img = build("servo_tb", defines, key=KEY)
+    img = servo_tb_image()
     params = {"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'}
     run("soc", sim, "test_firmware", parameters=params)
     # the same model, its stub ROM rewritten with a blank key slot
-    build("servo_tb", defines, key=None)
+    servo_tb_image(key=None)
     try:
         run("soc", sim, "test_firmware", parameters=params, testcase="no_key_board_refuses_motion",
             extra_env={"TB_NO_KEY": "1"})
     finally:
-        build("servo_tb", defines, key=KEY)
+        servo_tb_image()
 
 
 @cocotb.test(skip=os.environ.get("TL_FW_MEASURE") != "1")

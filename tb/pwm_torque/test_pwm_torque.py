@@ -11,6 +11,7 @@ map_duty(...) * div clocks.
 """
 
 import random
+from dataclasses import asdict
 
 import cocotb
 import pytest
@@ -22,6 +23,8 @@ from torqueloop.oracles.freq_div import FreqDivParams, carrier_hz, count_max
 from torqueloop.oracles.pwm_torque import (PIPE_CLOCKS, PwmInputs, PwmOutputs, PwmTorqueModel,
                                        full_scale, map_duty, safe_pins)
 from torqueloop.flow.simrun import run, sims_for
+
+import tbutil
 
 PINS = PwmOutputs.PINS
 STATUS = ("period_start", "duty_applied", "dir_applied", "active")
@@ -51,16 +54,8 @@ class TB:
         self.inp = PwmInputs(**d)
 
     def _drive(self, rst: int) -> None:
-        d, i = self.dut, self.inp
-        d.rst.value = rst
-        d.tick.value = i.tick
-        d.cmd.value = i.cmd & ((1 << (self.n + 1)) - 1)
-        d.pw0.value = i.pw0
-        d.pw_max.value = i.pw_max
-        d.enable.value = i.enable
-        d.fault.value = i.fault
-        d.brake_on_fault.value = i.brake_on_fault
-        d.dir_mode.value = i.dir_mode
+        i = self.inp   # the model's inputs are named as the core's ports
+        tbutil.drive(self.dut, rst=rst, **{**asdict(i), "cmd": i.cmd & ((1 << (self.n + 1)) - 1)})
 
     def read(self) -> dict[str, int]:
         return {k: int(getattr(self.dut, k).value) for k in (*PINS, *STATUS)}

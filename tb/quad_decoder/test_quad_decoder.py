@@ -8,6 +8,7 @@ transitions and index pulses, up to the stated maximum count rate."""
 from __future__ import annotations
 
 import random
+from dataclasses import asdict
 
 import cocotb
 import pytest
@@ -27,6 +28,8 @@ from torqueloop.oracles.quad_decoder import (
 )
 from torqueloop.flow.simrun import run, sims_for
 
+import tbutil
+
 OUTPUTS = ("position", "dir", "illegal_count", "illegal_flag", "index_pos", "index_seen",
            "index_armed", "timestamp", "last_edge_time", "edge_interval", "enc_filtered")
 STROBES = ("pos_load", "illegal_clear", "index_arm")
@@ -44,15 +47,8 @@ class TB:
         cocotb.start_soon(Clock(dut.clk, 20, unit="ns").start())
 
     def _drive(self) -> None:
-        d, i = self.dut, self.inp
-        d.enc_a.value, d.enc_b.value, d.enc_z.value = i.a, i.b, i.z
-        d.rst.value = i.rst
-        d.sample_div.value = i.sample_div
-        d.filter_len.value = i.filter_len
-        d.pos_load.value = i.pos_load
-        d.pos_load_val.value = i.pos_load_val
-        d.illegal_clear.value = i.illegal_clear
-        d.index_arm.value = i.index_arm
+        v = asdict(self.inp)   # named as the core's ports, but the encoder pins
+        tbutil.drive(self.dut, enc_a=v.pop("a"), enc_b=v.pop("b"), enc_z=v.pop("z"), **v)
 
     async def tick(self, **change: int) -> None:
         """Apply pins/commands (strobes last one clock), clock once, compare all outputs."""

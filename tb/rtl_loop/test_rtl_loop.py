@@ -15,7 +15,7 @@ x settles within the 2 s.  Checks what a user of ``make run`` relies on:
   - axis x of the experiment arm settles within 2 % and close to the fast path;
   - the two arms differ, but by less than the step (the lab plant is not the paper's);
   - report.json has the documented keys.
-The full experiment is `make run` (scripts/run_experiment.py).
+The full experiment is `make run` (torqueloop-study experiment).
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sim_models.variants import PlantSpec
 from torqueloop.sim import experiment, report
 
 T_END_S = 2.0
@@ -67,7 +68,7 @@ def test_the_experiment_both_arms_short(tmp_path: Path) -> None:
     char = _characterization(tmp_path / "characterization.json")
     base = experiment.ExperimentConfig(law="P", t_end_s=T_END_S, period_us=PERIOD_US, progress=False)
     exp = experiment.ExperimentConfig(law="P", t_end_s=T_END_S, period_us=PERIOD_US, progress=False,
-                                      plant="lab", char_config=str(char))
+                                      plant=PlantSpec("lab"), char_config=str(char))
     rtl = experiment.run_rtl(exp)
     fast = experiment.run_fast(exp, rtl.carrier_start_clk)
     model = experiment.run_paper_model(base)
@@ -143,39 +144,38 @@ class _Recorder:
         return data, cycles
 
 
-def _pin_trace(variant) -> _Recorder:
+def _pin_trace(harness) -> _Recorder:
     from sim_models.stepper import TwoAxisPlant
     from torqueloop.sim import native
     from torqueloop.spec import auth
-    from torqueloop.spec import protocol as tp
     from torqueloop.sim.pins import PlantOnPins
     img = experiment.firmware_image()
-    board = _Recorder(native.NativeBoard.create(img.rom_hex, img.ram_hex, variant=variant))
+    board = _Recorder(native.NativeBoard.create(img.rom_hex, img.ram_hex, harness=harness))
     try:
         bridge = PlantOnPins(TwoAxisPlant(seed=0), board)
         link, _ = experiment.power_up(board, bridge, host_nonce=bytes(auth.NONCE_BYTES))   # the same bytes in both builds
-        link.set_param(0xFF, "BAUD_DIV", 15)             # 3.1 Mbaud: many input changes
+        link.set_param("BAUD_DIV", 15)                   # 3.1 Mbaud: many input changes
         board.set_uart_div(16)
-        link.set_param(0xFF, "PERIOD_US", 500)
+        link.set_param("PERIOD_US", 500)
         for ax in (0, 1):
-            link.set_param(ax, "LAW", experiment.LAWS["PD"])
-            link.set_param(ax, "FDIV", 3)                # 16 kHz carrier: many pin changes
-        link.call("TELEMETRY", every=1)
-        link.call("ENABLE", mask=3, enable=1)
+            link.set_param("LAW", experiment.LAWS["PD"], ax)
+            link.set_param("FDIV", 3, ax)                # 16 kHz carrier: many pin changes
+        link.set_telemetry(1)
+        link.enable(3)
         # axis 0's positive switch opens while nothing else changes on the pins (no
         # encoder edges, no host bytes): the firmware must see it within its debounce
         # and a period (faults in the STATUS bytes compared below); then it closes again
         board.set_limits(0, 0b01)
-        link.advance(150_000)
-        link.call("STATUS", axis=0)
+        link.transport.advance(150_000)
+        link.status(0)
         board.set_limits(0, 0)
-        link.advance(150_000)
-        link.call("ENABLE", mask=1, enable=0)
-        link.call("CLEAR_FAULT", mask=1)                 # the switch closed again: the fault clears
-        link.call("ENABLE", mask=1, enable=1)
+        link.transport.advance(150_000)
+        link.enable(1, on=False)
+        link.clear_fault(1)                              # the switch closed again: the fault clears
+        link.enable(1)
         for ax in (0, 1):
-            link.call("MOVE", axis=ax, mode=tp.MOVE_UNHOMED, target=300 * (1 - 2 * ax))
-        link.advance(1_500_000)                          # 30 ms of both axes moving
+            link.move(ax, 300 * (1 - 2 * ax), unhomed=True)
+        link.transport.advance(1_500_000)                # 30 ms of both axes moving
         link.poll()
         board.set_board(1, 0, 1)                         # e-stop: pins drop combinationally
         bridge.run_to(board.cycle + 10_000)

@@ -28,6 +28,8 @@ from torqueloop.oracles.uart import (
 )
 from torqueloop.flow.simrun import run, sims_for
 
+import tbutil
+
 CLK_NS = 20
 
 
@@ -47,15 +49,8 @@ class TB:
 
     async def reset(self, baud_div: int = 0, flow_en: int = 0) -> None:
         d = self.dut
-        d.rst.value = 1
-        d.baud_div.value = baud_div
-        d.flow_en.value = flow_en
-        d.s_tx_data.value = 0
-        d.s_tx_valid.value = 0
-        d.m_rx_ready.value = 0
-        d.overrun_clear.value = 0
-        d.rxd.value = 1
-        d.cts_n.value = 0
+        tbutil.drive(d, rst=1, baud_div=baud_div, flow_en=flow_en, s_tx_data=0, s_tx_valid=0, m_rx_ready=0,
+                     overrun_clear=0, rxd=1, cts_n=0)
         await ClockCycles(d.clk, 4)
         await FallingEdge(d.clk)
         d.rst.value = 0

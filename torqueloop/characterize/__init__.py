@@ -6,7 +6,11 @@ frequency and dead zone of each motor out, as the build's configuration.
     method  - steps 2, 5, 6-7 and the loop back to step 5
     config  - step 8: divider count (eq. 4), PW0 in counts (the file: torqueloop.spec.charconfig)
     plots   - Fig. 10 / Fig. 11 style figures
-    cli     - the command (scripts/characterize.py)
+    conclude - steps 2-7's verdict per axis and step 8 (the file), shared by the command and the study
+    simbench - the simulated lab bench (rope dynamometer, pins from the RTL or the cores' waveform)
+
+The command (``torqueloop-study characterize``) and the study around the
+method live on the applications floor, torqueloop/study/.
 
 docs/characterization.md is the lab's guide.
 """

@@ -24,9 +24,32 @@ from dataclasses import asdict, dataclass, field
 from typing import Literal, Sequence
 
 import numpy as np
-from scipy import stats
 
 from .data import Sweep
+
+
+@dataclass(frozen=True)
+class LineFit:
+    """y = slope * x + intercept by least squares; ``rvalue`` is Pearson's r."""
+
+    slope: float
+    intercept: float
+    rvalue: float
+
+
+def line_fit(x: np.ndarray, y: np.ndarray) -> LineFit:
+    """The ordinary least-squares line through (x, y) with numpy alone (the
+    lab's host install has no scipy); tests/test_characterize.py checks it
+    against ``scipy.stats.linregress``."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if x.size < 2 or np.ptp(x) == 0:
+        raise MethodError("a line fit needs at least two different duty values")
+    a = np.column_stack([x, np.ones_like(x)])
+    (slope, icpt), *_ = np.linalg.lstsq(a, y, rcond=None)
+    ss_tot = float(np.sum((y - y.mean()) ** 2))
+    ss_res = float(np.sum((y - (slope * x + icpt)) ** 2))
+    r2 = 0.0 if ss_tot == 0 else max(0.0, 1.0 - ss_res / ss_tot)
+    return LineFit(float(slope), float(icpt), float(np.copysign(np.sqrt(r2), slope)))
 
 
 class MethodError(ValueError):
@@ -258,7 +281,7 @@ def steps67_linearity(duty_sweep: Sweep, tau_max: float, th: Thresholds = Thresh
         )
     k0 = int(moving[0])
     dm, tm = d[k0:], t[k0:]
-    fit = stats.linregress(dm, tm)
+    fit = line_fit(dm, tm)
     slope, icpt = float(fit.slope), float(fit.intercept)
     r2 = float(fit.rvalue) ** 2
     checks.append(Check(
@@ -287,7 +310,7 @@ def steps67_linearity(duty_sweep: Sweep, tau_max: float, th: Thresholds = Thresh
     # should sit on a line as well; a drifting or jumping current shows up
     # as deviation from that line.
     cm = cur[k0:]
-    cfit = stats.linregress(dm, cm)
+    cfit = line_fit(dm, cm)
     cscale = float(cur.max()) if cur.max() > 0 else 1.0
     cdev = float(np.max(np.abs(cm - (cfit.intercept + cfit.slope * dm))) / cscale)
     checks.append(Check(
@@ -403,3 +426,61 @@ def characterize_motor(
         "fail", freq_sweep, s5, tuple(attempts), unused_duty_sweeps=unused(),
         message=f"step 7 failed at every step-5 candidate ({fails})",
     )
+
+
+# ---------------------------------------------------------------- the paper's dead zone
+
+
+@dataclass(frozen=True)
+class MotionDeadZone:
+    """The dead zone as the paper measures it (sec. II.B): on the applied
+    system, the pulse width raised until the system moves, then lowered
+    until it stops moving; one direction at one carrier.  Beside it, the
+    project's intercept PW0 (:class:`Linearity`) is where the stalled torque
+    line leaves zero: a different quantity (a torque threshold on the held
+    motor, not a motion threshold on the free one)."""
+
+    freq_hz: float
+    direction: int
+    start_pct: float
+    """the first duty of the rising ramp at which the system moved (breakaway)."""
+    stop_pct: float
+    """the lowest duty of the falling ramp at which it still moved; one step
+    lower it stopped.  The paper's procedure ends here, so this is its PW0."""
+    threshold_counts: float
+    """motion: at least this many encoder counts moved in one dwell."""
+
+    @property
+    def pw0_pct(self) -> float:
+        return self.stop_pct
+
+    @property
+    def hysteresis_pct(self) -> float:
+        """start - stop: how far the breakaway lies above the stop."""
+        return self.start_pct - self.stop_pct
+
+
+def motion_dead_zone(duty_up_pct: Sequence[float], moved_up: Sequence[float], duty_down_pct: Sequence[float],
+                     moved_down: Sequence[float], threshold_counts: float, freq_hz: float,
+                     direction: int) -> MotionDeadZone:
+    """The paper's dead zone from a recorded ramp: ``moved_up[k]`` is the
+    motion (encoder counts, either sign) during the dwell at the rising
+    ramp's ``duty_up_pct[k]``, ``moved_down`` the same for the falling ramp
+    that follows it.  Motion is ``|moved| >= threshold_counts``."""
+    up = [(float(d), abs(float(m)) >= threshold_counts) for d, m in zip(duty_up_pct, moved_up, strict=True)]
+    down = [(float(d), abs(float(m)) >= threshold_counts) for d, m in zip(duty_down_pct, moved_down, strict=True)]
+    if any(b[0] <= a[0] for a, b in zip(up, up[1:])) or any(b[0] >= a[0] for a, b in zip(down, down[1:])):
+        raise MethodError("dead zone ramp: the rising ramp must rise and the falling ramp fall")
+    start = next((d for d, mv in up if mv), None)
+    if start is None:
+        top = up[-1][0] if up else float("nan")
+        raise MethodError(f"dead zone ramp: the system never moved up to {top:g} % duty "
+                          f"({threshold_counts:g} counts per dwell); raise the ramp further")
+    last_moving = start
+    for d, mv in down:
+        if d > start:
+            raise MethodError("dead zone ramp: the falling ramp must start below the breakaway")
+        if not mv:
+            return MotionDeadZone(freq_hz, direction, start, last_moving, threshold_counts)
+        last_moving = d
+    raise MethodError(f"dead zone ramp: the system still moved at {last_moving:g} % duty; lower the ramp further")

@@ -55,13 +55,9 @@ async def _one_period(dut) -> dict:
 async def capture(dut):
     job = json.loads(Path(os.environ["CHAR_BENCH_JOB"]).read_text())
     cocotb.start_soon(Clock(dut.clk, CLK_NS, unit="ns").start())
+    for name in ("div_we", "div_in", "cmd", "pw0", "pw_max", "enable"):   # in reset, everything off
+        getattr(dut, name).value = 0
     dut.rst.value = 1
-    dut.div_we.value = 0
-    dut.div_in.value = 0
-    dut.cmd.value = 0
-    dut.pw0.value = 0
-    dut.pw_max.value = 0
-    dut.enable.value = 0
     await ClockCycles(dut.clk, 4)
     await FallingEdge(dut.clk)
     dut.rst.value = 0

@@ -28,6 +28,7 @@ from typing import Callable, Literal, Sequence
 
 import numpy as np
 
+from sim_models.variants import PlantSpec
 from torqueloop.flow.manifest import REPO_ROOT, core
 
 from torqueloop.spec.charconfig import Config
@@ -35,7 +36,7 @@ from torqueloop.spec.pwm import divider_for, full_scale as pwm_full_scale
 
 from .config import CLK_HZ, PWM_BITS
 from .data import BenchConstants, Sweep, read_sweep, write_sweep
-from .method import MotorResult, Thresholds, characterize_motor
+from .method import MotionDeadZone, MotorResult, Thresholds, characterize_motor, motion_dead_zone
 
 CHAR_BENCH_TOP = Path(__file__).resolve().with_name("char_bench_top.v")
 CLK_PS = 20_000  # CLOCK_50
@@ -169,6 +170,8 @@ class Reading:
     force_n: float
     current_a: float
     current_std_a: float | None = None
+    settle_s: float | None = None
+    """how long the setting was held before the reading (the bench's settle rule)"""
 
 
 def log_frequencies(lo: float = 50.0, hi: float = 24_500.0, n: int = 25) -> tuple[float, ...]:
@@ -318,35 +321,24 @@ def run_bench(measure: Measure, out_dir: Path, motor: str, plan: SweepPlan = Swe
 # ---------------------------------------------------------------- the plant's rope dynamometer
 
 
-@dataclass(frozen=True)
-class Plant:
-    """A named plant variant with effects switched off (sim_models.variants)."""
-
-    name: str = "lab"
-    off: tuple[str, ...] = ()
-
-    @property
-    def label(self) -> str:
-        return self.name + "".join(f"-no-{e}" for e in self.off)
-
-
 class LabBench:
     """The rope dynamometer (sim_models.dyno) for each axis of a plant
     variant, its physics cached across sessions; ``measure(axis, seed)``
     gives a :data:`Measure` whose instrument noise comes from ``seed``."""
 
-    def __init__(self, plant: Plant = Plant(), config: "object | None" = None,
+    def __init__(self, plant: PlantSpec = PlantSpec("lab"), config: "object | None" = None,
                  tweak: dict[str, dict] | None = None) -> None:
         from sim_models.dyno import RopeBenchConfig, RopeDynamometer
-        from sim_models.variants import load_variant
 
         self.plant = plant
-        p = load_variant(plant.name, plant.off, tweak)
+        p = plant.params(tweak)
         cfg = config or RopeBenchConfig()
         self.config = cfg
         self.dyno = {a.name: RopeDynamometer(a, p, cfg) for a in p.axes}
         self.plan = SweepPlan(wheel_radius_m=cfg.wheel_radius_m, theta_deg=cfg.rope_angle_deg,
                               supply_v=p.bridge.supply_V)
+        #: every reading's settle time and whether it converged, in order
+        self.settle_log: list[dict] = []
 
     def axes(self) -> tuple[str, ...]:
         return tuple(self.dyno)
@@ -361,8 +353,10 @@ class LabBench:
 
         def measure(w: PinWaveform) -> Reading:
             r = d.measure(w.segments, w.period_s, rng)
+            self.settle_log.append({"axis": axis, "freq_hz": w.freq_hz, "duty_counts": w.duty_counts,
+                                    "settle_s": r.trace.settle_s, "converged": r.trace.converged})
             # the ammeter shows a mean; PWM ripple is not "wandering", so no current_std_a column
-            return Reading(force_n=r.force_N, current_a=r.current_A)
+            return Reading(force_n=r.force_N, current_a=r.current_A, settle_s=r.trace.settle_s)
 
         return measure
 
@@ -370,7 +364,7 @@ class LabBench:
 def simulate_lab(out_dir: Path, bench: LabBench, axes: Sequence[str] = ("x", "z"), seed: int | None = 0,
                  wf: Waveforms | None = None, th: Thresholds = Thresholds(), quiet: bool = False) -> dict[str, MotorResult]:
     """Every axis through the simulated bench: ``out_dir/<axis>/*.csv`` as a
-    lab would hand them to ``characterize.py run``."""
+    lab would hand them to ``torqueloop-study characterize run``."""
     wf = wf or Waveforms()
     out = {}
     for a in axes:
@@ -379,4 +373,130 @@ def simulate_lab(out_dir: Path, bench: LabBench, axes: Sequence[str] = ("x", "z"
         out[a] = run_bench(bench.measure(a, seed), out_dir / a, a, bench.plan, th, wf=wf, tag=tag)
         if not quiet:
             _progress(f"{a} (seed {seed}): {out[a].status}: {out[a].message}")
+    return out
+
+
+def rope_config(settle: float | str = 0.3, **changes: object) -> "object":
+    """The rope bench's configuration with a settle rule: a number is a fixed
+    settle in seconds (the project's bench used 0.3 s); ``"converged"`` waits
+    until the gauge's window mean has stopped moving (RopeBenchConfig's
+    converge_frac of the stall force per window, converge_windows windows in
+    a row) and records the time it took."""
+    import dataclasses
+
+    from sim_models.dyno import RopeBenchConfig
+
+    if settle == "converged":
+        return dataclasses.replace(RopeBenchConfig(), settle_rule="converged", **changes)
+    if isinstance(settle, bool) or not isinstance(settle, (int, float)) or not settle > 0:
+        raise ValueError(f"settle {settle!r}: a positive number of seconds or 'converged'")
+    return dataclasses.replace(RopeBenchConfig(), settle_rule="fixed", settle_s=float(settle), **changes)
+
+
+# ---------------------------------------------------------------- the paper's dead zone on the applied system
+
+
+@dataclass(frozen=True)
+class MotionRamp:
+    """How the simulated lab finds the paper's dead zone (sec. II.B, "raise
+    the pulse width until the system moves, lower it until it stops"): on
+    the stage axis itself (motor, gearbox, screw, table; no dynamometer),
+    from rest, the duty raised in steps of ``step_counts`` (of the 1023-count
+    period), each held ``dwell_s``, until the motor-side encoder moves by
+    ``threshold_counts`` within the last ``1 - settle_frac`` of a dwell; then
+    lowered in the same steps until it does not.  Counting only the end of
+    the dwell lets the rotor coast out of the previous step: a rotor that is
+    still decelerating has not "stopped moving" and has not kept moving
+    either."""
+
+    step_counts: int = 4
+    dwell_s: float = 0.2
+    settle_frac: float = 0.5
+    threshold_counts: int = 2
+    max_duty_counts: int = 512
+
+
+def _reverse(pins: tuple[int, int, int, int]) -> tuple[int, int, int, int]:
+    return (pins[1], pins[0], pins[2], pins[3])
+
+
+def record_motion_ramp(params: "object", axis_index: int, count_max: int, direction: int,
+                       ramp: MotionRamp = MotionRamp()) -> tuple[list[float], list[int], list[float], list[int]]:
+    """One ramp up and down on a plant axis (``params``: sim_models
+    PlantParams) at the carrier of ``count_max``, brake off-phase, forward
+    (+1) or reverse (-1): (duty % up, counts moved per dwell up, duty % down,
+    counts moved down), what a lab writes down."""
+    from sim_models.bridge import Pins
+    from sim_models.stepper import FastAxis
+
+    if direction not in (1, -1):
+        raise ValueError(f"direction {direction!r}: +1 or -1")
+    m = pwm_full_scale(PWM_BITS)
+    fa = FastAxis(params.axes[axis_index], params, axis_index)  # type: ignore[attr-defined]
+    edges: list = []
+
+    def hold(duty_counts: int) -> int:
+        w = model_waveform(count_max, duty_counts)
+        n = max(2, int(np.ceil(ramp.dwell_s / w.period_s)))
+        n_settle = min(n - 1, int(round(ramp.settle_frac * n)))
+        segs = [(Pins(*(p if direction > 0 else _reverse(p))),
+                 (w.segments[k + 1][0] if k + 1 < len(w.segments) else w.period_s) - t0)
+                for k, (t0, p) in enumerate(w.segments)]
+        c0 = fa.count
+        for k in range(n):
+            if k == n_settle:
+                c0 = fa.count
+            for p, dt in segs:
+                fa.set_pins(p)
+                fa.advance(dt, edges)
+                edges.clear()
+        return fa.count - c0
+
+    up_d: list[float] = []
+    up_m: list[int] = []
+    d = 0
+    while d + ramp.step_counts <= min(ramp.max_duty_counts, m):
+        d += ramp.step_counts
+        moved = hold(d)
+        up_d.append(100.0 * d / m)
+        up_m.append(moved)
+        if abs(moved) >= ramp.threshold_counts:
+            break
+    down_d: list[float] = []
+    down_m: list[int] = []
+    if up_m and abs(up_m[-1]) >= ramp.threshold_counts:
+        while d - ramp.step_counts >= 0:
+            d -= ramp.step_counts
+            moved = hold(d)
+            down_d.append(100.0 * d / m)
+            down_m.append(moved)
+            if abs(moved) < ramp.threshold_counts:
+                break
+    return up_d, up_m, down_d, down_m
+
+
+def motion_dead_zones(plant: Plant, freqs_hz: Sequence[float], axes: Sequence[str] = ("x", "z"),
+                      ramp: MotionRamp = MotionRamp(), quiet: bool = True) -> list[MotionDeadZone]:
+    """The paper's dead zone per axis, per direction, per carrier (the board
+    carrier nearest each frequency) on a plant variant."""
+    from sim_models.variants import load_variant
+
+    p = load_variant(plant.name, plant.off)
+    names = [a.name for a in p.axes]
+    out = []
+    for axis in axes:
+        if axis not in names:
+            raise ValueError(f"axis {axis!r}: the plant has {names}")
+        i = names.index(axis)
+        for f in freqs_hz:
+            n = divider_for(f, CLK_HZ, PWM_BITS)
+            f_board = model_waveform(n, 1).freq_hz
+            for direction in (1, -1):
+                rec = record_motion_ramp(p, i, n, direction, ramp)
+                dz = motion_dead_zone(*rec, threshold_counts=ramp.threshold_counts, freq_hz=f_board,
+                                      direction=direction)
+                if not quiet:
+                    _progress(f"{axis} {f_board:.4g} Hz dir {direction:+d}: moves from {dz.start_pct:.2f} %, "
+                              f"stops below {dz.stop_pct:.2f} %")
+                out.append(dz)
     return out

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from torqueloop.flow import firmware
+from torqueloop.flow.licence import banner
 from torqueloop.spec import auth, bootproto, regs
 from torqueloop.spec.repo import REPO_ROOT as REPO
 
@@ -32,10 +33,42 @@ HERE = REPO / "firmware" / "boot"
 
 CC = "riscv64-unknown-elf-gcc"
 CRYPTO = REPO / "firmware" / "crypto"
-SOURCES = [HERE / "start.S", HERE / "boot.c", HERE / "boot_crc.c", CRYPTO / "tl_sha256.c", CRYPTO / "tl_keyslot.c",
+SOURCES = [HERE / "start.S", HERE / "boot.c", HERE / "boot_crc.c", CRYPTO / "tl_sha256.c", REPO / "firmware" / "protocol" / "tl_keyslot.c",
            REPO / "firmware" / "common" / "mem.c"]
 CFLAGS = ["-march=rv32im_zicsr", "-mabi=ilp32", "-Os", "-ffreestanding", "-nostdlib", "-static", "-std=c11",
           "-Wall", "-Wextra", "-Werror", "-msmall-data-limit=0", "-ffunction-sections", "-fdata-sections"]
+
+
+def boot_proto_header(window_cycles: int | None = None, gap_cycles: int | None = None, baud_div: int = 0,
+                      wdog_cycles: int | None = None) -> str:
+    """boot_proto.h for firmware/boot: torqueloop/spec/bootproto.py's constants as C defines."""
+    w = bootproto.ms_to_cycles(bootproto.WINDOW_MS) if window_cycles is None else window_cycles
+    g = bootproto.ms_to_cycles(bootproto.GAP_MS) if gap_cycles is None else gap_cycles
+    wd = bootproto.ms_to_cycles(bootproto.WDOG_MS) if wdog_cycles is None else wdog_cycles
+    sync = ", ".join(f"0x{b:02X}u" for b in bootproto.SYNC)
+    codes = "\n".join(f"#define BOOT_REPLY_{r.name} '{r.value}'" for r in bootproto.Reply)
+    return banner("boot_proto.h", "torqueloop/spec/bootproto.py", "torqueloop.flow.boot_image") + f"""
+#ifndef BOOT_PROTO_H
+#define BOOT_PROTO_H
+#define BOOT_SYNC_BYTES {{{sync}}}
+#define BOOT_VERSION {bootproto.VERSION}u
+#define BOOT_HEADER_BYTES {bootproto.HEADER_BYTES}u
+#define BOOT_LOAD_ADDR 0x{bootproto.LOAD_ADDR:08X}u
+#define BOOT_MAX_IMAGE_BYTES {bootproto.MAX_IMAGE_BYTES}u
+#define BOOT_STACK_BYTES {bootproto.BOOT_STACK_BYTES}u
+#define BOOT_TAG_BYTES {bootproto.TAG_BYTES}u
+#define BOOT_LABEL_UPLOAD "{auth.LABEL_UPLOAD.decode()}"
+#define BOOT_WINDOW_CYCLES {w}u
+#define BOOT_GAP_CYCLES {g}u
+#define BOOT_BAUD_DIV {baud_div}u
+#define BOOT_WDOG_CYCLES {wd}u
+#define BOOT_CODE_BYTES 0x{bootproto.BOOT_CODE_BYTES:X}u
+#define BOOT_FACTORY_OFS 0x{bootproto.FACTORY_OFS:X}u
+#define BOOT_FACTORY_MAGIC 0x{bootproto.FACTORY_MAGIC:08X}u
+#define BOOT_FACTORY_MAX_BYTES {bootproto.FACTORY_MAX_BYTES}u
+{codes}
+#endif
+"""
 
 
 @dataclass(frozen=True)
@@ -95,7 +128,7 @@ def build_boot(cfg: BootConfig = BootConfig(), out: Path | None = None) -> BootB
     out = out or REPO / "build" / "firmware" / "boot" / cfg.tag
     out.mkdir(parents=True, exist_ok=True)
     _write_if_changed(out / "boot.ld", linker_script())
-    _write_if_changed(out / "boot_proto.h", bootproto.c_header(cfg.window_cycles, cfg.gap_cycles, cfg.baud_div,
+    _write_if_changed(out / "boot_proto.h", boot_proto_header(cfg.window_cycles, cfg.gap_cycles, cfg.baud_div,
                                                                    cfg.wdog_cycles))
     tmp_elf = out / f"boot.{os.getpid()}.elf"
     cmd = [CC, *CFLAGS, f"-I{out}", f"-I{HERE}", f"-I{REPO / 'firmware' / 'include'}", f"-I{CRYPTO}",

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""Consistency checks of the DE0-CV constraints (scripts/check_constraints.py).
+"""Consistency checks of the DE0-CV constraints (``python -m torqueloop.flow constraints``; exit 1 if any fails).
 
 Quartus is not available where the project is built and tested, so the
 Quartus project must be right by construction; these checks read the
@@ -16,13 +16,17 @@ board's pin data and the HDL manifest:
   - the .qsf's source files are the board top's manifest sources, include
     every file of the SoC core, exist, and elaborate (Yosys hierarchy -check);
   - the .sdc constrains CLOCK_50 at the table's period and names only ports
-    that exist;
-  - every generated file is in step with its sources.
+    that exist.
+
+That the generated files are in step with pins.toml is the staleness gate's
+job (``python -m torqueloop.flow gen --check``), as for every generated file.
 """
 
 from __future__ import annotations
 
 import re
+import sys
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -212,18 +216,6 @@ def port_bits_of_top(table: board.PinTable, top_v: Path = board.TOP_V) -> set[st
     return out
 
 
-def check_generated(table: board.PinTable, board_pins: dict[str, board.BoardPin]) -> Check:
-    """The committed products equal what the generator makes now."""
-    name = "generated files in step (qsf, sdc, top GPIO block, cable harness, docs wiring table)"
-    try:
-        drift = quartus.stale(quartus.products(table, board_pins))
-    except SystemExit as e:
-        return Check(name, False, str(e))
-    return _result(name, [f"{_rel(p.path)} is out of date "
-                          f"(run .venv/bin/python scripts/gen_quartus.py --update):\n{diff[:1500]}"
-                          for p, diff in drift])
-
-
 def run_all() -> list[Check]:
     table = board.load_pin_table()
     board_pins = board.load_board_pins()
@@ -238,5 +230,24 @@ def run_all() -> list[Check]:
         top_bits = None          # check_top_ports has reported it
     checks.append(check_sdc(table, sdc, top_bits) if top_bits is not None
                   else Check("sdc", False, "the top could not be read"))
-    checks.append(check_generated(table, board_pins))
     return checks
+
+
+def main() -> int:
+    t0 = time.monotonic()
+    checks = run_all()
+    for c in checks:
+        mark = "skip" if c.skipped else ("ok  " if c.ok else "FAIL")
+        print(f"[constraints] {mark} {c.name}" + (f"  ({c.detail})" if c.skipped else ""))
+    failed = [c for c in checks if not c.ok]
+    for c in failed:
+        lines = c.detail.splitlines()
+        more = f"\n... and {len(lines) - 40} more" if len(lines) > 40 else ""
+        print(f"\n---- {c.name} ----\n" + "\n".join(lines[:40]) + more + "\n", file=sys.stderr)
+    print(f"[constraints] {len(checks) - len(failed)} passed, {len(failed)} failed "
+          f"in {time.monotonic() - t0:.1f} s")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 """Lint, synthesis and formal-equivalence flows over the HDL manifest.
 
-Used by scripts/lint.py (make lint) and scripts/synth.py (make synth).  Each
+Used by torqueloop/flow/lint.py (make lint) and scripts/synth.py (make synth).  Each
 function returns (ok, message) instead of raising, so one report lists every
 problem.  All outputs go under build/.
 """

@@ -31,10 +31,12 @@ from torqueloop.spec.repo import REPO_ROOT as REPO
 
 FW = REPO / "firmware"
 #: the authentication code the servo firmware, the host builds and the fuzzer share (docs/security.md)
-AUTH_SOURCES = [FW / "crypto" / "tl_sha256.c", FW / "crypto" / "tl_keyslot.c", FW / "protocol" / "tl_auth.c"]
+AUTH_SOURCES = [FW / "crypto" / "tl_sha256.c", FW / "protocol" / "tl_keyslot.c", FW / "protocol" / "tl_auth.c"]
+#: the servo core (firmware/servo/servo_internal.h says which file holds what): the same C on the board,
+#: in the host tests, the fuzzer and the simulated board
+SERVO_CORE = [FW / "servo" / n for n in ("control.c", "servo.c", "params.c", "safety.c", "homing.c", "commands.c")]
 SOURCES = [FW / "common" / "crt0.S", FW / "common" / "mem.c", FW / "protocol" / "tl_link.c", *AUTH_SOURCES,
-           FW / "servo" / "control.c", FW / "servo" / "servo.c", FW / "servo" / "hal_soc.c",
-           FW / "servo" / "main.c"]
+           *SERVO_CORE, FW / "servo" / "hal_soc.c", FW / "servo" / "main.c"]
 INCLUDES = [FW / "include", FW / "protocol", FW / "crypto", FW / "servo"]
 CFLAGS = ["-march=rv32im_zicsr", "-mabi=ilp32", "-O2", "-ffreestanding", "-nostdlib", "-static",
           "-std=c11", "-Wall", "-Wextra", "-Werror", "-ffunction-sections", "-fdata-sections",
@@ -140,8 +142,7 @@ def build(name: str = "servo", defines: dict[str, str] | None = None, out: Path 
 # --- the link parser under libFuzzer (host build, clang + sanitizers) ------------
 
 #: the firmware C that runs on the host (tests, fuzzing) with the fake HAL
-HOST_SOURCES = [FW / "tests" / "hal_fake.c", FW / "protocol" / "tl_link.c", *AUTH_SOURCES, FW / "servo" / "control.c",
-                FW / "servo" / "servo.c"]
+HOST_SOURCES = [FW / "tests" / "hal_fake.c", FW / "protocol" / "tl_link.c", *AUTH_SOURCES, *SERVO_CORE]
 HOST_INCLUDES = [f"-I{FW / d}" for d in ("protocol", "crypto", "servo", "tests")]
 
 

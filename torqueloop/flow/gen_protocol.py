@@ -38,7 +38,14 @@ def c_header() -> str:
           f"#define TLP_MAX_WIRE {P.MAX_ENCODED + 2}u  /* 0x00 COBS 0x00 */", ""]
     for n, v in P.STATUS.items():
         L.append(f"#define TLP_ST_{n} {v}u")
-    L.append("")
+    L.append("/* the rule that refused a command: byte TLP_REPLY_WHY of its error reply */")
+    L.append("#define TLP_REPLY_WHY 1u")
+    for n, v in P.REFUSAL.items():
+        L.append(f"#define TLP_WHY_{n} {v}u")
+    L += ["/* the status a rule comes with (a constant rule folds to a constant) */",
+          "static inline uint8_t tlp_why_status(uint8_t why)", "{", "    switch (why) {"]
+    L += [f"    case TLP_WHY_{n}: return TLP_ST_{P.STATUS_NAME[st]};" for n, st in P.REFUSAL_STATUS.items()]
+    L += ["    default: return TLP_ST_OK;", "    }", "}", ""]
     for n, v in P.FAULT.items():
         L.append(f"#define TLP_FAULT_{n} 0x{v:04X}u")
     L.append("/* faults that only block motion toward their end: ENABLE is allowed with them latched */")
@@ -48,11 +55,7 @@ def c_header() -> str:
         L.append(f"#define TLP_CMD_{c.name} 0x{c.cmd:02X}u")
         L.append(f"#define TLP_CMD_{c.name}_REQ_LEN {_size(c.req)}u")
         L.append(f"#define TLP_CMD_{c.name}_REP_LEN {_size(c.rep)}u")
-        L.append(f"#define TLP_CMD_{c.name}_FEEDS_LINK {int(c.feeds_link)}u")
-    feeders = [c for c in P.COMMANDS.values() if c.feeds_link]
-    assert all(c.cmd < 32 for c in feeders), "TLP_LINK_FEED_MASK holds command codes below 32"
-    L.append("/* bit cmd set: that command, executed, feeds the link watchdog */")
-    L.append("#define TLP_LINK_FEED_MASK (" + " | ".join(f"(1u << TLP_CMD_{c.name})" for c in feeders) + ")")
+    L += _c_command_table()
     L += [f"#define TLP_MOVE_TRAPEZOID 0x{P.MOVE_TRAPEZOID:02X}u", f"#define TLP_MOVE_UNHOMED 0x{P.MOVE_UNHOMED:02X}u"]
     L += [f"#define TLP_HOME_MODE_{k.upper()} {v}u" for k, v in P.HOME_MODES.items()]
     L += [f"#define TLP_HOME_STATE_{v.upper().replace(' ', '_')} {k}u" for k, v in P.HOME_STATE.items()]
@@ -103,6 +106,29 @@ def c_header() -> str:
     return "\n".join(L)
 
 
+#: descriptor flags of the C command table, in bit order (protocol.toml's command columns)
+COMMAND_FLAGS = ("seq_checked", "read_only", "repeatable", "untagged", "feeds_link")
+
+
+def _c_command_table() -> list[str]:
+    """The command descriptors as an X-macro: the firmware expands it into its
+    dispatch table (firmware/servo/commands.c) with its own handler type, so
+    this header names no servo type."""
+    L = ["/* Command descriptor flags (protocol.toml's command columns). */"]
+    L += [f"#define TLP_CF_{f.upper()} 0x{1 << k:02X}u" for k, f in enumerate(COMMAND_FLAGS)]
+    top = max(c.cmd for c in P.COMMANDS.values())
+    L += [f"#define TLP_CMD_LIMIT {top + 1}u   /* command codes are below this */",
+          "/* X(code, handler, req_len, rep_len, flags): one row per command; needing the key",
+          "   depends on the payload (open_when): tlp_needs_key() */",
+          "#define TLP_COMMAND_TABLE(X) \\"]
+    rows = []
+    for c in P.COMMANDS.values():
+        fl = " | ".join(f"TLP_CF_{f.upper()}" for f in COMMAND_FLAGS if getattr(c, f)) or "0u"
+        rows.append(f"    X(TLP_CMD_{c.name}, {c.handler}, TLP_CMD_{c.name}_REQ_LEN, TLP_CMD_{c.name}_REP_LEN, {fl})")
+    L += [r + " \\" for r in rows[:-1]] + [rows[-1], ""]
+    return L
+
+
 def _c_auth() -> list[str]:
     """The [auth] constants and which command needs the key with which payload."""
     A = P.SPEC["auth"]
@@ -128,6 +154,14 @@ def _auth_text(c: P.Command) -> str:
         return "open: no key needed (a MAC may be appended)"
     unless = " or ".join(f"{f} = {v}" for f, v in c.open_when.items())
     return f"needs the key (MAC appended)" + (f", except with {unless}" if unless else "")
+
+
+def _descriptor_text(c: P.Command) -> str:
+    """The command's descriptor row in words (protocol.toml's command columns)."""
+    words = [f"handler `{c.handler}`", "sequence-checked" if c.seq_checked else "accepted at any seq"]
+    words += [w for w, on in (("read-only", c.read_only), ("repeatable after a lost reply", c.repeatable),
+                              ("sent without a MAC", c.untagged)) if on]
+    return ", ".join(words)
 
 
 def markdown() -> str:
@@ -167,6 +201,13 @@ def markdown() -> str:
          "## Status codes", "", "| code | name | meaning |", "|---|---|---|"]
     for s in P.SPEC["status"]:
         L.append(f"| {s['code']} | {s['name']} | {s['desc']} |")
+    L += ["", "## Refusals", "",
+          "A command its handler refuses is answered with two bytes: the status and `why`, the rule that "
+          "refused it (the host tool prints it). A frame refused before its command ran (length, key, seq, "
+          "MAC) gets the status alone.", "",
+          "| why | name | status | rule |", "|---|---|---|---|"]
+    for r in P.SPEC["refusal"]:
+        L.append(f"| {r['code']} | {r['name']} | {r.get('status', '')} | {r['desc']} |")
     L += ["", "## Fault flags (per axis, u16, latched)", "",
           "Each fault disables the axis when it trips. *blocks*: `enable` - the axis stays disabled until "
           "CLEAR_FAULT (refused while the cause is present); `direction` - the axis may be enabled again, "
@@ -178,7 +219,7 @@ def markdown() -> str:
     L += ["", "## Commands", ""]
     for c in P.COMMANDS.values():
         L.append(f"### 0x{c.cmd:02X} {c.name}")
-        L += ["", c.desc, "", f"authentication: {_auth_text(c)}", ""]
+        L += ["", c.desc, "", f"authentication: {_auth_text(c)}", "", f"descriptor: {_descriptor_text(c)}", ""]
         L.append("request: " + (", ".join(f"`{n}:{t}`" for n, t in c.req) or "(empty)"))
         L.append("")
         L.append(f"reply (0x{c.cmd | P.REPLY_FLAG:02X}): " + ", ".join(f"`{n}:{t}`" for n, t in c.rep))

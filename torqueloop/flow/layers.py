@@ -3,9 +3,10 @@
 
     spec                               the single sources, one definition of each equation
     host   oracles  sim_models   flow  the lab tool | core oracles | the plant | EDA flows
-    sim                                co-simulation, simulated boards, the experiment
+    sim                                co-simulation, simulated boards, the experiment's runs and report
     characterize                       the characterisation method and its bench
-    cli                                the ``torqueloop`` command (the application)
+    cli   study                        the applications, side by side: the ``torqueloop`` lab tool |
+                                       the studies (``torqueloop-study``: make run, make characterize)
 
 A module may import its own layer and the layers its entry in ``ALLOWED``
 names, nothing else of ours: never upward, never sideways between the
@@ -15,6 +16,12 @@ middle layers.  It may not load a file by path (importlib's
 
 :func:`violations` reads the sources (``ast``; nothing is imported), so a
 function-level (lazy) import counts as much as a top-level one.
+
+The leaves (``scripts/``, ``tests/``) may import any layer, but they load
+nothing by path and edit no ``sys.path`` either, and ``tb/`` belongs to the
+test benches: nothing outside ``tb/`` and ``tests/`` imports a module of
+``tb/``, and ``tests/`` imports only ``tb/tbutil`` (a benchmark that runs a
+bench's measurement hands its folder to ``flow.simrun.run(bench=...)``).
 ``make lint`` and tests/test_layers.py run it.
 """
 
@@ -40,10 +47,16 @@ ALLOWED: dict[str, frozenset[str]] = {
                                           "sim_models", "torqueloop.flow", "torqueloop.sim"}),
     "torqueloop.cli": frozenset({"torqueloop.spec", "torqueloop.host", "torqueloop.oracles", "sim_models",
                                  "torqueloop.flow", "torqueloop.sim", "torqueloop.characterize"}),
+    "torqueloop.study": frozenset({"torqueloop.spec", "torqueloop.host", "torqueloop.oracles", "sim_models",
+                                   "torqueloop.flow", "torqueloop.sim", "torqueloop.characterize"}),
 }
 #: modules outside every layer that any module may import
 SHARED = frozenset({"torqueloop"})          # the package's __init__ (version only)
 PACKAGES = ("torqueloop", "sim_models")     # what counts as "ours"
+LEAVES = ("scripts", "tests")               # entry points and unit tests: above every layer
+TB = "tb"                                   # the test benches
+#: what tests/ may import from tb/
+TB_FOR_TESTS = frozenset({"tbutil"})
 
 
 @dataclass(frozen=True)
@@ -113,9 +126,45 @@ def _path_tricks(tree: ast.AST) -> list[tuple[int, str]]:
     return out
 
 
-def violations(root: Path = REPO_ROOT, packages: tuple[str, ...] = PACKAGES) -> list[Violation]:
+def tb_modules(root: Path = REPO_ROOT) -> frozenset[str]:
+    """The top-level names a module of tb/ is imported by (tb/ and each bench
+    folder go on the path of pytest and of the simulator's Python)."""
+    return frozenset({TB} | {p.stem for p in (root / TB).rglob("*.py") if p.stem != "conftest"})
+
+
+def _tb_imports(tree: ast.AST, tb: frozenset[str]) -> list[tuple[int, str]]:
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name) for a in node.names if a.name.split(".")[0] in tb]
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module \
+                and node.module.split(".")[0] in tb:
+            out.append((node.lineno, node.module))
+    return out
+
+
+def leaf_violations(root: Path = REPO_ROOT, leaves: tuple[str, ...] = LEAVES) -> list[Violation]:
+    """Files loaded by path, sys.path edits and imports from tb/ in the leaves."""
+    tb = tb_modules(root)
+    found: list[Violation] = []
+    for leaf in leaves:
+        for path in sorted((root / leaf).rglob("*.py")):
+            rel = str(path.relative_to(root))
+            tree = ast.parse(path.read_text(), filename=rel)
+            found += [Violation(rel, line, what) for line, what in _path_tricks(tree)]
+            for line, target in _tb_imports(tree, tb):
+                if leaf == "tests" and target.split(".")[0] in TB_FOR_TESTS:
+                    continue
+                found.append(Violation(rel, line, f"{leaf}/ imports {target} from tb/ (tb/ belongs to the test "
+                                                  f"benches; tests/ may import only {', '.join(sorted(TB_FOR_TESTS))})"))
+    return found
+
+
+def violations(root: Path = REPO_ROOT, packages: tuple[str, ...] = PACKAGES,
+               leaves: tuple[str, ...] = LEAVES) -> list[Violation]:
     """Every import against the direction, file loaded by path and sys.path
-    edit in the packages under ``root``."""
+    edit in the packages under ``root``, and the leaves' (:func:`leaf_violations`)."""
+    tb = tb_modules(root)
     found: list[Violation] = []
     for pkg in packages:
         for path in sorted((root / pkg).rglob("*.py")):
@@ -125,6 +174,8 @@ def violations(root: Path = REPO_ROOT, packages: tuple[str, ...] = PACKAGES) -> 
             tree = ast.parse(path.read_text(), filename=rel)
             for line, what in _path_tricks(tree):
                 found.append(Violation(rel, line, what))
+            for line, target in _tb_imports(tree, tb):
+                found.append(Violation(rel, line, f"imports {target} from tb/ (the package needs no test bench)"))
             if mine is None:
                 continue   # torqueloop/__init__.py
             allowed = ALLOWED[mine] | {mine} | SHARED
@@ -137,12 +188,13 @@ def violations(root: Path = REPO_ROOT, packages: tuple[str, ...] = PACKAGES) -> 
                 if theirs not in allowed:
                     found.append(Violation(rel, line, f"{mine} imports {target} ({theirs}): "
                                                       f"against the layer direction"))
-    return found
+    return found + leaf_violations(root, leaves)
 
 
 def main() -> int:
     bad = violations()
-    return finish("layers", bad, f"import direction of torqueloop/ and sim_models/ ({len(bad)} violations)")
+    return finish("layers", bad, f"import direction of torqueloop/ and sim_models/, and what scripts/ and tests/ "
+                                 f"take from tb/ ({len(bad)} violations)")
 
 
 if __name__ == "__main__":

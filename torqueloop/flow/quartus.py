@@ -1,23 +1,31 @@
 # SPDX-License-Identifier: MIT
 """The DE0-CV Quartus project: generated files and the project folder.
 
-``python -m torqueloop.flow.generate`` writes the generated files (and
-``--check`` fails on a stale one), scripts/gen_quartus.py (make quartus)
-writes the project folder; torqueloop/flow/constraints_check.py
-(scripts/check_constraints.py) checks the committed files against the board.
+    python -m torqueloop.flow.quartus [--compile]    (make quartus: --compile)
+
+``python -m torqueloop.flow.generate`` writes the generated files of the pin
+table (:func:`products`; ``--check`` fails on a stale one); this module's
+command creates the Quartus project in build/quartus (de0_cv_top.qpf + the
+committed .qsf) and, with ``--compile``, compiles it when quartus_sh is on
+PATH and fails on negative slack in the timing summary, otherwise prints the
+commands for a machine that has it.  torqueloop/flow/constraints_check.py
+(python -m torqueloop.flow constraints) checks the committed files against the board.
 """
 
 from __future__ import annotations
 
-import difflib
+import argparse
 import re
 import shutil
+import subprocess
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 from torqueloop.flow import board_files as board
 from torqueloop.flow.licence import with_licence
 from torqueloop.flow.manifest import REPO_ROOT, load_manifest
+from torqueloop.spec import auth
 
 PROJECT = "de0_cv_top"
 
@@ -32,7 +40,7 @@ def top_sources(top: str) -> list[Path]:
     """The board top's Verilog sources, in manifest order."""
     cores = load_manifest()
     if top not in cores:
-        raise SystemExit(f"gen_quartus: core '{top}' is not in rtl/manifest.toml yet "
+        raise SystemExit(f"quartus: core '{top}' is not in rtl/manifest.toml yet "
                          "(it is added together with rtl/soc/tl_soc.v); cannot list the project's sources")
     return list(cores[top].verilog)
 
@@ -45,7 +53,7 @@ def products(table: board.PinTable | None = None,
     board_pins = board_pins or board.load_board_pins()
     problems = board.validate(table, board_pins)
     if problems:
-        raise SystemExit("gen_quartus: constraints/pins.toml is inconsistent:\n  " + "\n  ".join(problems))
+        raise SystemExit("quartus: constraints/pins.toml is inconsistent:\n  " + "\n  ".join(problems))
     sources = sources if sources is not None else top_sources(table.board.quartus_top)
     out = [
         Product(board.QSF, with_licence(board.QSF.name, board.gen_qsf(table, board_pins, sources))),
@@ -61,19 +69,6 @@ def products(table: board.PinTable | None = None,
         md = board.HARDWARE_MD.read_text()
         out.append(Product(board.HARDWARE_MD, board.replace_between(
             md, board.MD_BEGIN, board.MD_END, board.gen_wiring_md(table, board_pins))))
-    return out
-
-
-def stale(prods: list[Product]) -> list[tuple[Product, str]]:
-    """(product, unified diff) for every product whose file differs."""
-    out = []
-    for p in prods:
-        old = p.path.read_text() if p.path.exists() else ""
-        if old != p.text:
-            rel = p.path.relative_to(REPO_ROOT)
-            diff = "".join(difflib.unified_diff(old.splitlines(True), p.text.splitlines(True),
-                                                f"a/{rel}", f"b/{rel}"))
-            out.append((p, diff))
     return out
 
 
@@ -111,27 +106,28 @@ def build_firmware() -> None:
     try:
         boot_image.main([])
     except RuntimeError as e:
-        raise SystemExit(f"gen_quartus: boot ROM build failed:\n{e}") from None
+        raise SystemExit(f"quartus: boot ROM build failed:\n{e}") from None
 
 
 def write_project(project_dir: Path = board.QUARTUS_DIR) -> Path:
     """build/quartus/de0_cv_top.qpf + .qsf (a copy of the committed, checked one)."""
     if project_dir.resolve() != board.QUARTUS_DIR.resolve():
-        raise SystemExit("gen_quartus: the committed .qsf's relative paths assume build/quartus")
+        raise SystemExit("quartus: the committed .qsf's relative paths assume build/quartus")
     table = board.load_pin_table()
     if table.firmware:
         build_firmware()
     sizes = memory_words()
     for name, image in table.firmware:
         for p in check_readmemh(image, sizes.get(name)):
-            raise SystemExit(f"gen_quartus: {name}: {p}")
-    drift = stale(products(table))
-    if drift:
-        raise SystemExit("gen_quartus: generated files are out of date; run "
+            raise SystemExit(f"quartus: {name}: {p}")
+    from torqueloop.flow import generate
+
+    if generate.stale({str(p.path.relative_to(REPO_ROOT)): p.text for p in products(table)}):
+        raise SystemExit("quartus: generated files are out of date; run "
                          "'.venv/bin/python -m torqueloop.flow.generate' and commit")
     project_dir.mkdir(parents=True, exist_ok=True)
     (project_dir / f"{PROJECT}.qpf").write_text(
-        f"# Quartus project of the torqueloop board top, written by scripts/gen_quartus.py\n"
+        f"# Quartus project of the torqueloop board top, written by python -m torqueloop.flow.quartus\n"
         f'PROJECT_REVISION = "{PROJECT}"\n')
     shutil.copyfile(board.QSF, project_dir / f"{PROJECT}.qsf")
     return project_dir / f"{PROJECT}.qpf"
@@ -165,3 +161,54 @@ def timing_verdict(summary_path: Path) -> tuple[bool, list[str]]:
     lines = [f"{'FAIL' if v < 0 else 'ok  '} {kind}: slack {v:+.3f} ns" for kind, v in slacks]
     return all(v >= 0 for _, v in slacks), lines
 
+
+def compile_project(qpf: Path) -> int:
+    """Compile when quartus_sh is on PATH and fail on negative slack; else
+    print the commands for a machine that has Quartus."""
+    cmd = ["quartus_sh", "--flow", "compile", PROJECT]
+    rel = qpf.parent.relative_to(REPO_ROOT)
+    summary = qpf.parent / "output_files" / f"{PROJECT}.sta.summary"
+    if shutil.which("quartus_sh") is None:
+        print(f"[quartus] project written: {qpf.relative_to(REPO_ROOT)} (boot ROM image built; docs/hardware.md, First compile)")
+        print("[quartus] quartus_sh is not on PATH, so nothing was compiled. On a machine with Quartus Prime")
+        print("[quartus] Lite 18.1 or later (Cyclone V needs 14.0+; 18.1 and 20.1 are the usual DE0-CV versions):")
+        print(f"[quartus]   cd {rel} && {' '.join(cmd)}")
+        print(f"[quartus]   grep -A2 'Type' {rel}/output_files/{PROJECT}.sta.summary   # every Slack must be >= 0")
+        print(f"[quartus]   quartus_pgm -m jtag -o 'p;{rel}/output_files/{PROJECT}.sof'     # program the board over USB-Blaster")
+        print("[quartus] or without Python: quartus_sh -t constraints/create_project.tcl compile")
+        print(f"[quartus] or open {rel}/{PROJECT}.qpf in the Quartus GUI and press Compile.")
+        print("[quartus] Then run make quartus again on that machine: it reads the timing summary and fails on negative slack.")
+        return 0
+    print(f"[quartus] {' '.join(cmd)}  (in {rel})", flush=True)
+    rc = subprocess.run(cmd, cwd=qpf.parent).returncode
+    if rc != 0:
+        print(f"[quartus] compile failed (exit {rc}): see {rel}/output_files/*.rpt")
+        return rc
+    met, lines = timing_verdict(summary)
+    for line in lines:
+        print(f"[quartus] {line}")
+    print(f"[quartus] timing {'met' if met else 'NOT met'}; bitstream {rel}/output_files/{PROJECT}.sof")
+    return 0 if met else 1
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--compile", action="store_true", help="compile when quartus_sh is on PATH")
+    ap.add_argument("--keyless", action="store_true",
+                    help="build a boot ROM without a link key (a board that refuses every move)")
+    args = ap.parse_args(argv)
+    if auth.key_file_path(None) is None and not args.keyless:
+        # A long compile ending in a board that refuses every move helps nobody: stop before it.
+        print(f"[quartus] no link key: name the key file in ${auth.KEY_FILE_ENV} (`torqueloop key new FILE`; "
+              "docs/security.md, 'Key provisioning'), or `make quartus KEYLESS=1` for a board that refuses "
+              "motion, parameter changes and uploads", file=sys.stderr)
+        return 2
+    qpf = write_project()
+    if not board.load_pin_table().firmware:
+        print("[quartus] WARNING: constraints/pins.toml [firmware] names no ROM_INIT image: the boot ROM"
+              " of this bitstream is empty and the CPU will run no program")
+    return compile_project(qpf) if args.compile else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

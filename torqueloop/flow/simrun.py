@@ -30,6 +30,8 @@ from torqueloop.flow.tools import use_project_tools
 SIMULATORS: dict[str, str] = {"icarus": "verilog", "verilator": "verilog", "ghdl": "vhdl"}
 
 BUILD_ROOT = REPO_ROOT / "build" / "sim"
+#: the test benches, one folder per core or system (tb/<bench>/test_<bench>.py)
+TB_ROOT = REPO_ROOT / "tb"
 
 
 def selected_sims() -> list[str]:
@@ -61,6 +63,22 @@ def sims_for(c: Core | str, langs: Iterable[str] = ("verilog", "vhdl")) -> list[
     return out
 
 
+def _search_bench(runner, folder: Path) -> None:
+    """Put ``folder`` and tb/ first on the simulator's module search path.
+    The runner sets PYTHONPATH from this process's sys.path when a test
+    starts (cocotb_tools.runner ``_set_env_common``); this adds to what it
+    set, and leaves this process's sys.path alone."""
+    if not folder.is_dir():
+        raise FileNotFoundError(f"{folder}: no such test bench folder")
+    common = runner._set_env_common
+
+    def set_env() -> None:
+        common()
+        runner.env["PYTHONPATH"] = os.pathsep.join([str(folder), str(TB_ROOT), runner.env.get("PYTHONPATH", "")])
+
+    runner._set_env_common = set_env
+
+
 def _tag(parameters: Mapping[str, object], extra: str) -> str:
     if not parameters and not extra:
         return "default"
@@ -79,8 +97,14 @@ def run(
     testcase: str | None = None,
     extra_env: Mapping[str, str] | None = None,
     build_tag: str = "",
+    bench: str | None = None,
 ) -> None:
     """Build ``core_name`` for ``sim`` and run the cocotb tests of ``test_module``.
+
+    ``bench``: the test bench folder (tb/<bench>) that holds ``test_module``,
+    for a caller that is not pytest in that folder (a benchmark, the ELF
+    runner): the simulator's Python then finds the module and tb/tbutil,
+    and the caller imports nothing from tb/.
 
     Raises AssertionError if a cocotb test fails or if no test ran at all.
     """
@@ -92,6 +116,8 @@ def run(
     waves = os.environ.get("WAVES", "") == "1"
     use_project_tools()
     runner = get_runner(sim)
+    if bench is not None:
+        _search_bench(runner, TB_ROOT / bench)
 
     build_kwargs: dict = dict(
         hdl_toplevel=top,

@@ -9,4 +9,7 @@
 - :mod:`.analysis`: step-test figures, CSV and plots from telemetry records.
 - :mod:`.simboard`, :mod:`.server`: the simulated board on a local TCP port.
 - :mod:`.upload`: firmware images for ``upload``.
+- :mod:`.serve`, :mod:`.remote`: ``torqueloop serve`` (one link and session
+  for many local clients) and its client.
+- :mod:`.shell`, :mod:`.termplot`: ``torqueloop shell`` and its live text plot.
 """

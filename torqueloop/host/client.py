@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""The protocol client: one command, one reply, over any :class:`Link`.
+"""The protocol client: one command, one reply, over any :class:`Transport`.
 
 All framing, CRC, payload layouts and codes come from the generated
 :mod:`torqueloop.spec.protocol` (single definition torqueloop/spec/protocol.toml);
@@ -17,7 +17,13 @@ this module adds what a host needs on a real link:
   all came back (port, cable, RN-XV not in data mode) or bytes that were
   never a frame (baud rate, RN-XV text such as ``CMD`` or ``*HELLO*``);
   damaged chunks, CRC errors and bridge text are counted in :class:`LinkStats`.
-- telemetry frames arriving between replies are queued, not lost.
+- telemetry frames arriving between replies are queued, not lost (stamped
+  with their arrival time when the transport keeps ``chunk_times``).
+- **one client for every board**: the board's serial port or TCP bridge, the
+  simulated board of ``torqueloop sim``, and the co-simulation's transport
+  (torqueloop.sim.link), whose blocking read runs the simulated board on;
+  :meth:`Client.post` and :meth:`Client.wait` pipeline commands where the
+  timing matters (the co-simulated experiment's two MOVEs in one period).
 - **authentication** (docs/security.md): with a key, every command that is
   not a read goes out with its MAC in a session the client opens (SESSION)
   and re-opens when the board has restarted or another host took over; the
@@ -37,15 +43,9 @@ from typing import Callable, Iterator
 from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
 
-from .transport import Link, LinkInfo
+from .transport import LinkInfo, Transport
 
-READ_ONLY = frozenset({"IDENTIFY", "GET_PARAM", "STATUS", "COUNTERS"})
-#: a lost reply to these is harmless to repeat with a fresh seq
-REPEATABLE = READ_ONLY | {"HEARTBEAT"}
 AUTH_STATUSES = frozenset({P.STATUS["AUTH"], P.STATUS["NO_SESSION"], P.STATUS["NO_KEY"]})
-#: sent without a MAC even with a key: reads and the telemetry rate (a MAC costs the board's
-#: main loop ~0.6 ms, which can delay a telemetry record at short control periods) and SESSION itself
-UNTAGGED = READ_ONLY | {"SESSION", "TELEMETRY"}
 FAULT_DESC: dict[str, str] = {f["name"]: f["desc"] for f in P.SPEC["fault"]}
 STATUS_DESC: dict[int, str] = {s["code"]: s["desc"] for s in P.SPEC["status"]}
 
@@ -87,13 +87,25 @@ class BoardHasNoKey(ProtocolError):
 
 
 class CommandRejected(ProtocolError):
-    def __init__(self, command: str, status: int, detail: str = "") -> None:
-        self.command, self.status = command, status
+    """The board refused a command: ``status``, and ``why``, the rule that
+    refused it (protocol.toml [[refusal]]), which the message names."""
+
+    def __init__(self, command: str, status: int, detail: str = "", why: int = P.REFUSAL["NONE"]) -> None:
+        self.command, self.status, self.why = command, status, why
         name = P.STATUS_NAME.get(status, f"status {status}")
-        msg = f"{command} refused: {name} ({STATUS_DESC.get(status, 'unknown status')})"
+        if why != P.REFUSAL["NONE"]:
+            rule = P.REFUSAL_NAME.get(why, f"rule {why}")
+            msg = f"{command} refused: {name}, {rule}: {P.REFUSAL_DESC.get(why, 'unknown rule')}"
+        else:
+            msg = f"{command} refused: {name} ({STATUS_DESC.get(status, 'unknown status')})"
         if name == "LOOSEN":
             msg += " - `torqueloop disable --all`, change it, enable again"
         super().__init__(msg + (f" {detail}" if detail else ""))
+
+    @property
+    def rule(self) -> str:
+        """The refusal's rule by name (NONE: the board named none)."""
+        return P.REFUSAL_NAME.get(self.why, "NONE")
 
 
 @dataclass
@@ -133,13 +145,13 @@ def _printable(raw: bytes) -> int:
 class Client:
     """Protocol client.  ``clock`` and the link are injectable for tests."""
 
-    def __init__(self, link: Link, info: LinkInfo | None = None, *, timeout: float = 0.5,
+    def __init__(self, transport: Transport, info: LinkInfo | None = None, *, timeout: float = 0.5,
                  retries: int = 3, clock: Callable[[], float] = time.monotonic, key: bytes | None = None,
                  key_source: str = "", key_error: str = "") -> None:
         """``key``: the link key (None: commands that need one are refused
         here); ``key_source`` names where it came from and ``key_error`` why
         there is none, for the messages."""
-        self.link, self.info = link, info
+        self.transport, self.info = transport, info
         self.key, self.key_source, self.key_error = key, key_source, key_error
         self.session: auth.Session | None = None
         self.timeout, self.retries = timeout, retries
@@ -149,6 +161,7 @@ class Client:
         self._seq = 0
         self._synced = False
         self.telemetry_queue: collections.deque[dict] = collections.deque(maxlen=100_000)
+        self._posted: dict[int, P.Frame | None] = {}   # seq of a post() -> its reply, once read
         self.identity: dict[str, int] | None = None
         self.raw_tap: bytearray | None = None   # when set, every byte read is appended (upload)
 
@@ -163,18 +176,18 @@ class Client:
 
     def _write(self, data: bytes) -> None:
         try:
-            self.link.write(data)
+            self.transport.write(data)
         except OSError as e:
             raise self._closed(e) from None
 
     def _read_some(self) -> bytes:
         try:
-            n = getattr(self.link, "in_waiting", 0) or 0
-            data = self.link.read(max(1, min(n, 4096)))
+            n = getattr(self.transport, "in_waiting", 0) or 0
+            data = self.transport.read(max(1, min(n, 4096)))
             if data:
-                more = getattr(self.link, "in_waiting", 0) or 0
+                more = getattr(self.transport, "in_waiting", 0) or 0
                 if more:
-                    data += self.link.read(min(more, 4096))
+                    data += self.transport.read(min(more, 4096))
         except OSError as e:
             raise self._closed(e) from None
         self.stats.rx_bytes += len(data)
@@ -186,7 +199,9 @@ class Client:
         # Run the decoder over all of ``data`` first: FrameDecoder.feed is a generator
         # that clears its buffer only after the consumer resumes it, and _exchange
         # stops consuming at its reply.
+        times = getattr(self.transport, "chunk_times", None)
         for item in list(self._dec.feed(data)):
+            at = times.popleft() if times else None   # one chunk, one item
             if isinstance(item, P.FrameError):
                 if item.status == P.STATUS["CRC"]:
                     self.stats.crc_errors += 1
@@ -200,11 +215,52 @@ class Client:
             if item.cmd == P.TELEMETRY_CMD:
                 self.stats.telemetry += 1
                 try:
-                    self.telemetry_queue.append(P.decode_telemetry(item))
+                    rec = P.decode_telemetry(item)
                 except Exception:   # a CRC-valid frame of the wrong length: count, do not die
                     self.stats.bad_chunks += 1
+                    continue
+                if at is not None:
+                    rec["rx_time"] = at
+                self.telemetry_queue.append(rec)
+                continue
+            if item.seq in self._posted and item.cmd & P.REPLY_FLAG:
+                self._posted[item.seq] = item      # the reply a wait() collects
                 continue
             yield item
+
+    def poll(self) -> None:
+        """Read what has arrived, without waiting (telemetry, replies to posts)."""
+        while getattr(self.transport, "in_waiting", 0):
+            for f in self._frames(self._read_some()):
+                self.stats.stale_replies += 1
+
+    def post(self, name: str, **fields: int) -> int:
+        """Send a command without waiting for its reply (no retry): returns its
+        seq for :meth:`wait`.  With a session, it carries its MAC as in :meth:`transact`."""
+        if auth.needs_key(name, fields) and self.key is None:
+            raise self._key_missing(name)
+        if not self._synced:
+            self.connect()
+        tagged = self.session is not None and not P.COMMANDS[name].untagged
+        seq = self._next_seq()
+        self._write(self.session.request(name, seq, **fields) if tagged else P.request(name, seq, **fields))
+        self.stats.frames_tx += 1
+        self._posted[seq] = None
+        return seq
+
+    def wait(self, seq: int) -> dict[str, int]:
+        """The reply to the command :meth:`post` sent with ``seq`` (status
+        included: the caller judges it); :class:`NoAnswer` after ``timeout``."""
+        deadline = self.clock() + self.timeout
+        while self._posted.get(seq) is None and self.clock() < deadline:
+            for f in self._frames(self._read_some()):
+                self.stats.stale_replies += 1
+        f = self._posted.pop(seq, None)
+        if f is None:
+            self.stats.timeouts += 1
+            raise NoAnswer(self._no_answer_hint(f"seq {seq}"))
+        self.stats.replies += 1
+        return P.decode_reply(f)
 
     def pump(self, duration: float) -> None:
         """Read for ``duration`` seconds, queueing telemetry."""
@@ -216,6 +272,7 @@ class Client:
     # ---- one transaction -----------------------------------------------------
     def _next_seq(self) -> int:
         self._seq = (self._seq + 1) & 0xFFFF
+        self._posted.pop(self._seq, None)   # a post nobody waited for, 65536 commands ago
         return self._seq
 
     def _exchange(self, name: str, seq: int, fields: dict, session: auth.Session | None = None
@@ -284,13 +341,15 @@ class Client:
         return AuthFailed(f"authentication failed: the board does not accept the key{src} (key id "
                           f"{auth.key_id(self.key or b'')}): it was provisioned with another key")
 
-    def open_session(self) -> auth.Session:
-        """SESSION: a fresh challenge from the board, whose proof shows it holds our key."""
+    def open_session(self, host_nonce: bytes | None = None) -> auth.Session:
+        """SESSION: a fresh challenge from the board, whose proof shows it holds our key.
+        ``host_nonce``: a fixed one for runs that must repeat byte for byte (a
+        simulation); a fresh random one otherwise, as a real host must."""
         if self.key is None:
             raise self._key_missing("SESSION")
         if not self._synced:
             self.connect()
-        hn = auth.new_host_nonce()
+        hn = auth.new_host_nonce() if host_nonce is None else host_nonce
         rep, _ = self._exchange("SESSION", self._next_seq(), {"host_nonce": hn})
         if rep["status"] == P.STATUS["NO_KEY"]:
             raise self._board_has_no_key("SESSION")
@@ -310,7 +369,7 @@ class Client:
             raise self._key_missing(name)              # refused here: nothing is sent
         if not self._synced and name != "IDENTIFY":
             self.connect()
-        if self.key is None or name in UNTAGGED:   # here only commands that need no key
+        if self.key is None or P.COMMANDS[name].untagged:   # here only commands that need no key
             return self._transact(name, fields, None)
         try:
             return self._authenticated(name, fields)
@@ -351,7 +410,7 @@ class Client:
                 st = rep["status"]
             if st == P.STATUS["REPLAY"]:
                 # The first copy was accepted and executed; its reply was lost.
-                if name in REPEATABLE:
+                if P.COMMANDS[name].repeatable:
                     return self.transact(name, **fields)
                 if name == "SET_PARAM":
                     got = self.transact("GET_PARAM", axis=fields["axis"], param=fields["param"])
@@ -359,7 +418,7 @@ class Client:
                 raise ReplyLost(f"{name} (seq {seq}) reached the board but its reply was lost twice; "
                                 "it ran at most once - check `torqueloop status` before repeating it")
         if st != P.STATUS["OK"]:
-            raise CommandRejected(name, st)
+            raise CommandRejected(name, st, why=rep["why"])
         return rep
 
     # ---- commands ---------------------------------------------------------------
@@ -388,8 +447,8 @@ class Client:
     def set_param(self, name: str, value: int, axis: int = 0) -> int:
         p = P.PARAMS[name]
         if not p.min <= value <= p.max:
-            raise CommandRejected("SET_PARAM", P.STATUS["RANGE"],
-                                  f"{name} = {value} is outside [{p.min}, {p.max}]")
+            raise CommandRejected("SET_PARAM", P.STATUS["RANGE"], f"({name} = {value} is outside [{p.min}, {p.max}]; "
+                                  "checked before sending)", why=P.REFUSAL["BELOW_MIN" if value < p.min else "ABOVE_MAX"])
         ax = P.GLOBAL_AXIS if p.scope == "global" else axis
         return self.transact("SET_PARAM", axis=ax, param=p.id, value=value)["value"]
 
@@ -397,11 +456,11 @@ class Client:
         try:
             self.transact("ENABLE", mask=mask, enable=int(on))
         except CommandRejected as e:
-            if e.status == P.STATUS["STATE"]:
+            if e.why == P.REFUSAL["FAULT"]:
                 faults = [self.status(a)["faults"] for a in range(P.AXIS_COUNT) if mask & (1 << a)]
                 detail = "; ".join(f"axis {a}: {describe_faults(f)}"
                                    for a, f in zip([a for a in range(P.AXIS_COUNT) if mask & (1 << a)], faults))
-                raise CommandRejected("ENABLE", e.status, f"- latched faults: {detail} "
+                raise CommandRejected("ENABLE", e.status, why=e.why, detail=f"- latched faults: {detail} "
                                       "(remove the cause, then `torqueloop clear-fault`)") from None
             raise
 
@@ -442,4 +501,4 @@ class Client:
         return out
 
     def close(self) -> None:
-        self.link.close()
+        self.transport.close()

@@ -1,10 +1,12 @@
 # SPDX-License-Identifier: MIT
-"""Links by URL: everything goes through pyserial's ``serial_for_url``.
+"""What the protocol client talks through: a :class:`Transport`, and the
+board's transports by URL, through pyserial's ``serial_for_url``.
 
 ``/dev/ttyUSB0`` (or ``COM3``) opens a serial port at ``baud``;
 ``socket://host:2000`` opens a TCP connection (the RN-XV's bridge, or the
 simulated board of ``torqueloop sim``); ``loop://`` is pyserial's loopback.
-The client needs only :class:`Link`, so tests script a fake one.
+The co-simulation's transport (torqueloop.sim.link) runs the simulated board
+while the client waits, and tests script fake ones.
 """
 
 from __future__ import annotations
@@ -15,10 +17,12 @@ from typing import Protocol
 DEFAULT_BAUD = 115200   # the firmware's BAUD_DIV default (docs/protocol.md)
 
 
-class Link(Protocol):
-    """A byte pipe with a read timeout (what :class:`serial.Serial` offers)."""
-
-    timeout: float | None
+class Transport(Protocol):
+    """A byte pipe whose read blocks for at most a short poll interval (what
+    :class:`serial.Serial` offers).  Optional, read with ``getattr``:
+    ``in_waiting`` (bytes that a read returns at once) and ``chunk_times``
+    (a deque with the arrival time of each 0x00-delimited chunk read so far,
+    in order; the client stamps each telemetry record with it)."""
 
     def write(self, data: bytes) -> int | None: ...
 
@@ -46,7 +50,7 @@ class LinkOpenError(OSError):
     """The link could not be opened; the message says what to check."""
 
 
-def open_link(url: str, baud: int = DEFAULT_BAUD, timeout: float = 0.05) -> tuple[Link, LinkInfo]:
+def open_link(url: str, baud: int = DEFAULT_BAUD, timeout: float = 0.05) -> tuple[Transport, LinkInfo]:
     """Open ``url``; ``timeout`` is the read poll interval, not the answer timeout."""
     import serial  # pyserial; imported here so --help works without it
 

@@ -92,7 +92,7 @@ def run_upload(client: Client, image: bytes, progress: Callable[[int, int], None
     if bp.Reply.WINDOW not in early:
         raise ProtocolError(f"the board acknowledged BOOTLOADER but no boot ROM window (TLBW) came within "
                             f"{window_s:g} s: the bootloader is not in this FPGA image")
-    res = upload("", image, key=client.key, wait_window_s=0, progress=progress, port=port or client.link)
+    res = upload("", image, key=client.key, wait_window_s=0, progress=progress, port=port or client.transport)
     res.replies[:0] = early
     replies = [r.value for r in res.replies]
     # Whatever runs now (the upload or the factory firmware) starts its seq afresh.

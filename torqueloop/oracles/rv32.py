@@ -529,3 +529,27 @@ def run_to_tohost(sim: Rv32, tohost: int, max_steps: int) -> tuple[int, int]:
         if st is not None and st[0] == tohost and st[2] != 0:
             return st[2], retired
     raise TimeoutError(f"no tohost write within {max_steps} steps (pc {sim.pc:#x})")
+
+
+@dataclass
+class IssResult:
+    tohost: int
+    instructions: int
+    signature: list[int]
+
+
+def signature_words(mem: Memory, symbols: dict[str, int]) -> list[int]:
+    """The words from ``begin_signature`` to ``end_signature``."""
+    begin, end = symbols["begin_signature"], symbols["end_signature"]
+    return [mem.load(a, 4) or 0 for a in range(begin, end, 4)]
+
+
+def run_iss(elf_path: str | Path, ram_base: int, ram_bytes: int, max_steps: int = 5_000_000) -> IssResult:
+    """Run an ELF from its entry point, with RAM at ``ram_base``, until tohost is written."""
+    elf = read_elf(elf_path)
+    mem = Memory()
+    mem.add_ram(ram_base, ram_bytes)
+    load_elf(mem, elf)
+    sim = Rv32(mem, pc=elf.entry)
+    value, steps = run_to_tohost(sim, elf.symbols["tohost"], max_steps)
+    return IssResult(value, steps, signature_words(mem, elf.symbols))

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 """The cocotb harness of the co-simulation: the same board image
-(tb/rtl_loop/rtl_loop_top.v), plant bridge (torqueloop.sim.pins), host link
+(torqueloop/sim/harness/rtl_loop_top.v), plant bridge (torqueloop.sim.pins), host link
 and experiment runner (torqueloop.sim.experiment) as the native harness,
 with the board behind cocotb instead of a C++ main.
 

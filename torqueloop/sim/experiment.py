@@ -27,18 +27,18 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field, replace
-from pathlib import Path
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
 from sim_models.params import PlantParams
 from sim_models.stepper import TwoAxisPlant
-from sim_models.variants import load_variant, parse_plant
+from sim_models.variants import PlantSpec
 from torqueloop.flow import firmware
 from torqueloop.flow.manifest import REPO_ROOT
 from torqueloop.host import config as hconfig
-from torqueloop.sim.link import Link
+from torqueloop.host.client import Client
+from torqueloop.sim.link import SimTransport, sim_client, telemetry
 from torqueloop.sim.model_loop import TABLE1, LoopConfig, run_averaged
 from torqueloop.sim.pins import PlantOnPins
 from torqueloop.spec import auth
@@ -52,6 +52,24 @@ COUNTS_PER_REV = SYSTEM.counts_per_turn
 #: the paper's tau_max (twice tau_max/2 of sec. VI.A), milli N m: the torque at full PWM command
 TAU_MAX_MNM = tuple(a.tau_max_mnm for a in SYSTEM.axes)
 BOARD_KEYS = ("FDIV", "PW0", "PWMAX", "TAU_MAX_MNM")
+AXES = (0, 1)                 # x, z: every run drives both
+BOTH_AXES = 0b11              # the axis mask of ENABLE and CLEAR_FAULT for both
+
+
+@dataclass(frozen=True)
+class HarnessTiming:
+    """What the harness waits for on the board image, named once."""
+
+    reset_clk: int = 20             # clocks in reset, arm switch down
+    arm_delay_clk: int = 40_000     # out of reset with the switch down, before it rises (0.8 ms)
+    settle_ms: int = 30             # after configuring: past a deadline of the previous control period
+    sample_poll_clk: int = 2_000    # the step waits for a fresh sample in strides of this
+    loop_poll_clk: int = 20_000     # run_fast_loop's stride between link polls
+    link_timeout_ms: int = 2_000    # LINK_TIMEOUT_MS of a run (the heartbeat feeds it every heartbeat_s)
+    follow_limit_turns: int = 10    # FOLLOW_LIMIT in screw turns: axis z overshoots by most of a turn
+
+
+TIMING = HarnessTiming()
 
 
 @dataclass(frozen=True)
@@ -60,7 +78,7 @@ class ExperimentConfig:
     t_end_s: float = SYSTEM.t_end_s     # the paper's T
     step_rad: float = SYSTEM.step_rad   # one screw turn, 4 mm (sec. VI.B)
     period_us: int = SYSTEM.period_us   # control period: the paper's 25 ms speed sample period
-    plant: str = "paper"                # plant variant (sim_models.variants; lab-no-EFFECT ...)
+    plant: PlantSpec = PlantSpec("paper")   # plant variant, effects off (sim_models.variants.plant_of)
     char_config: str | None = None      # characterisation file, loaded as `torqueloop config load` does
     pwm_hz: tuple[float, ...] | None = None   # carriers set after the file (None: the file's, else the paper's)
     pw0_off: bool = False               # PW0 set to 0 after the file: no dead-zone compensation
@@ -76,7 +94,7 @@ class ExperimentConfig:
         return round(self.step_rad * COUNTS_PER_REV / (2 * math.pi))
 
     def plant_params(self) -> PlantParams:
-        return load_variant(*parse_plant(self.plant))
+        return self.plant.params()
 
     def loaded_settings(self) -> tuple[dict[str, int], ...]:
         """What ``config load`` of the characterisation file writes (per axis
@@ -90,8 +108,8 @@ class ExperimentConfig:
 
     def overrides(self) -> tuple[dict[str, int], ...]:
         """What the user sets after loading (``torqueloop set pwm_freq F``, ``set pw0 0``)."""
-        out: list[dict[str, int]] = [{}, {}]
-        for ax in (0, 1):
+        out: list[dict[str, int]] = [{} for _ in AXES]
+        for ax in AXES:
             if self.pwm_hz is not None:
                 out[ax]["FDIV"] = divider_for(self.pwm_hz[ax])
             if self.pw0_off:
@@ -156,7 +174,7 @@ def firmware_image(key: bytes | None = auth.TEST_KEY) -> firmware.Image:
     return firmware.build("servo", out=REPO_ROOT / "build" / "rtl_loop" / "firmware", key=key)
 
 
-def configure(link: Link, cfg: ExperimentConfig) -> list[dict[str, int]]:
+def configure(link: Client, cfg: ExperimentConfig) -> list[dict[str, int]]:
     """Configure the board as a user does: ``torqueloop config load`` of the
     characterisation file (the host tool's reader and write order), then
     ``set`` for any override, the law and the Table 1 gains in the protocol's
@@ -164,44 +182,45 @@ def configure(link: Link, cfg: ExperimentConfig) -> list[dict[str, int]]:
     Returns the board settings read back."""
     if cfg.char_config is not None:
         for axis, name, value in hconfig.apply_order(hconfig.load_file(cfg.char_config)):
-            link.set_param(tp.GLOBAL_AXIS if axis == tp.GLOBAL_AXIS else axis, name, value)
+            link.set_param(name, value, axis)
     else:
         for ax, b in enumerate(cfg.loaded_settings()):
             for k, v in b.items():
-                link.set_param(ax, k, v)
+                link.set_param(k, v, ax)
     for ax, o in enumerate(cfg.overrides()):
         for k, v in o.items():
-            link.set_param(ax, k, v)
-    link.set_param(tp.GLOBAL_AXIS, "PERIOD_US", cfg.period_us)
-    link.set_param(tp.GLOBAL_AXIS, "LINK_TIMEOUT_MS", 2000)
-    for ax in (0, 1):
+            link.set_param(k, v, ax)
+    link.set_param("PERIOD_US", cfg.period_us)
+    link.set_param("LINK_TIMEOUT_MS", TIMING.link_timeout_ms)
+    for ax in AXES:
         g = TABLE1[cfg.law][ax]
-        link.set_param(ax, "LAW", LAWS[cfg.law])
-        link.set_param(ax, "COUNTS_PER_REV", COUNTS_PER_REV)
-        link.set_param(ax, "KP_UNM_RAD", round(g.kp * 1e6))
-        link.set_param(ax, "KD_UNMS_RAD", round(g.kd * 1e6))
-        link.set_param(ax, "KI_UNM_RADS", round(g.ki * 1e6))
-        link.set_param(ax, "CMD_LIMIT", SYSTEM.pwm_full)
-        link.set_param(ax, "VEL_MODE", 0)          # the paper's filtered Euler difference
-        link.set_param(ax, "BRAKE", int(cfg.brake))
-        link.set_param(ax, "FOLLOW_LIMIT", 10 * COUNTS_PER_REV)   # axis z overshoots by most of a turn
-    return [{k: link.get_param(ax, k) for k in BOARD_KEYS} for ax in (0, 1)]
+        link.set_param("LAW", LAWS[cfg.law], ax)
+        link.set_param("COUNTS_PER_REV", COUNTS_PER_REV, ax)
+        link.set_param("KP_UNM_RAD", round(g.kp * 1e6), ax)
+        link.set_param("KD_UNMS_RAD", round(g.kd * 1e6), ax)
+        link.set_param("KI_UNM_RADS", round(g.ki * 1e6), ax)
+        link.set_param("CMD_LIMIT", SYSTEM.pwm_full, ax)
+        link.set_param("VEL_MODE", 0, ax)          # the paper's filtered Euler difference
+        link.set_param("BRAKE", int(cfg.brake), ax)
+        link.set_param("FOLLOW_LIMIT", TIMING.follow_limit_turns * COUNTS_PER_REV, ax)
+    return [{k: link.get_param(k, ax) for k in BOARD_KEYS} for ax in AXES]
 
 
-def power_up(board, bridge: PlantOnPins, host_nonce: bytes | None = None) -> tuple[Link, dict[str, int]]:
+def power_up(board, bridge: PlantOnPins, host_nonce: bytes | None = None) -> tuple[Client, dict[str, int]]:
     """The board image from reset to a link in an authenticated session:
     reset with the arm switch down, release, then arm (SW[0] rising edge),
     IDENTIFY, SESSION under the public test key the stub ROM holds.  Returns
-    the link and IDENTIFY's reply.  ``host_nonce``: fixed, for runs that must
+    the host tool's client on the board's UART and IDENTIFY's reply.  ``host_nonce``: fixed, for runs that must
     repeat byte for byte."""
     board.set_board(0, 1, 0)
-    bridge.run_to(20)
+    bridge.run_to(TIMING.reset_clk)
     board.set_board(1, 1, 0)
-    bridge.run_to(40_000)
+    bridge.run_to(TIMING.arm_delay_clk)
     board.set_board(1, 1, 1)
-    link = Link(board.uart_send, board.uart_recv, lambda n: bridge.run_to(board.cycle + n), lambda: board.cycle)
-    ident = link.call("IDENTIFY")
-    link.open_session(auth.TEST_KEY, host_nonce)
+    link = sim_client(SimTransport(board.uart_send, board.uart_recv, lambda n: bridge.run_to(board.cycle + n),
+                                   lambda: board.cycle), auth.TEST_KEY)
+    ident = link.connect()
+    link.open_session(host_nonce)
     return link, ident
 
 
@@ -218,28 +237,28 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
     try:
         link, ident = power_up(board, bridge)
         if cfg.baud_div is not None:
-            link.set_param(tp.GLOBAL_AXIS, "BAUD_DIV", cfg.baud_div)   # replied at the old rate
+            link.set_param("BAUD_DIV", cfg.baud_div)   # replied at the old rate
             board.set_uart_div(cfg.baud_div + 1)
         settings = configure(link, cfg)
-        # Changing PERIOD_US used to trip the SoC watchdog (the next tick stayed
-        # at the old period's deadline); the firmware now restarts its tick.
-        # Still wait past an old deadline and record anything latched, so a
-        # regression shows in report.json and fails the rtl_loop test.
-        link.advance(30 * CLK_HZ // 1000)
-        config_faults = [link.call("STATUS", axis=ax)["faults"] for ax in (0, 1)]
+        # Wait past a deadline of the previous control period and record
+        # anything latched: a firmware that kept its tick at the old period's
+        # deadline after PERIOD_US changes would trip the SoC watchdog here,
+        # which shows in report.json and fails the rtl_loop test.
+        link.transport.advance(TIMING.settle_ms * CLK_HZ // 1000)
+        config_faults = [link.status(ax)["faults"] for ax in AXES]
         if any(config_faults):
-            link.call("CLEAR_FAULT", mask=3)
-        link.call("TELEMETRY", every=1)
-        link.call("ENABLE", mask=3, enable=1)
+            link.clear_fault(BOTH_AXES)
+        link.set_telemetry(1)
+        link.enable(BOTH_AXES)
         # step both axes in the same control period: send both MOVEs right after a sample
-        n_tel = len(link.telemetry)
-        while len(link.telemetry) == n_tel:
-            link.advance(2_000)
+        n_tel = len(link.telemetry_queue)
+        while len(link.telemetry_queue) == n_tel:
+            link.transport.advance(TIMING.sample_poll_clk)
             link.poll()
         target = cfg.target_counts
         # the paper's step from rest, relative to where the stage was at power-up: UNHOMED
         bridge.watch(board.cycle)       # the first drive edges give the carriers' phase at the step
-        seqs = [link.post("MOVE", axis=ax, mode=tp.MOVE_UNHOMED, target=target) for ax in (0, 1)]
+        seqs = [link.post("MOVE", axis=ax, mode=tp.MOVE_UNHOMED, target=target) for ax in AXES]
         for s in seqs:
             r = link.wait(s)
             if r["status"] != tp.STATUS["OK"]:
@@ -276,7 +295,7 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
         run.identify = ident
         run.config_faults = config_faults
         run.uart_errors = board.uart_errors() if hasattr(board, "uart_errors") else 0
-        run.link_errors = len(link.errors)
+        run.link_errors = link.stats.crc_errors + link.stats.bad_chunks
         run.bridge = asdict(bridge.stats)
         run.board = tuple(settings)
         run.resistance_ohm = tuple(a.resistance_ohm for a in params.axes)
@@ -288,7 +307,7 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
     return run
 
 
-def _assemble(cfg: ExperimentConfig, link: Link, trace: list[tuple], target: int,
+def _assemble(cfg: ExperimentConfig, link: Client, trace: list[tuple], target: int,
               pin_changes: list[list[int]]) -> RtlRun:
     """Each axis's samples from the first control iteration that used the
     step's target: the first frame whose error is target - position (the
@@ -296,7 +315,7 @@ def _assemble(cfg: ExperimentConfig, link: Link, trace: list[tuple], target: int
     that arrives in between shows in its setpoint too early).  The two MOVEs
     may straddle a sample (two authenticated frames take ~7 ms at 115 200
     baud): each axis is then aligned on its own step."""
-    tel = link.telemetry
+    tel = telemetry(link)
     n = int(round(cfg.t_end_s * 1e6 / cfg.period_us)) + 1
     # place the samples on the plant's clock: a sample at firmware time time_us
     # leaves its first telemetry byte L clocks later; the smallest latency seen
@@ -308,7 +327,7 @@ def _assemble(cfg: ExperimentConfig, link: Link, trace: list[tuple], target: int
     rad = 2 * math.pi / COUNTS_PER_REV
     cols: dict[str, list[np.ndarray]] = {k: [] for k in ("pos", "vel", "cmd", "err", "true", "q", "q2")}
     start, tts, k0s = [], [], []
-    for a in (0, 1):
+    for a in AXES:
         k0 = next((i for i, f in enumerate(tel) if f.axes[a]["error"] == target - f.axes[a]["position"]), None)
         if k0 is None:
             raise RuntimeError(f"no telemetry frame of axis {a} shows an iteration that used the step's target")
@@ -363,7 +382,7 @@ def run_paper_model(cfg: ExperimentConfig) -> ModelRun:
                     gains=TABLE1[cfg.law])
     r = run_averaged(lc, params, TwoAxisPlant(params, seed=0))
     traj = Trajectory(r.t, r.x_meas, r.v_est, r.cmd, target_rad - r.x_meas, r.x_true)
-    return ModelRun(traj, r.wall_s, {"arm": "model", "plant": cfg.plant, "law": cfg.law, "drive": "averaged voltage",
+    return ModelRun(traj, r.wall_s, {"arm": "model", "plant": cfg.plant.label, "law": cfg.law, "drive": "averaged voltage",
                                      "gains": [asdict(g) for g in lc.gains]},
                     tuple(a.resistance_ohm for a in params.axes))
 
@@ -393,7 +412,7 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
     starts = [s or 0 for s in carrier_start_clk] or [0, 0]
     channels = [PwmChannel(PwmSetting(**st), off_phase=safe, first_start=s) for st, s in zip(setting, starts)]
     axes = []
-    for ax in (0, 1):
+    for ax in AXES:
         g = TABLE1[cfg.law][ax]
         raw = [tp.gain_raw_from_phys(round(k * 1e6), board[ax]["TAU_MAX_MNM"], COUNTS_PER_REV) if k else 0
                for k in (g.kp, g.kd, g.ki)]
@@ -407,7 +426,7 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
     for k in range(n):
         ts = k * period
         run_until(plant, channels, (k - 1) * period if k else 0, ts)
-        for a in (0, 1):
+        for a in AXES:
             if k == 0:
                 axes[a].move(cfg.target_counts, False)
             pos = plant.count(a)
@@ -425,7 +444,7 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
     traj = Trajectory(t, out["pos"] * rad, out["vel"] * rad, out["cmd"], out["err"] * rad, out["true"],
                       out["q"], out["q2"])
     return ModelRun(traj, time.monotonic() - w0,
-                    {"arm": "fast path", "plant": cfg.plant, "law": cfg.law, "board": list(board),
+                    {"arm": "fast path", "plant": cfg.plant.label, "law": cfg.law, "board": list(board),
                      "carrier_start_clk": starts,
                      "pwm_hz": list(cfg.pwm_hz_actual), "implementation": "torqueloop.oracles.servo (firmware law)"},
                     tuple(a.resistance_ohm for a in params.axes))
@@ -468,32 +487,32 @@ def run_fast_loop(period_us: int = 50, seconds: float = 0.5, law: str = "PID", b
     c0 = time.process_time()
     try:
         link, _ = power_up(board, bridge)
-        link.set_param(tp.GLOBAL_AXIS, "BAUD_DIV", baud_div)
+        link.set_param("BAUD_DIV", baud_div)
         board.set_uart_div(baud_div + 1)
-        link.set_param(tp.GLOBAL_AXIS, "PERIOD_US", period_us)
+        link.set_param("PERIOD_US", period_us)
         # the run sends nothing that feeds the link watchdog for `seconds`
-        link.set_param(tp.GLOBAL_AXIS, "LINK_TIMEOUT_MS", max(500, round(seconds * 2000)))
-        for ax in (0, 1):
+        link.set_param("LINK_TIMEOUT_MS", max(500, round(seconds * 2000)))
+        for ax in AXES:
             g = TABLE1[law][ax]
-            link.set_param(ax, "LAW", LAWS[law])
-            link.set_param(ax, "KP_UNM_RAD", round(g.kp * 1e6))
-            link.set_param(ax, "KD_UNMS_RAD", round(g.kd * 1e6))
-            link.set_param(ax, "KI_UNM_RADS", round(g.ki * 1e6))
-            link.set_param(ax, "VEL_MODE", 1)
-        link.call("ENABLE", mask=3, enable=1)
-        start = [link.call("STATUS", axis=ax)["position"] for ax in (0, 1)]
-        for ax in (0, 1):
-            link.call("MOVE", axis=ax, mode=move_mode | tp.MOVE_UNHOMED, target=start[ax] + travel_counts * (1 - 2 * ax))
-        link.call("TELEMETRY", every=telemetry_every)
-        n0 = len(link.telemetry)
+            link.set_param("LAW", LAWS[law], ax)
+            link.set_param("KP_UNM_RAD", round(g.kp * 1e6), ax)
+            link.set_param("KD_UNMS_RAD", round(g.kd * 1e6), ax)
+            link.set_param("KI_UNM_RADS", round(g.ki * 1e6), ax)
+            link.set_param("VEL_MODE", 1, ax)
+        link.enable(BOTH_AXES)
+        start = [link.status(ax)["position"] for ax in AXES]
+        for ax in AXES:
+            link.move(ax, start[ax] + travel_counts * (1 - 2 * ax), trapezoid=move_mode == 1, unhomed=True)
+        link.set_telemetry(telemetry_every)
+        n0 = len(link.telemetry_queue)
         t_end = board.cycle + round(seconds * CLK_HZ)
         while board.cycle < t_end:
-            link.advance(min(20_000, t_end - board.cycle))
+            link.transport.advance(min(TIMING.loop_poll_clk, t_end - board.cycle))
             link.poll()
-        frames = link.telemetry[n0:]
-        link.call("TELEMETRY", every=0)
-        st = [link.call("STATUS", axis=ax) for ax in (0, 1)]
-        cnt = link.call("COUNTERS")
+        frames = telemetry(link)[n0:]
+        link.set_telemetry(0)
+        st = [link.status(ax) for ax in AXES]
+        cnt = link.counters()
         cycles = board.cycle
     finally:
         if hasattr(board, "close"):

@@ -1,22 +1,27 @@
 # SPDX-License-Identifier: MIT
-"""Host side of the servo link over a simulated UART: the frames of
-torqueloop.spec.protocol (the same code the host tool uses), with the board and
-the plant advancing while the host waits for a reply.  After
-:meth:`Link.open_session` every command but the reads carries the session's
-MAC, as the host tool sends it (docs/security.md)."""
+"""The co-simulation's transport: the host tool's own protocol client
+(torqueloop.host.client.Client) talks to a simulated board's UART through
+it, and its blocking read runs the board and the plant on while the client
+waits for bytes, as a real line would pass time.  Time is the board's clock:
+:meth:`SimTransport.seconds` is the client's clock, so its answer timeouts are
+simulated time, and each 0x00-delimited chunk is stamped with the clock of
+its first byte's start bit (``chunk_times``), which the client puts on each
+telemetry record (``rx_time``)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import collections
+from dataclasses import dataclass
 from typing import Callable
 
-from torqueloop.host.client import UNTAGGED
+from torqueloop.host.client import Client
 from torqueloop.spec import auth
-from torqueloop.spec import protocol as tp
+from torqueloop.spec.system import SYSTEM
 
-
-class LinkError(RuntimeError):
-    pass
+#: clocks the board runs on per blocking read that finds nothing (the client's poll step)
+READ_STEP_CYCLES = 20_000
+#: the client's answer timeout in simulated seconds (5 000 000 clocks)
+ANSWER_TIMEOUT_S = 0.1
 
 
 @dataclass
@@ -26,73 +31,62 @@ class Telemetry:
     axes: list[dict]           # per axis: setpoint, position, velocity_q8, error, pwm_cmd, faults, enabled
 
 
-@dataclass
-class Link:
+def telemetry(client: Client) -> list[Telemetry]:
+    """The telemetry records the client queued over a :class:`SimTransport`, with their clocks."""
+    return [Telemetry(f["rx_time"], f["time_us"], f["axes"]) for f in client.telemetry_queue]
+
+
+class SimTransport:
     """``send(bytes)`` puts bytes on the line to the FPGA, ``recv()`` returns
-    what arrived and the clock of each byte's start bit, ``advance(cycles)`` runs board and plant that much further,
-    ``now()`` is the clock count."""
+    what arrived and the clock of each byte's start bit, ``advance(cycles)``
+    runs board and plant that much further, ``now()`` is the clock count."""
 
-    send: Callable[[bytes], None]
-    recv: Callable[[], tuple[bytes, list[int]]]
-    advance: Callable[[int], None]
-    now: Callable[[], int]
-    seq: int = 1
-    telemetry: list[Telemetry] = field(default_factory=list)
-    errors: list[tp.FrameError] = field(default_factory=list)
-    _dec: tp.FrameDecoder = field(default_factory=tp.FrameDecoder)
-    _replies: dict[int, tp.Frame] = field(default_factory=dict)
-    _chunk_cycle: int = -1
-    session: auth.Session | None = None
+    def __init__(self, send: Callable[[bytes], None], recv: Callable[[], tuple[bytes, list[int]]],
+                 advance: Callable[[int], None], now: Callable[[], int], clk_hz: int = SYSTEM.clk_hz) -> None:
+        self.send, self.recv, self.advance, self.now, self.clk_hz = send, recv, advance, now, clk_hz
+        self._rx = bytearray()
+        self.chunk_times: collections.deque[int] = collections.deque()
+        self._in_chunk = False
 
-    def open_session(self, key: bytes, host_nonce: bytes | None = None) -> None:
-        """SESSION, and the board's proof checked: later commands carry their MAC.
-        ``host_nonce``: a fixed one for runs that must repeat byte for byte
-        (a fresh random one otherwise, as a real host must)."""
-        hn = auth.new_host_nonce() if host_nonce is None else host_nonce
-        self.session = auth.open_session(key, hn, self.call("SESSION", host_nonce=hn))
+    def seconds(self) -> float:
+        return self.now() / self.clk_hz
 
-    def poll(self) -> None:
+    def _pull(self) -> None:
         data, cycles = self.recv()
         for byte, cyc in zip(data, cycles):
-            if byte and self._chunk_cycle < 0:
-                self._chunk_cycle = cyc
-            for f in self._dec.feed(bytes((byte,))):
-                if isinstance(f, tp.FrameError):
-                    self.errors.append(f)
-                elif f.cmd == tp.TELEMETRY_CMD:
-                    d = tp.decode_telemetry(f)
-                    self.telemetry.append(Telemetry(self._chunk_cycle, d["time_us"], d["axes"]))
-                else:
-                    self._replies[f.seq] = f
-            if not byte:
-                self._chunk_cycle = -1
+            if byte and not self._in_chunk:
+                self.chunk_times.append(cyc)
+                self._in_chunk = True
+            elif not byte:
+                self._in_chunk = False
+        self._rx += data
 
-    def post(self, name: str, **fields: int) -> int:
-        """Send a request without waiting; returns its seq."""
-        seq = self.seq
-        self.seq = (self.seq + 1) & 0xFFFF or 1
-        tagged = self.session is not None and name not in UNTAGGED
-        self.send(self.session.request(name, seq, **fields) if tagged else tp.request(name, seq, **fields))
-        return seq
+    @property
+    def in_waiting(self) -> int:
+        self._pull()
+        return len(self._rx)
 
-    def wait(self, seq: int, timeout_cycles: int = 5_000_000, step: int = 20_000) -> dict[str, int]:
-        end = self.now() + timeout_cycles
-        while self.now() < end:
-            self.advance(step)
-            self.poll()
-            f = self._replies.pop(seq, None)
-            if f is not None:
-                return tp.decode_reply(f)
-        raise LinkError(f"no reply to seq {seq} within {timeout_cycles} clocks")
+    def write(self, data: bytes) -> int:
+        self.send(data)
+        return len(data)
 
-    def call(self, name: str, check: bool = True, **fields: int) -> dict[str, int]:
-        r = self.wait(self.post(name, **fields))
-        if check and r["status"] != tp.STATUS["OK"]:
-            raise LinkError(f"{name} {fields}: status {tp.STATUS_NAME.get(r['status'], r['status'])}")
-        return r
+    def read(self, size: int = 1) -> bytes:
+        """Up to ``size`` bytes; with none waiting, the board runs READ_STEP_CYCLES on first."""
+        self._pull()
+        if not self._rx:
+            self.advance(READ_STEP_CYCLES)
+            self._pull()
+        out = bytes(self._rx[:size])
+        del self._rx[:size]
+        return out
 
-    def set_param(self, axis: int, name: str, value: int) -> int:
-        return self.call("SET_PARAM", axis=axis, param=tp.PARAMS[name].id, value=value)["value"]
+    def close(self) -> None:
+        pass
 
-    def get_param(self, axis: int, name: str) -> int:
-        return self.call("GET_PARAM", axis=axis, param=tp.PARAMS[name].id)["value"]
+
+def sim_client(transport: SimTransport, key: bytes | None = auth.TEST_KEY) -> Client:
+    """The host client on a simulated board: no retries (the simulated line
+    loses nothing, so a retry would only hide a fault), answer timeout in
+    simulated time."""
+    return Client(transport, timeout=ANSWER_TIMEOUT_S, retries=0, clock=transport.seconds, key=key,
+                  key_source="the public test key")

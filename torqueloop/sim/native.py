@@ -1,8 +1,8 @@
 # SPDX-License-Identifier: MIT
-"""Build and drive the native Verilator harness (torqueloop/sim/native/harness.cpp).
+"""Build and drive the native Verilator harness (torqueloop/sim/harness/harness.cpp).
 
 The board image is verilated once into a shared library
-(build/rtl_loop/native/<variant>/libtlcosim.so) and loaded with ctypes; the ROM/RAM images are read by $readmemh when a model
+(build/rtl_loop/native/<build>/libtlcosim.so) and loaded with ctypes; the ROM/RAM images are read by $readmemh when a model
 is created, from fixed paths in the build folder, so a new firmware image
 needs no rebuild.  The build is skipped when the sources, the harness and the
 flags are unchanged (a hash stamp), and serialised with a file lock so
@@ -29,8 +29,8 @@ from torqueloop.flow import tools
 from torqueloop.flow.manifest import REPO_ROOT, core as manifest_core
 from torqueloop.spec.system import SYSTEM
 
-NATIVE_DIR = Path(__file__).resolve().with_name("native")
-WRAPPER = REPO_ROOT / "tb" / "rtl_loop" / "rtl_loop_top.v"
+HARNESS_DIR = Path(__file__).resolve().with_name("harness")
+WRAPPER = HARNESS_DIR / "rtl_loop_top.v"
 BUILD = REPO_ROOT / "build" / "rtl_loop" / "native"
 ROM_HEX = BUILD / "image_rom.hex"
 RAM_HEX = BUILD / "image_ram.hex"
@@ -48,7 +48,7 @@ def _cxx() -> str:
 
 
 @dataclass(frozen=True)
-class Variant:
+class HarnessBuild:
     """One way of building the harness library (docs/experiment.md, Speed:
     what each option gains).  The evaluation options are harness.cpp's
     compile-time switches."""
@@ -87,16 +87,16 @@ class Variant:
 
 
 #: The co-simulation build.
-DEFAULT = Variant("fast")
+DEFAULT = HarnessBuild("fast")
 #: The build before the speed work, kept for the side-by-side comparison of
 #: scripts/benches/bench_rtl_loop.py: g++, two evaluations per clock through
 #: eval(), and -CFLAGS -O2, which overrode OPT_FAST's -O3 on the compiler line
 #: (the model really ran at -O2).
-BASELINE = Variant("baseline", cxx="g++", opt_fast="-O3 -march=native", opt_global="-O2 -march=native",
+BASELINE = HarnessBuild("baseline", cxx="g++", opt_fast="-O3 -march=native", opt_global="-O2 -march=native",
                    cflags="-fPIC -O2", harness_opt="-O2", eval_per_clock=2, direct_eval=False,
                    skip_ico=False)
 #: Only Verilator's public API: the fallback if a Verilator renames the internals DEFAULT uses.
-PUBLIC_API = Variant("public", eval_per_clock=2, direct_eval=False, skip_ico=False)
+PUBLIC_API = HarnessBuild("public", eval_per_clock=2, direct_eval=False, skip_ico=False)
 LIB = DEFAULT.lib
 
 
@@ -114,24 +114,24 @@ def sources() -> list[Path]:
     return [REPO_ROOT / p for p in manifest_core("rtl_loop").verilog]   # ends with WRAPPER
 
 
-def _stamp(v: Variant) -> str:
+def _stamp(v: HarnessBuild) -> str:
     h = hashlib.sha1()
-    for p in sources() + [NATIVE_DIR / "harness.cpp", Path(__file__)]:   # this file: the build recipe
+    for p in sources() + [HARNESS_DIR / "harness.cpp", Path(__file__)]:   # this file: the build recipe
         h.update(p.read_bytes())
     h.update(repr(v).encode())
     h.update(_verilator().encode())
     return h.hexdigest()
 
 
-def build(verbose: bool = False, variant: Variant = DEFAULT) -> Path:
-    """Verilate and compile the harness library of ``variant`` if anything
+def build(verbose: bool = False, harness: HarnessBuild = DEFAULT) -> Path:
+    """Verilate and compile the harness library of ``harness`` if anything
     changed; the library's path.  If harness.cpp does not compile against a
     Verilator that names the internals it uses differently, say so in one
     line and build :data:`PUBLIC_API` instead."""
     try:
-        return _build(variant, verbose)
+        return _build(harness, verbose)
     except _InternalsMissing:
-        print(f"[native] harness.cpp's {variant.name!r} build does not compile with this Verilator "
+        print(f"[native] harness.cpp's {harness.name!r} build does not compile with this Verilator "
               f"({_verilator()}); using the public-API build (slower)", file=sys.stderr)
         return _build(PUBLIC_API, verbose)
 
@@ -140,7 +140,7 @@ class _InternalsMissing(Exception):
     pass
 
 
-def _build(v: Variant, verbose: bool) -> Path:
+def _build(v: HarnessBuild, verbose: bool) -> Path:
     v.dir.mkdir(parents=True, exist_ok=True)
     with open(v.dir / ".lock", "w") as lk:
         fcntl.flock(lk, fcntl.LOCK_EX)
@@ -170,7 +170,7 @@ def _build(v: Variant, verbose: bool) -> Path:
         cxx = subprocess.run([v.cxx, "-shared", "-fPIC", *v.harness_opt.split(), "-std=c++17",
                               f"-DTL_EVAL_PER_CLOCK={v.eval_per_clock}", f"-DTL_DIRECT_EVAL={int(v.direct_eval)}",
                               f"-DTL_SKIP_ICO={int(v.skip_ico)}", f"-I{inc}", f"-I{inc / 'vltstd'}",
-                              f"-I{obj}", "-o", str(tmp), str(NATIVE_DIR / "harness.cpp"),
+                              f"-I{obj}", "-o", str(tmp), str(HARNESS_DIR / "harness.cpp"),
                               str(obj / "Vrtl_loop_top__ALL.a"), str(obj / "libverilated.a"), "-pthread",
                               *(["-latomic"] if "clang" in v.cxx else [])],
                              stdout=out, stderr=subprocess.PIPE, text=True)
@@ -236,8 +236,8 @@ class NativeBoard:
     h: int
 
     @classmethod
-    def create(cls, rom_hex: Path, ram_hex: Path, variant: Variant = DEFAULT) -> "NativeBoard":
-        lib = _load(build(variant=variant))
+    def create(cls, rom_hex: Path, ram_hex: Path, harness: HarnessBuild = DEFAULT) -> "NativeBoard":
+        lib = _load(build(harness=harness))
         install_images(rom_hex, ram_hex)
         return cls(lib, lib.tl_create())
 

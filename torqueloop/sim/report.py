@@ -16,7 +16,7 @@ and current ripple come from the plant's exact current integrals.
 * ``implementation_check.<law>.rmse_position_rad``, ``.rmse_velocity_rad_s``
   (and ``.per_axis``, ``.carrier_start_clk``) - RTL arm against the fast path on
   the same plant, settings and carrier phase;
-* ``variants.<name>.<law>`` - experiment-arm variants on the fast path, with
+* ``cases.<name>.<law>`` - the experiment arm's cases on the fast path, with
   their RMSE against the model arm and their step metrics;
 * ``sweep`` - rows ``{freq_hz, pw0, law, axis, ...metrics}``;
 * ``characterization``, ``interpretations``, ``meta``.
@@ -109,7 +109,7 @@ def compare(a: Trajectory, b: Trajectory) -> dict[str, Any]:
 
 @dataclass
 class Study:
-    """Everything make run collects (scripts/run_experiment.py)."""
+    """Everything make run collects (torqueloop.study.experiment)."""
 
     t_end_s: float
     target_rad: float
@@ -117,8 +117,8 @@ class Study:
     model_arm: dict[str, ModelRun] = field(default_factory=dict)
     experiment_arm: dict[str, RtlRun] = field(default_factory=dict)
     fast_check: dict[str, ModelRun] = field(default_factory=dict)
-    variants: dict[str, dict[str, ModelRun]] = field(default_factory=dict)
-    variant_labels: dict[str, str] = field(default_factory=dict)
+    cases: dict[str, dict[str, ModelRun]] = field(default_factory=dict)
+    case_labels: dict[str, str] = field(default_factory=dict)
     sweep: list[tuple[float, bool, str, ModelRun]] = field(default_factory=list)
     sweep_t_end_s: float | None = None
     characterization: dict[str, Any] = field(default_factory=dict)
@@ -126,12 +126,12 @@ class Study:
 
 
 def build(st: Study) -> dict[str, Any]:
-    rep: dict[str, Any] = {"schema": "torqueloop-experiment-report", "schema_version": 1,
+    rep: dict[str, Any] = {"schema": "torqueloop-experiment-report", "schema_version": 2,
                            "meta": st.meta | {"T_s": st.t_end_s, "step_rad": st.target_rad},
                            "characterization": st.characterization,
                            "interpretations": INTERPRETATIONS,
                            "table3": {}, "arms": {"model": {}, "experiment": {}},
-                           "implementation_check": {}, "variants": {}, "sweep": []}
+                           "implementation_check": {}, "cases": {}, "sweep": []}
     for law in st.laws:
         m, e = st.model_arm.get(law), st.experiment_arm.get(law)
         if m is not None:
@@ -145,13 +145,13 @@ def build(st: Study) -> dict[str, Any]:
             rep["implementation_check"][law] = compare(e.traj, f.traj) | {
                 "fast_path": run_metrics(f, st.target_rad), "fast_path_wall_s": f.wall_s,
                 "carrier_start_clk": list(e.carrier_start_clk)}
-    for name, runs in st.variants.items():
-        rep["variants"][name] = {"description": st.variant_labels.get(name, name)}
+    for name, runs in st.cases.items():
+        rep["cases"][name] = {"description": st.case_labels.get(name, name)}
         for law, r in runs.items():
             row: dict[str, Any] = {"metrics": run_metrics(r, st.target_rad), "config": r.config}
             if law in st.model_arm:
                 row["against_model_arm"] = compare(st.model_arm[law].traj, r.traj)
-            rep["variants"][name][law] = row
+            rep["cases"][name][law] = row
     for f, pw0, law, r in st.sweep:
         for ax, mm in run_metrics(r, st.target_rad).items():
             rep["sweep"].append({"freq_hz": f, "pw0": pw0, "law": law, "axis": ax, **mm})
@@ -225,7 +225,7 @@ def markdown(rep: dict[str, Any]) -> str:
     if rep["implementation_check"]:
         L += ["## Implementation check: RTL in the loop against the fast path (same plant, same settings)", "",
               "This compares the board image and its pins with the firmware's law in Python on the same plant: it "
-              "checks the implementation, and licenses the fast path for the variants and the sweep. It cannot "
+              "checks the implementation, and licenses the fast path for the cases and the sweep. It cannot "
               "see an error of interpretation: both sides share every assumption. The fast path's carriers "
               "start where the RTL run's first drove the bridge after the step (the carrier's phase is set "
               "by when the divider was written, not by the law).", "",
@@ -237,12 +237,12 @@ def markdown(rep: dict[str, Any]) -> str:
                      f"{pa['x']['max_abs_diff_counts']} / {pa['z']['max_abs_diff_counts']} | "
                      f"{' / '.join(str(c) for c in v['carrier_start_clk'])} |")
         L.append("")
-    if rep["variants"]:
-        L += ["## What the method buys: the experiment arm's variants (fast path)", "",
-              "| variant | law | RMSE vs model arm (rad) | x: steady-state error (counts) | overshoot (%) | settling (s) |"
+    if rep["cases"]:
+        L += ["## What the method buys: the experiment arm's cases (fast path)", "",
+              "| case | law | RMSE vs model arm (rad) | x: steady-state error (counts) | overshoot (%) | settling (s) |"
               " z: steady-state error (counts) | overshoot (%) | settling (s) | copper loss x / z (J) |",
               "|---|---|---|---|---|---|---|---|---|---|"]
-        for name, v in rep["variants"].items():
+        for name, v in rep["cases"].items():
             for law, row in v.items():
                 if law == "description":
                     continue

@@ -14,23 +14,28 @@ time, which is what keeps it quiet.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from torqueloop.spec.system import SYSTEM
+
+if TYPE_CHECKING:
+    from sim_models.variants import PlantSpec
 
 CLK_HZ = SYSTEM.clk_hz
 
 
 class RtlBoard:
-    def __init__(self, seed: int = 0, plant: str = "paper", key: bytes | None = None) -> None:
+    def __init__(self, seed: int = 0, plant: "str | PlantSpec" = "paper", key: bytes | None = None) -> None:
         """``key``: the link key in the image's boot-ROM key slot (None: a board without one)."""
         from sim_models.stepper import TwoAxisPlant
-        from sim_models.variants import load_variant, parse_plant
+        from sim_models.variants import plant_of
         from torqueloop.sim.experiment import firmware_image
         from torqueloop.sim.native import NativeBoard
         from torqueloop.sim.pins import PlantOnPins
 
         img = firmware_image(key)
         self.board = NativeBoard.create(img.rom_hex, img.ram_hex)
-        self.bridge = PlantOnPins(TwoAxisPlant(load_variant(*parse_plant(plant)), seed=seed), self.board)
+        self.bridge = PlantOnPins(TwoAxisPlant(plant_of(plant).params(), seed=seed), self.board)
         # the cosim's power-up: reset with the arm switch down, release, arm (SW[0] rising edge)
         self.board.set_board(0, 1, 0)
         self.bridge.run_to(20)

@@ -34,21 +34,22 @@ import hashlib
 import os
 import subprocess
 from pathlib import Path
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
-from torqueloop.flow.firmware import AUTH_SOURCES
+from torqueloop.flow.firmware import AUTH_SOURCES, SERVO_CORE
 from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, run_until
 from torqueloop.spec import auth
 from torqueloop.spec.bridge import BRAKE, COAST
 from torqueloop.spec.system import SYSTEM
 
+if TYPE_CHECKING:
+    from sim_models.variants import PlantSpec
+
 REPO = Path(__file__).resolve().parents[2]
 FW = REPO / "firmware"
-SOURCES = [Path(__file__).with_name("simboard_hal.c"), FW / "servo" / "servo.c",
-           FW / "servo" / "control.c", FW / "protocol" / "tl_link.c", *AUTH_SOURCES]
-HEADERS = [FW / "servo" / "servo.h", FW / "servo" / "control.h", FW / "servo" / "hal.h",
-           FW / "protocol" / "tl_link.h", FW / "protocol" / "tl_protocol.h", FW / "protocol" / "tl_auth.h",
-           FW / "crypto" / "tl_sha256.h", FW / "crypto" / "tl_keyslot.h"]
+SOURCES = [Path(__file__).with_name("simboard_hal.c"), *SERVO_CORE, FW / "protocol" / "tl_link.c", *AUTH_SOURCES]
+#: every header the build can include (the cache key of the built library)
+HEADERS = sorted(h for d in ("servo", "protocol", "crypto") for h in (FW / d).glob("*.h"))
 BUILD = REPO / "build" / "host"
 CLK_HZ = SYSTEM.clk_hz
 DEFAULT_BUILD_ID = 0x51B0_0001
@@ -97,10 +98,10 @@ class SimBoard:
     its boot ROM's key slot (None: a board built without a key, which
     refuses motion, parameter changes and uploads; docs/security.md)."""
 
-    def __init__(self, build_id: int = DEFAULT_BUILD_ID, seed: int = 0, plant: str = "paper",
+    def __init__(self, build_id: int = DEFAULT_BUILD_ID, seed: int = 0, plant: "str | PlantSpec" = "paper",
                  key: bytes | None = None) -> None:
         from sim_models.stepper import TwoAxisPlant
-        from sim_models.variants import load_variant, parse_plant
+        from sim_models.variants import plant_of
 
         self._lib = ctypes.CDLL(str(build_library()))
         self._lib.sb_tx_take.restype = ctypes.c_uint32
@@ -108,7 +109,7 @@ class SimBoard:
         self._lib.sb_baud_div.restype = ctypes.c_uint32
         self._lib.sb_bootloader_requested.restype = ctypes.c_int32
         self._lib.sb_index_armed.restype = ctypes.c_int32
-        self.plant = TwoAxisPlant(load_variant(*parse_plant(plant)), seed=seed)
+        self.plant = TwoAxisPlant(plant_of(plant).params(), seed=seed)
         self.tick = 0                    # 50 MHz clocks since power-up
         self._edge_tick = [0, 0]
         self._edge_interval = [0, 0]     # clocks between the last two encoder counts

@@ -33,6 +33,11 @@ class Command:
     feeds_link: bool = False    # executed with a new seq, it feeds the link watchdog
     auth: str = "key"                 # "key": needs a MAC (docs/security.md); "open": may come without
     open_when: dict = field(default_factory=dict)   # field -> value with which a "key" command is open
+    handler: str = ""           # the firmware function that runs it (firmware/servo/commands.c)
+    seq_checked: bool = True    # executed only with a new seq (False: accepted at any seq, which it leaves)
+    read_only: bool = False     # changes nothing on the board
+    repeatable: bool = False    # a lost reply: send it again with a fresh seq
+    untagged: bool = False      # the host sends it without a MAC even in a session
 
     @property
     def req_fmt(self) -> str:
@@ -97,17 +102,42 @@ MAX_ENCODED = MAX_PACKET + MAX_PACKET // 254 + 1
 
 STATUS: dict[str, int] = {s["name"]: s["code"] for s in SPEC["status"]}
 STATUS_NAME: dict[int, str] = {v: k for k, v in STATUS.items()}
+#: the rule that refused a command: the second byte of its error reply ('why')
+REFUSAL: dict[str, int] = {r["name"]: r["code"] for r in SPEC["refusal"]}
+REFUSAL_NAME: dict[int, str] = {v: k for k, v in REFUSAL.items()}
+REFUSAL_DESC: dict[int, str] = {r["code"]: r["desc"] for r in SPEC["refusal"]}
+#: the status each rule comes with (NONE: any)
+REFUSAL_STATUS: dict[str, int] = {r["name"]: STATUS[r["status"]] for r in SPEC["refusal"] if "status" in r}
 FAULT: dict[str, int] = {f["name"]: 1 << f["bit"] for f in SPEC["fault"]}
 #: faults that only block motion toward one end (the axis may be enabled and driven back out)
 DIRECTIONAL_FAULTS: int = sum(1 << f["bit"] for f in SPEC["fault"] if f.get("blocks") == "direction")
 
 
+_COMMAND_KEYS = frozenset({"name", "cmd", "desc", "req", "rep", "feeds_link", "auth", "open_when", "handler",
+                           "seq", "read_only", "repeatable", "untagged"})
+
+
 def _command(c: dict) -> Command:
+    """One command's descriptor row; repeatable and untagged default to read_only."""
+    where = f"protocol.toml command {c.get('name', '?')}"
+    unknown = set(c) - _COMMAND_KEYS
+    if unknown:
+        raise ProtocolSpecError(f"{where}: unknown keys {sorted(unknown)}")
+    if c.get("seq", "checked") not in ("checked", "any"):
+        raise ProtocolSpecError(f"{where}: seq must be 'checked' or 'any'")
+    read_only = bool(c.get("read_only", False))
     cmd = Command(c["name"], c["cmd"], c["desc"], tuple(tuple(x) for x in c["req"]),
                   tuple(tuple(x) for x in c["rep"]), bool(c.get("feeds_link", False)), c.get("auth", ""),
-                  dict(c.get("open_when", {})))
+                  dict(c.get("open_when", {})), c.get("handler", ""), c.get("seq", "checked") == "checked",
+                  read_only, bool(c.get("repeatable", read_only)), bool(c.get("untagged", read_only)))
     if cmd.auth not in ("key", "open"):
-        raise ProtocolSpecError(f"protocol.toml command {cmd.name}: auth must be 'key' or 'open'")
+        raise ProtocolSpecError(f"{where}: auth must be 'key' or 'open'")
+    if not cmd.handler.startswith("cmd_") or not cmd.handler.isidentifier():
+        raise ProtocolSpecError(f"{where}: handler must name a C function cmd_*")
+    if cmd.untagged and cmd.auth == "key":
+        raise ProtocolSpecError(f"{where}: a command that needs the key cannot be untagged")
+    if cmd.read_only and cmd.feeds_link:
+        raise ProtocolSpecError(f"{where}: a read-only command does not show the host in control (feeds_link)")
     fields = dict(cmd.req)
     if cmd.open_when and (cmd.auth != "key" or any(fields.get(f) != "u8" for f in cmd.open_when)):
         raise ProtocolSpecError(f"protocol.toml command {cmd.name}: open_when names u8 request fields of a 'key' command")
@@ -119,6 +149,8 @@ class ProtocolSpecError(ValueError):
 
 
 COMMANDS: dict[str, Command] = {c["name"]: _command(c) for c in SPEC["command"]}
+if len({c.handler for c in COMMANDS.values()}) != len(COMMANDS):
+    raise ProtocolSpecError("protocol.toml: two commands name the same handler")
 #: MOVE mode bits
 MOVE_TRAPEZOID = 0x01
 MOVE_UNHOMED = 0x80
@@ -291,13 +323,14 @@ def request(name: str, seq: int, **fields: int) -> bytes:
 
 
 def decode_reply(frame: Frame) -> dict[str, int]:
-    """Fields of a reply frame by name; an error reply has only 'status'."""
+    """Fields of a reply frame by name; an error reply has 'status', and 'why'
+    (REFUSAL) when the command's handler refused it (REFUSAL["NONE"] otherwise)."""
     c = BY_CMD.get(frame.cmd & ~REPLY_FLAG)
     if not frame.payload:
         raise ValueError("reply without status")
     status = frame.payload[0]
     if c is None or status != STATUS["OK"]:
-        return {"status": status}
+        return {"status": status, "why": frame.payload[1] if len(frame.payload) > 1 else REFUSAL["NONE"]}
     vals = struct.unpack(c.rep_fmt, frame.payload)
     return dict(zip((n for n, _ in c.rep), vals))
 

@@ -53,6 +53,7 @@ class System:
     clk_hz: int
     pwm_bits: int
     div_bits: int
+    working_hz: int
     bridge_max_hz: int
     counts_per_motor_rev: int
     gear_ratio: float
@@ -135,6 +136,7 @@ def parse(data: dict) -> System:
         pwm_bits=int(_positive(_get(pwm, "bits", int, "pwm"), "pwm.bits")),
         div_bits=int(_positive(_get(pwm, "div_bits", int, "pwm"), "pwm.div_bits")),
         bridge_max_hz=int(_positive(_get(pwm, "bridge_max_hz", int, "pwm"), "pwm.bridge_max_hz")),
+        working_hz=int(_positive(_get(pwm, "working_hz", int, "pwm"), "pwm.working_hz")),
         counts_per_motor_rev=int(_positive(_get(enc, "counts_per_motor_rev", int, "encoder"), "encoder.counts_per_motor_rev")),
         gear_ratio=float(_positive(_get(mech, "gear_ratio", num, "mechanics"), "mechanics.gear_ratio")),
         lead_um=int(_positive(_get(mech, "lead_um", int, "mechanics"), "mechanics.lead_um")),

@@ -1,9 +1,18 @@
 # SPDX-License-Identifier: MIT
 """Physical units on the command line, integers on the wire.
 
-Positions: ``6.28rad``, ``4mm``, ``1rev``, ``8400`` or ``8400counts``; the
-board's COUNTS_PER_REV and PITCH_UM (read from it) convert them, so the tool
-needs no second copy of the mechanics.
+Positions: ``6.28rad``, ``4mm``, ``1rev``, ``90deg``, ``8400counts``; speeds
+the same per second (``5mm/s``, ``1rev/s``) and accelerations per second
+squared (``50mm/s^2``); the board's COUNTS_PER_REV and PITCH_UM (read from
+it) convert them, so the tool needs no second copy of the mechanics.  One
+rule everywhere: **a bare number is counts** (counts/s, counts/s^2), in
+``move``, ``step-test``, ``home`` and the position, limit and speed
+parameters alike; a command's ``--unit U`` (when given) makes its bare
+numbers U instead.
+
+``pwm_freq`` goes through the divider of eq. (4), which makes only some
+carriers: :func:`carrier_choice` names the two around a request and refuses
+one further than :data:`PWM_FREQ_TOL` from it unless asked for the nearest.
 
 Parameters: a friendly name in SI units (``kp`` in N m/rad, ``pwm_freq`` in
 Hz, ``period`` in s ...) maps to one protocol parameter and a scale; every
@@ -23,6 +32,10 @@ from torqueloop.spec.system import SYSTEM
 CLK_HZ = SYSTEM.clk_hz   # the board reports its own in IDENTIFY
 LAWS = {"off": 0, "p": 1, "pd": 2, "pid": 3}
 INT32_MIN, INT32_MAX = -(1 << 31), (1 << 31) - 1
+POSITION_UNITS = ("counts", "mm", "rev", "rad", "deg")
+#: the largest relative difference between a requested and a stored carrier that `set pwm_freq` accepts
+#: without --nearest
+PWM_FREQ_TOL = 0.02
 
 
 class BadValue(ValueError):
@@ -80,15 +93,56 @@ class Mechanics:
         raise ValueError(f"unknown position unit {unit!r}")
 
 
-_POS_RE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-z]*)\s*$")
+_POS_RE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-z]*)\s*((?:/\s*s(?:\^?2)?)?)\s*$")
+#: what a quantity is per second: 0 a position, 1 a speed, 2 an acceleration
+_PER = {0: "", 1: "/s", 2: "/s^2"}
+_DIM_NAME = {0: "position", 1: "speed", 2: "acceleration"}
+
+
+def parse_quantity(text: str, mech: Mechanics, dim: int = 0, default_unit: str = "counts") -> int:
+    """``'6.28rad'`` (dim 0), ``'5mm/s'`` (dim 1), ``'50mm/s^2'`` (dim 2) -> counts
+    (per second, per second squared).  A bare number is in ``default_unit``."""
+    m = _POS_RE.match(text.lower())
+    per = _PER[dim]
+    if not m:
+        raise BadValue(f"cannot read {_DIM_NAME[dim]} {text!r} (examples: 4mm{per}, 1rev{per}, "
+                       f"6.28rad{per}, 90deg{per}, 8400counts{per}, or 8400 = counts{per})")
+    suffix = m.group(3).replace(" ", "").replace("^", "")
+    got = {"": 0, "/s": 1, "/s2": 2}[suffix]
+    if got != dim and (m.group(2) or suffix):
+        raise BadValue(f"{text!r} is not a {_DIM_NAME[dim]}: give it in mm{per}, rev{per}, rad{per}, "
+                       f"deg{per} or counts{per}")
+    return mech.to_counts(float(m.group(1)), m.group(2) or default_unit)
 
 
 def parse_position(text: str, mech: Mechanics, default_unit: str = "counts") -> int:
     """``'6.28rad'`` -> counts.  A bare number is in ``default_unit``."""
-    m = _POS_RE.match(text.lower())
-    if not m:
-        raise BadValue(f"cannot read position {text!r} (examples: 6.28rad, 4mm, 1rev, 8400)")
-    return mech.to_counts(float(m.group(1)), m.group(2) or default_unit)
+    return parse_quantity(text, mech, 0, default_unit)
+
+
+def carrier_choice(f_hz: float, clk_hz: int = CLK_HZ) -> tuple[int, list[tuple[int, float]]]:
+    """(the divider :func:`divider_for` picks for ``f_hz``, the dividers around
+    the request with their carriers) - what `set pwm_freq` reports."""
+    div = divider_for(f_hz, clk_hz)
+    around = sorted({max(1, min(div + d, (1 << 16) - 1)) for d in (-1, 0, 1)})
+    near = [(d, carrier_hz(d, clk_hz)) for d in around]
+    lo = [x for x in near if x[1] <= f_hz]
+    hi = [x for x in near if x[1] > f_hz]
+    pair = ([max(lo, key=lambda x: x[1])] if lo else []) + ([min(hi, key=lambda x: x[1])] if hi else [])
+    return div, pair
+
+
+def check_carrier(f_hz: float, clk_hz: int = CLK_HZ, nearest: bool = False) -> int:
+    """The divider for ``f_hz``, or BadValue when its carrier is further than
+    PWM_FREQ_TOL from the request and ``nearest`` is not set."""
+    div, pair = carrier_choice(f_hz, clk_hz)
+    got = carrier_hz(div, clk_hz)
+    if abs(got - f_hz) > PWM_FREQ_TOL * f_hz and not nearest:
+        opts = " or ".join(f"{f:.0f} Hz (FDIV {d})" for d, f in pair)
+        raise BadValue(f"pwm_freq: requested {f_hz:g} Hz; the divider makes {opts}; the nearest, "
+                       f"{got:.0f} Hz, is {abs(got - f_hz) / f_hz:.1%} away (more than "
+                       f"{PWM_FREQ_TOL:.0%}): ask for it, or --nearest to store it")
+    return div
 
 
 @dataclass(frozen=True)
@@ -99,6 +153,7 @@ class Friendly:
     scale: float
     unit: str
     help: str
+    dim: int | None = None     # a position (0), speed (1) or acceleration (2) in counts: takes any unit
 
 
 FRIENDLY: dict[str, Friendly] = {
@@ -111,18 +166,18 @@ FRIENDLY: dict[str, Friendly] = {
     "pw0": Friendly("PW0", 1, "ticks of 1023", "dead-zone edge PW0, eq. (1)"),
     "pwmax": Friendly("PWMAX", 1, "ticks of 1023", "duty at full command PW_F, eq. (1)"),
     "cmd_limit": Friendly("CMD_LIMIT", 1, "steps", "PWM command saturation, eq. (19)"),
-    "follow_limit": Friendly("FOLLOW_LIMIT", 1, "counts", "following-error fault limit"),
-    "soft_min": Friendly("SOFT_MIN", 1, "counts", "lowest allowed position"),
-    "soft_max": Friendly("SOFT_MAX", 1, "counts", "highest allowed position"),
-    "vmax": Friendly("VMAX", 1, "counts/s", "trapezoid top speed"),
-    "amax": Friendly("AMAX", 1, "counts/s^2", "trapezoid acceleration"),
+    "follow_limit": Friendly("FOLLOW_LIMIT", 1, "counts", "following-error fault limit", 0),
+    "soft_min": Friendly("SOFT_MIN", 1, "counts", "lowest allowed position", 0),
+    "soft_max": Friendly("SOFT_MAX", 1, "counts", "highest allowed position", 0),
+    "vmax": Friendly("VMAX", 1, "counts/s", "trapezoid top speed", 1),
+    "amax": Friendly("AMAX", 1, "counts/s^2", "trapezoid acceleration", 2),
     "counts_per_rev": Friendly("COUNTS_PER_REV", 1, "counts", "encoder counts per screw turn"),
     "pitch": Friendly("PITCH_UM", 1e6, "m", "ball-screw lead"),
     "stall_cmd": Friendly("STALL_CMD", 1, "steps", "runaway check: command that must move the axis"),
     "stall_time": Friendly("STALL_MS", 1e3, "s", "runaway check: time it has to move it"),
     "limit_sw": Friendly("LIMIT_SW", 1, "", "1 = limit switches wired, 0 = none"),
-    "home_vel": Friendly("HOME_VEL", 1, "counts/s", "homing speed"),
-    "home_pos": Friendly("HOME_POS", 1, "counts", "position given to the home point"),
+    "home_vel": Friendly("HOME_VEL", 1, "counts/s", "homing speed", 1),
+    "home_pos": Friendly("HOME_POS", 1, "counts", "position given to the home point", 0),
     "pwm_max": Friendly("PWM_MAX_HZ", 1, "Hz", "PWM carrier ceiling (the bridge's rating)"),
 }
 # Parameters with their own conversions (not a plain scale).
@@ -147,26 +202,37 @@ def resolve(name: str) -> tuple[str, str]:
                    f"such as KP_Q16 (docs/protocol.md)")
 
 
-def to_raw(name: str, text: str, clk_hz: int = CLK_HZ) -> tuple[str, int]:
+def to_raw(name: str, text: str, clk_hz: int = CLK_HZ, mech: Mechanics | None = None,
+           nearest: bool = False) -> tuple[str, int]:
     """(protocol parameter, raw integer) for ``set NAME VALUE``; BadValue for
     anything the parameter cannot hold (the message gives its range in the
-    unit the value was given in)."""
+    unit the value was given in).  ``mech`` converts positions and speeds given
+    in mm, rev, rad or deg; ``nearest`` lets pwm_freq store a carrier further
+    than PWM_FREQ_TOL from the request."""
     param, kind = resolve(name)
     p = P.PARAMS[param]
     if kind == "special":
         if param == "LAW":
             if text.lower() in LAWS:
                 return param, LAWS[text.lower()]
-            v = number(text, name)
+            try:
+                v = float(text)
+            except ValueError:
+                v = -1.0
             if v not in range(p.min, p.max + 1):
-                raise BadValue(f"law {text!r}: use {', '.join(LAWS)} or 0..3")
+                raise BadValue(f"law {text!r}: one of {', '.join(LAWS)} (or 0..3)")
             return param, int(v)
-        f = number(text, name)
+        f = number(text.lower().removesuffix("hz").strip(), name)
         if f <= 0:
             raise BadValue(f"pwm_freq {text} Hz: the carrier must be above 0 Hz")
-        return param, divider_for(f, clk_hz)
+        return param, check_carrier(f, clk_hz, nearest)
     if kind == "friendly":
         fr = FRIENDLY[name.lower()]
+        if fr.dim is not None:
+            raw = float(parse_quantity(text, mech or Mechanics(), fr.dim))
+            if not p.min <= raw <= p.max:
+                raise BadValue(f"{name} {text} is {raw:.0f} {fr.unit}, outside [{p.min}, {p.max}] {fr.unit}")
+            return param, int(raw)
         raw = number(text, name) * fr.scale
         if not p.min <= round(raw) <= p.max:
             raise BadValue(f"{name} {text} {fr.unit}".rstrip() + f" is outside [{p.min / fr.scale:g}, "

@@ -1,13 +1,15 @@
 # SPDX-License-Identifier: MIT
-"""The characterisation command (scripts/characterize.py).
+"""The characterisation command: ``torqueloop characterize`` (the lab tool, a host
+install: lab CSVs in, the configuration out) and ``torqueloop-study characterize``
+(the same, and ``sim``: the method on the simulated bench with the study around it).
 
-    characterize.py run DATA_DIR [--out CONFIG] [--plots DIR] [--set NAME=VALUE ...]
-    characterize.py sim [--plant lab] [--seeds 10] [--out-dir DIR] [--source rtl|model] [--axes x z]
-                        [--no-ablation] [--no-linearity]
-    characterize.py step5 FREQ_SWEEP.csv
-    characterize.py check FILE.csv ...
-    characterize.py show CONFIG.json [--registers]
-    characterize.py export CONFIG.json --format c|verilog --out FILE
+    characterize run DATA_DIR [--out CONFIG] [--plots DIR] [--set NAME=VALUE ...]
+    characterize sim [--plant lab] [--seeds 10] [--out-dir DIR] [--source rtl|model] [--axes x z]
+                     [--no-ablation] [--no-linearity]
+    characterize step5 FREQ_SWEEP.csv
+    characterize check FILE.csv ...
+    characterize show CONFIG.json [--registers]
+    characterize export CONFIG.json --format c|verilog --out FILE
 
 ``sim`` records the sweeps on the simulated bench (the plant variant's
 motor on the rope dynamometer, driven by the RTL's pins or their documented
@@ -16,7 +18,9 @@ then does exactly what ``run`` does with them, writing
 ``DIR/characterization.json`` and the plots in ``DIR/plots``; then the
 study: the session with other instrument seeds, linearity at other
 frequencies and each plant effect off (``DIR/results.{json,md}``,
-torqueloop/characterize/study.py).
+torqueloop/study/characterization.py).  The study passes its ``sim`` to
+:func:`main` (the characterisation layer does not reach up into the study);
+without it ``sim`` says where it lives.
 
 ``run`` takes one folder per axis (``DATA_DIR/<axis>/*.csv``: one frequency
 sweep and any number of duty sweeps, recognised by their ``# sweep =``
@@ -33,16 +37,25 @@ import argparse
 import dataclasses
 import sys
 from pathlib import Path
-from typing import Sequence
+from typing import Callable, Sequence
 
-from torqueloop.spec.charconfig import ConfigError, load_config, register_writes, write_config
+from sim_models.params import PlantParamError
+from sim_models.variants import plant_choice
+from torqueloop.characterize.conclude import EXIT_ERROR, EXIT_FAIL, EXIT_NEED_SWEEP, EXIT_OK, conclude
+from torqueloop.characterize.config import CLK_HZ, PWM_BITS
+from torqueloop.characterize.data import DataError, Sweep, read_sweep
+from torqueloop.flow.gen_charconfig import c_header, verilog_header
+from torqueloop.characterize.method import MethodError, MotorResult, Thresholds, characterize_motor, step5_candidates
+from torqueloop.spec.charconfig import ConfigError, load_config, register_writes
 from torqueloop.spec.pwm import carrier_hz, divider_for
 
-from .config import CLK_HZ, PWM_BITS, axis_config, build_config, c_header, verilog_header
-from .data import DataError, Sweep, read_sweep
-from .method import MethodError, MotorResult, Thresholds, characterize_motor, step5_candidates
+__all__ = ["EXIT_OK", "EXIT_ERROR", "EXIT_NEED_SWEEP", "EXIT_FAIL", "main"]
 
-EXIT_OK, EXIT_ERROR, EXIT_NEED_SWEEP, EXIT_FAIL = 0, 1, 2, 3
+
+def _error(message: object) -> int:
+    """One line on stderr; the exit status of bad input."""
+    print(message, file=sys.stderr)
+    return EXIT_ERROR
 
 
 def _thresholds(sets: Sequence[str]) -> Thresholds:
@@ -81,29 +94,6 @@ def _split(files: Sequence[Path]) -> tuple[Sweep, list[Sweep]]:
     return freq[0], [s for s in sweeps if s.kind == "duty"]
 
 
-def report(name: str, r: MotorResult) -> str:
-    lines = [f"[{name}] motor {r.freq_sweep.motor!r}: tau_max = {r.step5.tau_max_nm:.4g} N m (step 2)",
-             f"[{name}] step 5: {r.step5.message}"]
-    for c in r.step5.candidates[:5]:
-        lines.append(f"[{name}]   candidate {c.freq_hz:9.4f} Hz  ({c.kind}, slope {c.slope_nm_per_hz:+.3g} N m/Hz)")
-    if len(r.step5.candidates) > 5:
-        lines.append(f"[{name}]   ... and {len(r.step5.candidates) - 5} more")
-    for a in r.attempts:
-        if a.linearity is None:
-            continue
-        lin = a.linearity
-        lines.append(f"[{name}] steps 6-7 at {lin.freq_hz:.4g} Hz ({a.duty_sweep.source if a.duty_sweep else ''}): "
-                     f"{'PASS' if lin.ok else 'FAIL'}")
-        for ch in lin.checks:
-            lines.append(f"[{name}]     {'ok  ' if ch.ok else 'FAIL'} {ch.text}")
-        if lin.pw0_pct == lin.pw0_pct:  # not NaN: a line was fitted
-            lines.append(f"[{name}]     dead zone PW0 = {lin.pw0_pct:.2f} %, PW_F = {lin.pwf_pct:.2f} %")
-    for u in r.unused_duty_sweeps:
-        lines.append(f"[{name}] note: {u} matched no candidate it was needed for")
-    lines.append(f"[{name}] {r.status}: {r.message}")
-    return "\n".join(lines)
-
-
 def cmd_run(args: argparse.Namespace) -> int:
     th = _thresholds(args.set)
     data_dir = Path(args.data_dir)
@@ -113,61 +103,31 @@ def cmd_run(args: argparse.Namespace) -> int:
             fs, ds = _split(files)
             results[name] = characterize_motor(fs, ds, th)
         except (DataError, MethodError) as e:
-            print(f"[{name}] error: {e}", file=sys.stderr)
-            return EXIT_ERROR
+            return _error(f"[{name}] error: {e}")
     return conclude(results, data_dir, Path(args.out), args.plots, th, args.clk_hz, args.pwm_bits)
 
 
-def conclude(results: dict[str, MotorResult], data_dir: Path, out: Path, plots: str | Path | None,
-             th: Thresholds, clk_hz: int = CLK_HZ, pwm_bits: int = PWM_BITS) -> int:
-    """Steps 2-7's report per axis, the plots, and step 8: the configuration
-    file, written only if every axis passed (the exit status says why not)."""
-    worst = EXIT_OK
-    for name, r in results.items():
-        print(report(name, r), flush=True)
-        if plots:
-            from .plots import plot_result
-
-            for p in plot_result(r, plots, name):
-                print(f"[{name}] plot {p}")
-        if r.status == "need_duty_sweep":
-            worst = max(worst, EXIT_NEED_SWEEP)
-        elif r.status == "fail":
-            worst = max(worst, EXIT_FAIL)
-    if worst != EXIT_OK:
-        print("no configuration written: not every axis passed", file=sys.stderr)
-        return worst
-    axes = {n: axis_config(r, clk_hz=clk_hz, pwm_bits=pwm_bits, base_dir=data_dir) for n, r in results.items()}
-    cfg = build_config(axes, th, clk_hz=clk_hz, pwm_bits=pwm_bits)
-    write_config(out, cfg)
-    load_config(out)  # what we write must be what the readers accept
-    for n, a in cfg.axes.items():
-        print(f"[{n}] step 8: {a.pwm_freq_hz:.6g} Hz -> count_max {a.count_max} -> {a.achieved_hz:.6g} Hz "
-              f"({a.freq_error_pct:+.3f} %), PW0 {a.pw0_counts} / PW_F {a.pw_max_counts} counts of {(1 << pwm_bits) - 1}")
-    print(f"wrote {out}")
-    return EXIT_OK
+#: ``sim``'s runner: (args) -> exit status; the study's, when it calls :func:`main`
+SimRunner = Callable[[argparse.Namespace], int]
 
 
-def cmd_sim(args: argparse.Namespace) -> int:
-    from sim_models.params import PlantParamError
-    from sim_models.variants import parse_plant
+def _no_sim(args: argparse.Namespace) -> int:
+    print("error: `characterize sim` is the study's: torqueloop-study characterize sim "
+          "(needs the simulation stack: pip install 'torqueloop[sim]')", file=sys.stderr)
+    return EXIT_ERROR
 
-    from .simbench import Plant
-    from .study import run_study
 
+def check_sim_args(args: argparse.Namespace) -> int | None:
+    """The ``sim`` arguments checked (an exit status if bad, else None)."""
     try:
-        name, off = parse_plant(args.plant)
+        plant = plant_choice(args.plant, args.plant_file, default="lab")
     except PlantParamError as e:
-        print(f"error: --plant: {e}", file=sys.stderr)
-        return EXIT_ERROR
+        return _error(f"error: --plant: {e}")
     if args.seeds < 1:
-        print("error: --seeds must be at least 1", file=sys.stderr)
-        return EXIT_ERROR
-    from .study import LINEARITY_FREQS_HZ
-
-    return run_study(Path(args.out_dir), Plant(name, off), seeds=args.seeds, axes=args.axes,
-                     source=args.source, sim=args.simulator, th=_thresholds(args.set), ablation=args.ablation,
-                     linearity_freqs=LINEARITY_FREQS_HZ if args.linearity else ())
+        return _error("error: --seeds must be at least 1")
+    args.plant = plant
+    args.thresholds = _thresholds(args.set)
+    return None
 
 
 def cmd_step5(args: argparse.Namespace) -> int:
@@ -176,8 +136,7 @@ def cmd_step5(args: argparse.Namespace) -> int:
         fs = read_sweep(args.freq_sweep)
         s5 = step5_candidates(fs, th)
     except (DataError, MethodError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return EXIT_ERROR
+        return _error(f"error: {e}")
     print(f"tau_max = {s5.tau_max_nm:.4g} N m, target {s5.target_nm:.4g} N m: {s5.message}")
     for i, c in enumerate(s5.candidates, 1):
         cm = divider_for(c.freq_hz, args.clk_hz, args.pwm_bits)
@@ -195,8 +154,7 @@ def cmd_check(args: argparse.Namespace) -> int:
             extra = f"at {s.freq_hz:g} Hz" if s.kind == "duty" else f"tau_max {s.stall_torque_nm:.4g} N m"
             print(f"{f}: ok, {s.kind} sweep, {len(s.x)} points, {extra}")
         except DataError as e:
-            print(f"error: {e}", file=sys.stderr)
-            rc = EXIT_ERROR
+            rc = _error(f"error: {e}")
     return rc
 
 
@@ -204,8 +162,7 @@ def cmd_show(args: argparse.Namespace) -> int:
     try:
         cfg = load_config(args.config)
     except ConfigError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return EXIT_ERROR
+        return _error(f"error: {e}")
     print(f"{args.config}: schema v{cfg.schema_version}, clk {cfg.clk_hz} Hz, {cfg.pwm_bits}-bit PWM")
     for n, a in cfg.axes.items():
         print(f"  {n}: {a.pwm_freq_hz:g} Hz, count_max {a.count_max} ({a.achieved_hz:.6g} Hz, {a.freq_error_pct:+.3f} %), "
@@ -215,8 +172,7 @@ def cmd_show(args: argparse.Namespace) -> int:
             for reg, addr, val in register_writes(cfg):
                 print(f"  write {reg:<16} 0x{addr:08X} = {val}")
         except ConfigError as e:
-            print(f"error: {e}", file=sys.stderr)
-            return EXIT_ERROR
+            return _error(f"error: {e}")
     return EXIT_OK
 
 
@@ -225,8 +181,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         cfg = load_config(args.config)
         text = (c_header if args.format == "c" else verilog_header)(cfg, Path(args.config).name)
     except ConfigError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return EXIT_ERROR
+        return _error(f"error: {e}")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text)
@@ -234,8 +189,9 @@ def cmd_export(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="characterize", description=__doc__,
+def main(argv: Sequence[str] | None = None, sim: SimRunner | None = None,
+         prog: str = "torqueloop characterize") -> int:
+    ap = argparse.ArgumentParser(prog=prog, description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
 
@@ -254,9 +210,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.set_defaults(fn=cmd_run)
     p = sub.add_parser("sim", help="the whole method on the simulated bench (no hardware), and the study around it")
     p.add_argument("--out-dir", default="build/characterize")
-    p.add_argument("--plant", default="lab",
+    p.add_argument("--plant", default=None,
                    help="plant variant: paper-printed, paper or lab; lab-no-EFFECT[-no-EFFECT] switches "
                         "lab effects off (sim_models/params/variants.toml) [lab]")
+    p.add_argument("--plant-file", default=None, metavar="FILE", help="a plant file instead of a variant")
     p.add_argument("--seeds", type=int, default=10, help="sessions with different instrument noise [10]")
     p.add_argument("--no-ablation", dest="ablation", action="store_false",
                    help="skip the runs with each plant effect off")
@@ -267,7 +224,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--simulator", default="verilator", choices=("verilator", "icarus"))
     p.add_argument("--axes", nargs="+", default=["x", "z"])
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
-    p.set_defaults(fn=cmd_sim)
+    p.set_defaults(fn=lambda args: check_sim_args(args) or (sim or _no_sim)(args))
     p = sub.add_parser("step5", help="candidate frequencies from a frequency sweep")
     p.add_argument("freq_sweep")
     common(p)

@@ -1,10 +1,10 @@
 # SPDX-License-Identifier: MIT
-"""The method on the simulated lab bench, as a study (``characterize.py sim``,
-``make characterize``).
+"""The characterisation study: the method on the simulated lab bench
+(``torqueloop-study characterize sim``, ``make characterize``).
 
 1. **The lab's session** (instrument seed 0): the sweeps as CSV files in
-   ``OUT/data/<axis>/``, then exactly what ``characterize.py run`` does with
-   them: the configuration ``OUT/characterization.json`` (what the board's
+   ``OUT/data/<axis>/``, then exactly what ``torqueloop-study characterize run`` does with
+   them (:func:`torqueloop.characterize.conclude.conclude`): the configuration ``OUT/characterization.json`` (what the board's
    ``torqueloop config load`` and the experiment load) and the Fig. 10/11
    analogues in ``OUT/plots/``.
 2. **Repeatability**: the same session with seeds 1..N-1 (other gauge and
@@ -32,26 +32,28 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from sim_models.variants import PlantSpec, effects_of
+from torqueloop.characterize.conclude import conclude
+from torqueloop.characterize.config import CLK_HZ, PWM_BITS
+from torqueloop.characterize.data import read_sweep, write_sweep
+from torqueloop.characterize.method import MotorResult, Thresholds, characterize_motor, steps67_linearity
+from torqueloop.characterize.simbench import (LabBench, Waveforms, duty_settings, record_duty_sweep,
+                                              record_frequency_sweep, simulate_lab)
 from torqueloop.spec.pwm import carrier_hz, divider_for
-
-from .config import CLK_HZ, PWM_BITS
-from .method import MotorResult, Thresholds, steps67_linearity
-from .simbench import LabBench, Plant, Waveforms, duty_settings, record_duty_sweep, simulate_lab
+from torqueloop.spec.repo import REPO_ROOT
 
 #: extra duty sweeps of the study: the paper's range ends, its two optima, and the carriers above
 LINEARITY_FREQS_HZ = (50.0, 200.0, 450.0, 2000.0, 24_400.0)
 
 
-def inputs_digest(plant: Plant, source: str) -> str:
+def inputs_digest(plant: PlantSpec, source: str) -> str:
     """A digest of everything the lab's session depends on (the plant, the
-    bench, the method, the PWM cores and eq. 4): make run reuses a written
-    configuration whose digest still matches."""
+    bench, the method, this study, the PWM cores and eq. 4): make run reuses
+    a written configuration whose digest still matches."""
     import hashlib
 
-    from torqueloop.spec.repo import REPO_ROOT
-
     files = sorted([*(REPO_ROOT / "sim_models").rglob("*.py"), *(REPO_ROOT / "sim_models" / "params").glob("*.toml"),
-                    *(REPO_ROOT / "torqueloop" / "characterize").glob("*.py"),
+                    *(REPO_ROOT / "torqueloop" / "characterize").glob("*.py"), Path(__file__).resolve(),
                     *(REPO_ROOT / "torqueloop" / "characterize").glob("*.v"),
                     REPO_ROOT / "torqueloop" / "spec" / "pwm.py", REPO_ROOT / "torqueloop" / "spec" / "system.toml",
                     REPO_ROOT / "rtl" / "motion" / "tl_freq_div.v", REPO_ROOT / "rtl" / "motion" / "tl_pwm_torque.v"])
@@ -113,7 +115,7 @@ def crossings(r: MotorResult) -> list[float]:
     return out
 
 
-def run_study(out: Path, plant: Plant, seeds: int = 10, axes: Sequence[str] = ("x", "z"),
+def run_study(out: Path, plant: PlantSpec, seeds: int = 10, axes: Sequence[str] = ("x", "z"),
               source: str = "rtl", sim: str = "verilator", th: Thresholds = Thresholds(),
               ablation: bool = True, linearity_freqs: Sequence[float] = LINEARITY_FREQS_HZ) -> int:
     """The whole study (module docstring).  Returns the exit status of the
@@ -124,13 +126,11 @@ def run_study(out: Path, plant: Plant, seeds: int = 10, axes: Sequence[str] = ("
     bench = LabBench(plant)
     studies = {a: AxisStudy(a) for a in axes}
 
-    # 1. the lab's session, then what `characterize.py run` does with its files
+    # 1. the lab's session, then what `torqueloop-study characterize run` does with its files
     _say(f"plant {plant.label}, pins from {source}: the lab's session (seed 0)")
     first = simulate_lab(out / "data", bench, axes, seed=0, wf=wf, th=th)
     for a, r in first.items():
         studies[a].sessions.append(r)
-    from .cli import conclude
-
     status = conclude(first, out / "data", out / "characterization.json", out / "plots", th)
     if status == 0:
         (out / "inputs.sha256").write_text(inputs_digest(plant, source) + "\n")
@@ -160,12 +160,10 @@ def run_study(out: Path, plant: Plant, seeds: int = 10, axes: Sequence[str] = ("
 
     # 4. each effect off in turn
     if ablation:
-        from sim_models.variants import effects_of
-
         for eff in effects_of(plant.name):
             if eff in plant.off:
                 continue
-            p2 = Plant(plant.name, (*plant.off, eff))
+            p2 = plant.without(eff)
             rs = simulate_lab(out / "ablation" / p2.label, LabBench(p2), axes, seed=0, wf=wf, th=th, quiet=True)
             for a, r in rs.items():
                 studies[a].ablation[eff] = {**_outcome(r), "crossings_hz": crossings(r),
@@ -187,10 +185,6 @@ def _prefetch_duty_sweeps(wf: Waveforms, bench: LabBench, axes: Sequence[str], s
     capture from the RTL costs a simulator start-up, so one start for all
     seeds instead of one per new frequency.  A session that asks for more
     (step 7 failing) captures the rest itself."""
-    from .data import read_sweep, write_sweep
-    from .method import characterize_motor
-    from .simbench import record_frequency_sweep
-
     want: list[tuple[int, int]] = []
     for seed in seeds:
         for a in axes:
@@ -210,7 +204,7 @@ def _brief(r: MotorResult) -> str:
     return f"{r.chosen.freq_hz:.4g} Hz, PW0 {r.linearity.pw0_pct:.2f} %"  # type: ignore[union-attr]
 
 
-def _results(plant: Plant, seeds: int, source: str, bench: LabBench, studies: dict[str, AxisStudy],
+def _results(plant: PlantSpec, seeds: int, source: str, bench: LabBench, studies: dict[str, AxisStudy],
              wall_s: float) -> dict[str, Any]:
     axes: dict[str, Any] = {}
     for a, st in studies.items():

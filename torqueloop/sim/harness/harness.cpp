@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Native Verilator harness of the co-simulation: the board image
-// (tb/rtl_loop/rtl_loop_top.v) with its clock, its encoder pins and its
+// (torqueloop/sim/harness/rtl_loop_top.v) with its clock, its encoder pins and its
 // UART line driven from C++, behind a narrow C interface that Python
 // (torqueloop/sim/native.py, ctypes) calls.  Python is woken only when a
 // bridge pin changes or a cycle budget ends, never per clock:

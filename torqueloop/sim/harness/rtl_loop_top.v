@@ -2,8 +2,8 @@
 // rtl_loop_top: the board image (rtl/board/de0_cv_top.v) as the co-simulation
 // sees it - only the pins a bench of the real machine would touch, as plain
 // ports (no inouts), so the same wrapper serves the cocotb harness and the
-// native Verilator harness (torqueloop/sim/native).  Which header bit
-// carries what is de0_cv_cable's business (tb/de0_cv_top, generated from
+// native Verilator harness (torqueloop/sim/harness/harness.cpp).  Which header bit
+// carries what is de0_cv_cable's business (torqueloop/sim/harness/de0_cv_cable.v, generated from
 // constraints/pins.toml: the cable harness of docs/hardware.md, GPIO_0 =
 // axis x, GPIO_1 = axis z).
 // Nothing inside the SoC is brought out: the plant sees the bridge pins and

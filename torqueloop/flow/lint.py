@@ -1,6 +1,5 @@
-#!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""make lint: Verilator -Wall, GHDL --std=08, Yosys synth -check and the
+"""make lint's core checks (``python -m torqueloop.flow lint [CORE ...]``): Verilator -Wall, GHDL --std=08, Yosys synth -check and the
 VHDL/Verilog equivalence proof for every core in rtl/manifest.toml.
 Exit status 1 if anything fails; every problem is listed."""
 

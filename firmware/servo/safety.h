@@ -1,0 +1,143 @@
+/* SPDX-License-Identifier: MIT */
+/* The checks the control iteration makes every period (docs/safety.md), inline
+ * into tl_servo_tick (servo.c): what the SoC safety latch bits mean for an axis,
+ * the soft limits, the runaway check, and which sides an axis must not be driven
+ * toward.  safety.c holds what runs outside the iteration (latch, enable, clear). */
+#ifndef TL_SAFETY_H
+#define TL_SAFETY_H
+
+#include "servo_internal.h"
+
+#define LATCH_BITS (TL_HAL_SAFE_ESTOP | TL_HAL_SAFE_FAULT0 | TL_HAL_SAFE_FAULT1 | TL_HAL_SAFE_WDOG)
+_Static_assert(TL_HAL_LIM_NEG == TLP_LIMIT_NEG && TL_HAL_LIM_POS == TLP_LIMIT_POS, "limit bits");
+
+/* Faults the SoC safety latch bits mean for axis i: its own bridge bit always
+ * (a bridge fault is a fault of that axis whatever it was doing), the shared
+ * e-stop and watchdog bits for an axis they stopped (enabled). */
+static inline __attribute__((always_inline)) uint16_t latch_bridge(uint32_t i, uint32_t safety)
+{
+    return (safety & (i == 0u ? TL_HAL_SAFE_FAULT0 : TL_HAL_SAFE_FAULT1)) ? TLP_FAULT_BRIDGE : 0u;
+}
+static inline __attribute__((always_inline)) uint16_t latch_enabled(uint32_t safety)
+{
+    return (uint16_t)(((safety & TL_HAL_SAFE_ESTOP) ? TLP_FAULT_ESTOP : 0u) |
+                      ((safety & TL_HAL_SAFE_WDOG) ? TLP_FAULT_HW_SAFE : 0u));
+}
+/* The soft-limit side the position is beyond (SOFT_MIN <= SOFT_MAX: at most one). */
+static inline __attribute__((always_inline)) uint8_t soft_side(const tl_axis_t *a)
+{
+    return a->pos < pv(a, TLP_P_SOFT_MIN) ? TLP_LIMIT_NEG : (a->pos > pv(a, TLP_P_SOFT_MAX) ? TLP_LIMIT_POS : 0u);
+}
+
+/* Runaway / encoder loss.  A command of STALL_CMD or more must, within
+ * STALL_MS, either move the position past a reference in its direction or
+ * raise the velocity in its direction by STALL_DV_Q8 over a reference; each
+ * time it does, the references move up to where the axis is.  An axis that
+ * accelerates, cruises, or is braked from the other direction satisfies it
+ * every few periods; a frozen encoder, one that counts the wrong way (the
+ * measured motion runs away against the command) or one channel flickering
+ * never does.  A compare and a counter per period: no division, no history. */
+#define STALL_DV_Q8 (20 * 256)   /* 20 counts/s */
+static inline __attribute__((always_inline)) uint16_t stall_check(tl_axis_t *a)
+{
+    int32_t lim = pv(a, TLP_P_STALL_CMD);
+    int8_t dir = a->cmd >= lim ? 1 : (a->cmd <= -lim ? -1 : 0);
+    if (dir == 0 || dir != a->stall_dir) {
+        a->stall_dir = dir;
+        a->stall_ref = a->pos;
+        a->stall_vel_q8 = a->c.vel_q8;
+        a->stall_ticks = 0;
+        return 0;
+    }
+    /* each reference only ever moves on in dir */
+    int32_t moved = (int32_t)((uint32_t)a->pos - (uint32_t)a->stall_ref);
+    int64_t dv = (int64_t)a->c.vel_q8 - a->stall_vel_q8;
+    bool progress = false;
+    if (dir > 0 ? moved > 0 : moved < 0) {
+        a->stall_ref = a->pos;
+        progress = true;
+    }
+    if (dir > 0 ? dv > STALL_DV_Q8 : dv < -STALL_DV_Q8) {
+        a->stall_vel_q8 = a->c.vel_q8;
+        progress = true;
+    }
+    if (progress) {
+        a->stall_ticks = 0;
+        return 0;
+    }
+    return ++a->stall_ticks >= a->stall_limit_ticks ? TLP_FAULT_RUNAWAY : 0u;
+}
+
+/* The switch homing is looking for does not trip a limit fault. */
+static inline __attribute__((always_inline)) uint8_t home_switch(const tl_axis_t *a)
+{
+    if (a->home != TLP_HOME_STATE_HOMING)
+        return 0;
+    return a->home_dir < 0 ? TLP_LIMIT_NEG : TLP_LIMIT_POS;
+}
+
+/* What the SoC safety word means this period, worked out once for both axes. */
+typedef struct {
+    uint32_t safety;
+    uint16_t all;        /* faults of every axis: the e-stop input */
+    uint16_t enabled;    /* faults of an enabled axis: the latched e-stop and watchdog bits */
+    bool link;           /* the link watchdog expired (enabled axes) */
+} tick_faults_t;
+
+/* Every check of one axis for this period; returns the faults that tripped.
+ * *out: the soft-limit sides the position is beyond (enabled axes only). */
+static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, uint32_t i,
+                                                                  const tl_enc_sample_t *e,
+                                                                  const tick_faults_t *t, uint8_t *out)
+{
+    /* latch_faults, the e-stop input and the bridge input */
+    uint16_t f = t->all | latch_bridge(i, t->safety);
+    if (e->bridge_fault)
+        f |= TLP_FAULT_BRIDGE;
+    if (e->illegal != a->illegal_seen) {
+        f |= TLP_FAULT_ENCODER;
+        a->illegal_seen = e->illegal;
+    }
+    uint8_t lim = pv(a, TLP_P_LIMIT_SW) ? (uint8_t)(e->limits & (TLP_LIMIT_NEG | TLP_LIMIT_POS)) : 0u;
+    a->limits = lim;
+    if (lim) {
+        lim &= (uint8_t)~home_switch(a);
+        if (lim & TLP_LIMIT_NEG)
+            f |= TLP_FAULT_LIMIT_NEG;
+        if (lim & TLP_LIMIT_POS)
+            f |= TLP_FAULT_LIMIT_POS;
+    }
+    if (!a->enabled)
+        return f;
+    f |= t->enabled;
+    if ((t->safety & TL_HAL_SAFE_FORCED) && f == 0u)
+        f |= TLP_FAULT_HW_SAFE;   /* forced off by a cause not seen above */
+    if (t->link)
+        f |= TLP_FAULT_LINK;
+    /* following error |sp - pos| > FOLLOW_LIMIT, sp in counts (int32 range: it lies between
+     * positions and targets), the difference in 33 bits */
+    int32_t sp = (int32_t)(a->c.sp_q16 >> 16);
+    uint32_t fl = (uint32_t)pv(a, TLP_P_FOLLOW_LIMIT);
+    uint32_t ad = sp >= a->pos ? (uint32_t)sp - (uint32_t)a->pos : (uint32_t)a->pos - (uint32_t)sp;
+    if (ad > fl)
+        f |= TLP_FAULT_FOLLOWING;
+    /* Outside the soft limits: a fault unless the axis was enabled out there
+     * (it may then only come back in); back inside, that allowance ends. */
+    uint8_t o = soft_side(a);
+    *out = o;
+    if (a->recover | o) {
+        a->recover &= o;
+        if (o & (uint8_t)~a->recover)
+            f |= TLP_FAULT_SOFT_LIMIT;
+    }
+    return f | stall_check(a);
+}
+
+/* Sides toward which the axis must not be driven: a latched limit fault, a
+ * limit switch open now, or soft, the soft-limit side the position is beyond. */
+static inline __attribute__((always_inline)) uint8_t blocked_with(const tl_axis_t *a, uint8_t soft)
+{
+    return (uint8_t)(a->limits | soft | ((a->faults & TLP_FAULT_LIMIT_NEG) ? TLP_LIMIT_NEG : 0u) |
+                     ((a->faults & TLP_FAULT_LIMIT_POS) ? TLP_LIMIT_POS : 0u));
+}
+#endif

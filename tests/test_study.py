@@ -1,0 +1,65 @@
+# SPDX-License-Identifier: MIT
+"""The studies' floor: an experiment plan becomes runs that carry parsed
+plants (never names), pickle into pool workers, and file into the report;
+the study command refuses bad input in one line."""
+
+from __future__ import annotations
+
+import pickle
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from sim_models.variants import PlantSpec, plant_of
+from torqueloop.sim import report
+from torqueloop.study.experiment import CASES, ExperimentPlan, RunFailed, collect, runs
+
+
+def test_the_quick_plan_is_the_runs_make_run_quick_does() -> None:
+    plan = ExperimentPlan.short(experiment_plant=plant_of("lab-no-brush_drop"))
+    rs = runs(plan, Path("char.json"))
+    kinds = [r.kind for r in rs]
+    # 3 laws x (RTL arm, model arm, each case) + 3 carriers x P x PW0 on/off
+    assert kinds.count("rtl") == 3 and kinds.count("model") == 3
+    assert kinds.count("fast") == 3 * len(CASES) + 3 * 2
+    assert kinds[:3] == ["rtl"] * 3, "the long runs go first"
+    for r in rs:
+        assert isinstance(r.config.plant, PlantSpec)
+        want = plan.model_plant if r.kind == "model" else plan.experiment_plant
+        assert r.config.plant == want, r.label()
+        assert (r.config.char_config is None) == (r.kind == "model")
+        assert pickle.loads(pickle.dumps(r)) == r          # what the pool sends a worker
+    sweep = [r for r in rs if r.key[0] == "sweep"]
+    assert {r.config.pwm_hz for r in sweep} == {(f, f) for f in plan.sweep_hz}
+    assert all(r.config.t_end_s == plan.sweep_t_end_s for r in sweep)
+
+
+def test_a_full_plan_sweeps_every_law() -> None:
+    rs = runs(ExperimentPlan(), Path("char.json"))
+    assert sum(r.key[0] == "sweep" for r in rs) == 8 * 3 * 2
+
+
+def test_results_are_filed_where_the_report_reads_them() -> None:
+    st = report.Study(t_end_s=1.0, target_rad=6.28, laws=["P"])
+    rs = {r.label(): r for r in runs(ExperimentPlan.short(laws=("P",)), Path("c.json"))}
+    collect(st, rs["model P"], "m")
+    collect(st, rs["rtl P"], ("e", "f"))
+    collect(st, rs["fast case pw0_off P"], "v")
+    collect(st, rs["fast sweep 50.0 True P"], "s")
+    assert st.model_arm == {"P": "m"} and st.experiment_arm == {"P": "e"} and st.fast_check == {"P": "f"}
+    assert st.cases == {"pw0_off": {"P": "v"}} and st.sweep == [(50.0, True, "P", "s")]
+    assert isinstance(RunFailed("x"), str)
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["experiment", "--experiment-plant", "lob"], "unknown plant variant 'lob'"),
+    (["experiment", "--t-end", "0"], "must be positive"),
+    (["characterize", "sim", "--plant", "lab-no-brushes"], "unknown effect 'brushes'"),
+    (["nothing"], "unknown study 'nothing'"),
+])
+def test_bad_input_is_one_line(argv: list[str], says: str) -> None:
+    r = subprocess.run([sys.executable, "-m", "torqueloop.study", *argv], capture_output=True, text=True, timeout=120)
+    assert r.returncode != 0 and "Traceback" not in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and says in r.stderr, r.stderr
