@@ -117,10 +117,10 @@ def main() -> int:
               f"{depth} cells by ltp counting every carry-chain cell (without the multiplier: {depth_core})")
     # the firmware's control iteration on the pipelined core (bench_firmware
     # measures it on the default core): worst case, two axes PID at 20 kHz
-    from bench import QUICK
+    from bench import QUICK, load   # scripts/bench.py, which runs this
     if not QUICK:
-        sys.path.insert(0, str(Path(__file__).resolve().parent))
-        from bench_firmware import BUDGET_CYCLES, _measure
+        fw = load(Path(__file__).resolve().with_name("bench_firmware.py"))
+        BUDGET_CYCLES, _measure = fw.BUDGET_CYCLES, fw._measure
         for mode, short, what in ((0, False, "step moves"), (1, True, "trapezoid moves (60 counts, braking)")):
             m = _measure(50, mode, short, cpu_pipelined=1)
             cyc, late = m["loop_cycles_max"], m["jitter_cycles_max"]
