@@ -40,14 +40,13 @@ os.environ["PATH"] = os.pathsep.join([str(VENV / "tools" / "bin"), str(VENV / "b
 
 from torqueloop.oracles.rv32 import read_elf  # noqa: E402
 
+from torqueloop.flow.cpu_progs import CPU_CORES as CORES  # noqa: E402
 from torqueloop.spec import regs  # noqa: E402
 
 # The SoC memory map (torqueloop/spec/regmap.toml), which cpu_sim_top decodes
 # through the generated include; its RAM_BYTES defaults to the map's RAM size.
 RAM_BASE = regs.RAM_BASE
 RAM_BYTES = regs.RAM_SIZE
-#: the cores cpu_sim_top holds: --core name -> its parameters
-CORES = {"multi": {"PIPELINED": 0}, "pipe": {"PIPELINED": 1}}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -61,6 +61,7 @@ module tl_cpu #(
     input  wire [63:0] mtime,
     output wire        retire
 );
+`include "tl_cpu_causes.vh"
     localparam [1:0] S_FETCH = 2'd0, S_EXEC = 2'd1, S_MEM = 2'd2, S_MULDIV = 2'd3;
     reg [1:0]  state;
     reg [31:0] pc;
@@ -200,28 +201,28 @@ module tl_cpu #(
         trap_tval_early = 32'd0;
         case (state)
             S_FETCH: if (fetch_fault) begin
-                trap_early = 1'b1; trap_code = 4'd1; trap_tval_early = pc;
+                trap_early = 1'b1; trap_code = CAUSE_FETCH_FAULT; trap_tval_early = pc;
             end
             S_EXEC: begin
                 trap_early = 1'b1;
                 if (irq_pending) begin
                     trap_irq = 1'b1; trap_code = irq_code;
                 end else if (ex_illegal) begin
-                    trap_code = 4'd2; trap_tval_early = insn;
+                    trap_code = CAUSE_ILLEGAL; trap_tval_early = insn;
                 end else if (is_ecall) begin
-                    trap_code = 4'd11;
+                    trap_code = CAUSE_ECALL_M;
                 end else if (is_ebreak) begin
-                    trap_code = 4'd3; trap_tval_early = pc;
+                    trap_code = CAUSE_BREAKPOINT; trap_tval_early = pc;
                 end else if (jump_misaligned) begin
-                    trap_code  = 4'd0; trap_tval_early = jump_target;
+                    trap_code  = CAUSE_FETCH_MISALIGNED; trap_tval_early = jump_target;
                 end else if ((is_load || is_store) && mem_misaligned) begin
-                    trap_code = is_store ? 4'd6 : 4'd4; trap_tval_early = eff_addr;
+                    trap_code = is_store ? CAUSE_STORE_MISALIGNED : CAUSE_LOAD_MISALIGNED; trap_tval_early = eff_addr;
                 end else begin
                     trap_early = 1'b0;
                 end
             end
             S_MEM: if (d_fin && pf_done && d_error) begin
-                trap_early = 1'b1; trap_code = is_store ? 4'd7 : 4'd5; trap_tval_early = eff_addr;
+                trap_early = 1'b1; trap_code = is_store ? CAUSE_STORE_FAULT : CAUSE_LOAD_FAULT; trap_tval_early = eff_addr;
             end
             // An interrupt abandons a multiply/divide still in progress (it
             // is re-executed after mret: mepc = its pc, rd not written), so

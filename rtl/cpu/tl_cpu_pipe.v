@@ -9,10 +9,12 @@
 //                two-entry queue when D is stalled.
 //   D  decode  : the answered word (bus or queue): decoded, register file
 //                read (block RAM, registered read) at the edge into E;
-//                a load-use hazard holds it here.
+//                a load-use hazard holds it here.  jal and backward
+//                branches are predicted taken: D redirects the fetch to
+//                their target (1 cycle lost).
 //   E  execute : operands forwarded from M and W, ALU, branch comparator,
-//                jump/branch targets (a taken branch or jump redirects the
-//                fetch from the next cycle: 2 cycles lost, no prediction),
+//                jump/branch targets (jalr, a taken forward branch or a
+//                mispredicted branch redirects the fetch: 2 cycles lost),
 //                effective address, multiply/divide (E waits for the unit),
 //                every exception but a data bus error, and interrupts,
 //                taken before the instruction in E executes.
@@ -56,10 +58,7 @@ module tl_cpu_pipe #(
     input  wire [63:0] mtime,
     output wire        retire
 );
-    // mcause exception codes (privileged spec, table 3.6)
-    localparam [3:0] CAUSE_FETCH_MISALIGNED = 4'd0, CAUSE_FETCH_FAULT = 4'd1, CAUSE_ILLEGAL = 4'd2,
-                     CAUSE_BREAKPOINT = 4'd3, CAUSE_LOAD_MISALIGNED = 4'd4, CAUSE_LOAD_FAULT = 4'd5,
-                     CAUSE_STORE_MISALIGNED = 4'd6, CAUSE_STORE_FAULT = 4'd7, CAUSE_ECALL_M = 4'd11;
+`include "tl_cpu_causes.vh"
 
     // Control signals used before the stage that drives them.
     wire        gs;              // global stall: W waits for its data bus answer
@@ -67,8 +66,11 @@ module tl_cpu_pipe #(
     wire [31:0] redirect_w_pc;
     wire        redirect_e;      // E redirects: taken branch, jal, jalr
     wire [31:0] redirect_e_pc;
-    wire        redirect    = flush_w || redirect_e;
-    wire [31:0] redirect_pc = flush_w ? redirect_w_pc : redirect_e_pc;
+    wire        redirect    = flush_w || redirect_e;   // kills D (and E, M for flush_w)
+    wire        redirect_d;      // D predicts a jump taken: jal, or a branch backwards
+    wire [31:0] redirect_d_pc;
+    wire        refetch     = redirect || redirect_d;
+    wire [31:0] refetch_pc  = flush_w ? redirect_w_pc : (redirect_e ? redirect_e_pc : redirect_d_pc);
 
     // ==== F: instruction fetch =================================================================
     reg         f_out;           // a request is outstanding (presented before, not answered yet)
@@ -112,6 +114,10 @@ module tl_cpu_pipe #(
     wire d_uses_rs1 = d_opcode != 7'b0110111 && d_opcode != 7'b0010111 && d_opcode != 7'b1101111;
     wire d_uses_rs2 = d_opcode == 7'b1100011 || d_opcode == 7'b0100011 || d_opcode == 7'b0110011;
     wire d_fencei   = d_opcode == 7'b0001111 && d_funct3 == 3'b001;
+    // Static prediction: jal always, a conditional branch when it jumps
+    // backwards (a loop); not a target that would trap as misaligned (E
+    // raises that).  E checks every prediction and corrects a wrong one.
+    wire d_pred = (d_opcode == 7'b1101111 || (d_opcode == 7'b1100011 && d_insn[31])) && !d_imm[1];
 
     // Load-use hazard: a load's word (or a CSR's old value) reaches rd only
     // in W, and is not forwarded from there (that would put a block RAM's
@@ -127,6 +133,8 @@ module tl_cpu_pipe #(
 
     wire e_load;                                // E takes a new instruction (or a bubble) this edge
     wire d_go = d_valid && !d_hazard && e_load;    // D moves on (unless a redirect kills it)
+    assign redirect_d    = d_go && d_pred && !redirect;
+    assign redirect_d_pc = d_pc + d_imm;
 
     // ==== register file =====================================================================
     wire        rf_we;
@@ -147,16 +155,19 @@ module tl_cpu_pipe #(
     reg         e_lui, e_auipc, e_jal, e_jalr, e_branch, e_is_load, e_is_store, e_use_imm, e_alt;
     reg         e_md, e_csr, e_csr_writes, e_ecall, e_ebreak, e_mret, e_writes, e_illegal;
     reg         e_md_started, e_md_fin;
-    wire [4:0]  e_rs2 = e_insn[24:20];
+    reg         e_pred;          // D predicted it taken and fetched its target
 
-    // forwarding: M's and W's early results (ALU, jumps, lui/auipc, multiply/divide)
-    reg         m_early, w_early;
+    // Forwarding: M's and W's early results (ALU, jumps, lui/auipc,
+    // multiply/divide).  The choice is made in D, beside the register file
+    // read, and registered (f1m.. below): the instruction in E moves to M
+    // and the one in M to W in the edge D moves to E, so D compares with
+    // them; E then starts from flip-flops.  (E stays longer only for a
+    // multiply/divide, which takes its operands in its first cycle, or when
+    // the whole pipeline waits, which keeps M and W as they are.)
+    reg         m_early;
     reg  [31:0] m_result, w_result;
     reg  [4:0]  w_rd;
-    wire f1m = m_valid && m_early && m_rd == e_rs1;
-    wire f1w = w_valid && w_early && w_rd == e_rs1;
-    wire f2m = m_valid && m_early && m_rd == e_rs2;
-    wire f2w = w_valid && w_early && w_rd == e_rs2;
+    reg         f1m, f1w, f2m, f2w;
     wire [31:0] rs1v = f1m ? m_result : (f1w ? w_result : rf_rdata1);
     wire [31:0] rs2v = f2m ? m_result : (f2w ? w_result : rf_rdata2);
 
@@ -221,18 +232,25 @@ module tl_cpu_pipe #(
     wire        md_done;
     wire [31:0] md_result;
     wire        in_md    = e_valid && e_md && e_md_started;   // a multiply/divide in progress
-    wire        md_start = e_valid && e_md && !e_md_started && !e_trap && !flush_w;
+    // the exceptions a multiply/divide can have (no address, no target): kept
+    // apart from e_trap, so that the pipeline's enables do not wait for E's adders
+    wire        md_trap  = e_ferr || irq_pending;
+    wire        md_start = e_valid && e_md && !e_md_started && !md_trap && !flush_w;
     /* verilator lint_off PINCONNECTEMPTY */
     tl_cpu_muldiv u_muldiv (
-        .clk(clk), .rst(rst), .start(md_start), .abort(flush_w || (in_md && e_trap)),
+        .clk(clk), .rst(rst), .start(md_start), .abort(flush_w || (in_md && md_trap && !gs)),
         .funct3(e_funct3), .a(rs1v), .b(rs2v), .busy(), .done(md_done), .result(md_result)
     );
     /* verilator lint_on PINCONNECTEMPTY */
-    wire e_done = !e_md || e_trap || md_done || e_md_fin;
+    wire e_done = !e_md || md_trap || md_done || e_md_fin;
     wire e_adv  = e_valid && e_done && !gs && !flush_w;   // E moves to M
     assign e_load = !gs && (!e_valid || e_done);
-    assign redirect_e    = e_valid && !e_trap && !gs && (e_taken || e_jal || e_jalr);
-    assign redirect_e_pc = e_jtarget;
+    // a jump or taken branch D did not predict, or a predicted branch not
+    // taken.  Also for an instruction that traps: W's trap redirects again
+    // (and keeps the trap logic out of the fetch address).
+    assign redirect_e    = e_valid && !gs &&
+                           (e_jalr || (e_jal && !e_pred) || (e_branch && e_taken != e_pred));
+    assign redirect_e_pc = (e_branch && !e_taken) ? e_pc4 : e_jtarget;
 
     reg [31:0] e_result;
     always @(*) begin
@@ -318,6 +336,9 @@ module tl_cpu_pipe #(
 
     // ==== pipeline registers =====================================================================
     wire e_writes_nz = e_writes && e_rd != 5'd0;
+    // E's result can be forwarded from M (the trap check is left out: a
+    // trapping instruction's readers never retire)
+    wire e_early = e_writes_nz && !e_is_load && !e_csr;
     always @(posedge clk) begin
         if (rst) begin
             f_out     <= 1'b0;
@@ -333,8 +354,8 @@ module tl_cpu_pipe #(
             // ---- F ----
             f_out      <= ibus_req;
             f_out_addr <= ibus_addr;
-            if (redirect) begin
-                f_pc      <= redirect_pc;
+            if (refetch) begin
+                f_pc      <= refetch_pc;
                 f_discard <= ibus_req;
             end else begin
                 if (f_new)
@@ -343,25 +364,26 @@ module tl_cpu_pipe #(
                     f_discard <= 1'b0;
             end
             // ---- instruction queue: D takes the head (or the answer itself when empty) ----
-            if (redirect) begin
-                q_n <= 2'd0;
-            end else begin
-                if (q_n == 2'd0) begin
-                    if (resp && !d_go) begin
-                        q_insn0 <= ibus_rdata; q_pc0 <= f_out_addr; q_err0 <= ibus_err; q_n <= 2'd1;
-                    end
-                end else if (q_n == 2'd1) begin
-                    if (d_go && resp) begin
-                        q_insn0 <= ibus_rdata; q_pc0 <= f_out_addr; q_err0 <= ibus_err;
-                    end else if (d_go) begin
-                        q_n <= 2'd0;
-                    end else if (resp) begin
-                        q_insn1 <= ibus_rdata; q_pc1 <= f_out_addr; q_err1 <= ibus_err; q_n <= 2'd2;
-                    end
-                end else if (d_go) begin   // two entries: no request was outstanding
-                    q_insn0 <= q_insn1; q_pc0 <= q_pc1; q_err0 <= q_err1; q_n <= 2'd1;
+            // The words load whatever a redirect does (it only empties the queue).
+            if (q_n == 2'd0 || (q_n == 2'd1 && d_go)) begin
+                if (resp) begin
+                    q_insn0 <= ibus_rdata; q_pc0 <= f_out_addr; q_err0 <= ibus_err;
                 end
+            end else if (q_n == 2'd1) begin
+                if (resp) begin
+                    q_insn1 <= ibus_rdata; q_pc1 <= f_out_addr; q_err1 <= ibus_err;
+                end
+            end else if (d_go) begin   // two entries: no request was outstanding
+                q_insn0 <= q_insn1; q_pc0 <= q_pc1; q_err0 <= q_err1;
             end
+            if (refetch)
+                q_n <= 2'd0;
+            else if (q_n == 2'd0)
+                q_n <= (resp && !d_go) ? 2'd1 : 2'd0;
+            else if (q_n == 2'd1)
+                q_n <= (d_go && !resp) ? 2'd0 : ((resp && !d_go) ? 2'd2 : 2'd1);
+            else if (d_go)
+                q_n <= 2'd1;
             // ---- D -> E ----
             if (e_load) begin
                 e_valid <= d_go && !redirect;
@@ -377,10 +399,14 @@ module tl_cpu_pipe #(
             end
             if (e_load) begin
                 e_pc <= d_pc; e_insn <= d_insn; e_imm <= d_imm; e_rs1 <= d_rs1; e_rd <= d_rd;
-                e_funct3 <= d_funct3; e_ferr <= d_ferr; e_fencei <= d_fencei;
+                e_funct3 <= d_funct3; e_ferr <= d_ferr; e_fencei <= d_fencei; e_pred <= d_pred;
                 {e_illegal, e_writes, e_mret, e_ebreak, e_ecall, e_csr_writes, e_csr, e_md, e_alt,
                  e_use_imm, e_is_store, e_is_load, e_branch, e_jalr, e_jal, e_auipc, e_lui} <= d_flags;
                 e_late <= (d_flags[5] || d_flags[10]) && d_flags[15] && d_rd != 5'd0;
+                f1m <= e_valid && e_early && e_rd == d_rs1;
+                f2m <= e_valid && e_early && e_rd == d_rs2;
+                f1w <= m_valid && m_early && m_rd == d_rs1;
+                f2w <= m_valid && m_early && m_rd == d_rs2;
             end
             // ---- E -> M ----
             if (!gs) begin
@@ -391,7 +417,7 @@ module tl_cpu_pipe #(
                 m_load <= e_is_load; m_store <= e_is_store;
                 m_trap <= e_trap; m_irq <= e_irq; m_code <= e_code; m_tval <= e_tval;
                 m_wr <= e_writes_nz;
-                m_early <= e_writes_nz && !e_is_load && !e_csr && !e_trap;
+                m_early <= e_early;
                 m_late  <= e_late;
                 m_csr <= e_csr; m_csr_writes <= e_csr_writes; m_mret <= e_mret; m_fencei <= e_fencei;
                 m_csr_src <= e_funct3[2] ? {27'd0, e_rs1} : rs1v;
@@ -404,7 +430,7 @@ module tl_cpu_pipe #(
                 w_addr <= m_addr; w_be <= m_be; w_wdata <= m_wdata;
                 w_load <= m_load; w_store <= m_store; w_acc <= m_acc;
                 w_trap <= m_trap; w_irq <= m_irq; w_code <= m_code; w_tval <= m_tval;
-                w_wr <= m_wr; w_early <= m_early;
+                w_wr <= m_wr;
                 w_csr <= m_csr; w_csr_writes <= m_csr_writes; w_mret <= m_mret; w_fencei <= m_fencei;
                 w_csr_src <= m_csr_src;
             end

@@ -26,11 +26,15 @@ FUZZ_SECONDS = int(os.environ.get("TL_FUZZ_BENCH_SECONDS", "120"))
 BUDGET_CYCLES = 1250
 
 
-def _measure(period_us: int, move_mode: int = 1, short: bool = False) -> dict:
+def _measure(period_us: int, move_mode: int = 1, short: bool = False, cpu_pipelined: int = 0) -> dict:
+    """The firmware test bench's worst-case measurement on the SoC (tl_soc's
+    CPU_PIPELINED picks the core: scripts/benches/bench_cpu.py runs it on both)."""
     img = servo_tb_image()
-    out = REPO / "build" / "firmware" / f"measure_{period_us}_{move_mode}{'_short' if short else ''}.json"
+    out = REPO / "build" / "firmware" / (f"measure_{period_us}_{move_mode}{'_short' if short else ''}"
+                                         f"{'_pipe' if cpu_pipelined else ''}.json")
     run("soc", "verilator", "test_firmware", bench="firmware",
-        parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'},
+        parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"',
+                    **({"CPU_PIPELINED": 1} if cpu_pipelined else {})},
         testcase="measure_control_iteration",
         extra_env={"TL_FW_MEASURE": "1", "TL_FW_PERIOD_US": str(period_us), "TL_FW_MOVE_MODE": str(move_mode),
                    "TL_FW_SHORT_MOVE": "1" if short else "0", "TL_FW_MEASURE_OUT": str(out)})

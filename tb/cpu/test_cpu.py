@@ -24,6 +24,7 @@ import randprog
 from cpu_progs import BUILD, PROGS, build, run_iss
 from cpu_tb import CpuTb
 from torqueloop.oracles.rv32 import read_elf
+from torqueloop.flow.cpu_progs import CPU_CORES as CORES
 from torqueloop.flow.simrun import run, sims_for
 
 TAG = os.environ.get("CPU_PROG_TAG", "default")
@@ -141,8 +142,6 @@ async def interrupts_latency_nesting_and_divide(dut):
     dut._log.info("%d traps logged, %d cycles", count, res.cycles)
 
 
-#: the cores cpu_sim_top can hold: name -> its parameters
-CORES = {"multi": {"PIPELINED": 0}, "pipe": {"PIPELINED": 1}}
 
 
 @pytest.mark.parametrize("core", list(CORES))

@@ -23,6 +23,9 @@ GCC = "riscv64-unknown-elf-gcc"
 ARCH = ["-march=rv32im_zicsr", "-mabi=ilp32"]
 RAM_BASE = regs.RAM_BASE      # the SoC's memory map, as cpu_sim_top decodes it
 RAM_BYTES = regs.RAM_SIZE     # cpu_sim_top's RAM_BYTES default
+#: the cores tb/cpu/cpu_sim_top holds: name (run_elf.py --core, the test
+#: benches' parameter) -> the harness's parameters
+CPU_CORES: dict[str, dict[str, int]] = {"multi": {"PIPELINED": 0}, "pipe": {"PIPELINED": 1}}
 
 
 def build(name: str, sources: list[Path], tag: str = "", opt: str = "-O2",
