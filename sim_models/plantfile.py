@@ -59,9 +59,11 @@ def _fields(obj: object) -> dict[str, object]:
 
 
 def export_text(p: PlantParams, source: str, description: str = "",
-                carrier_hz: float = SYSTEM.working_hz) -> str:
+                carrier_hz: float = SYSTEM.working_hz, measured: dict[str, dict[str, float]] | None = None) -> str:
     """The plant file of ``p`` (``source``: the variant name or file it came
-    from); the identifiable dead zones at ``carrier_hz``."""
+    from); the identifiable dead zones at ``carrier_hz``.  ``measured``: an
+    identification's estimates (with their ``_sigma``) for some axes, written
+    in their ``[identifiable.<axis>]`` sections instead of the closed forms."""
     lines = ["# torqueloop plant file: SI units, each key names its unit (docs/identification.md, 'The plant file').",
              "# [identifiable.*] is what an encoder-only identification can see; it is not read back as a plant.",
              ""]
@@ -71,7 +73,8 @@ def export_text(p: PlantParams, source: str, description: str = "",
     for i, a in enumerate(p.axes, start=1):
         lines += _section(f"axis{i}", _fields(a))
     for axis, ident in identifiable_plant(p, carrier_hz).items():
-        lines += _section(f"{IDENTIFIABLE}.{axis}", {"carrier_hz": float(carrier_hz), **ident.as_dict()})
+        rows = (measured or {}).get(axis, ident.as_dict())
+        lines += _section(f"{IDENTIFIABLE}.{axis}", {"carrier_hz": float(carrier_hz), **rows})
     return "\n".join(lines)
 
 
@@ -94,3 +97,48 @@ def identified(path: Path | str) -> dict[str, dict[str, float]]:
     """The [identifiable.<axis>] sections of a plant file (empty if none)."""
     d = read_toml(path).get(IDENTIFIABLE, {})
     return {k: dict(v) for k, v in d.items() if isinstance(v, dict)}
+
+
+def plant_from_identified(base: PlantParams, axis: int, est: dict[str, float], winding_ohm: float,
+                          carrier_hz: float = SYSTEM.working_hz) -> PlantParams:
+    """A plant whose ``axis`` reproduces an identification's estimates, the
+    rest (springs, screw, table, the other axis) kept from ``base``: k_e = k_t
+    = the back-EMF constant, the winding resistance as measured, the rotor
+    inertia what the estimate leaves after the reflected load, the brush drop
+    as a hard drop, the rotor's Coulomb friction what the estimates leave after
+    the base's table friction (and gravity), and its breakaway found so that
+    the closed form's dead zone at ``carrier_hz`` is the measured one (the
+    mean of both directions).  The plant model has no viscous term: a
+    viscous estimate is not carried."""
+    from sim_models.axis import AxisConsts
+    from sim_models.identifiable import _motor_load, identifiable, rigid_inertia_at_motor
+
+    a = base.axes[axis]
+    k = est["back_emf_v_s_per_rad"]
+    a = a.replace(ke_V_s_per_rad=k, km_N_m_per_A=k * a.gear_efficiency * a.gear_ratio, resistance_ohm=winding_ohm,
+                  brush_knee_A=0.0, brush_drop_V=max(0.0, (est.get("brush_drop_pos_v", 0.0)
+                                                               + est.get("brush_drop_neg_v", 0.0)) / 2),
+                  motor_coulomb_N_m=0.0, motor_static_N_m=0.0)
+    c = AxisConsts.build(a, base.bridge)
+    behind = rigid_inertia_at_motor(c) - a.rotor_inertia_kg_m2
+    a = a.replace(rotor_inertia_kg_m2=max(1e-12, est["inertia_at_motor_kg_m2"] - behind))
+    load = (_motor_load(c, +1, c.fc) - _motor_load(c, -1, c.fc)) / 2
+    tc = max(0.0, (est["coulomb_pos_n_m"] + est["coulomb_neg_n_m"]) / 2 - load)
+    a = a.replace(motor_coulomb_N_m=tc, motor_static_N_m=tc)
+    want = (est["dead_zone_pos_pct"] + est["dead_zone_neg_pct"]) / 2
+    stall = a.motor_stall_torque_N_m(base.bridge)
+    lo, hi = tc, 0.99 * stall
+
+    def dz(ts: float) -> float:
+        i = identifiable(a.replace(motor_static_N_m=ts), base.bridge, carrier_hz)
+        return (i.dead_zone_pos_pct + i.dead_zone_neg_pct) / 2
+
+    if dz(lo) < want:
+        for _ in range(60):
+            mid = (lo + hi) / 2
+            lo, hi = (mid, hi) if dz(mid) < want else (lo, mid)
+        a = a.replace(motor_static_N_m=hi)
+    axes = list(base.axes)
+    axes[axis] = a
+    a.validate(base.bridge, "identified: ")
+    return dataclasses.replace(base, axes=tuple(axes))

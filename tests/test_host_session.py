@@ -12,40 +12,16 @@ import pytest
 
 from torqueloop.host.client import Client, CommandRejected
 from torqueloop.host.session import MoveLimits, Session, move_refusal
-from torqueloop.sim.simboard import SimBoard
+from torqueloop.sim.simboard import SimBoard, SimBoardTransport
 from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
 
 PERIOD_S = 0.025
 
 
-class BoardTransport:
-    """The simulated board as the client's transport: it answers at once; a
-    read with nothing waiting runs it one control period on."""
-
-    def __init__(self, board: SimBoard) -> None:
-        self.b, self.rx = board, b""
-
-    def write(self, data: bytes) -> int:
-        self.b.write(data)
-        return len(data)
-
-    def read(self, size: int = 1) -> bytes:
-        if not self.rx:
-            self.rx = self.b.read()
-        if not self.rx:
-            self.b.advance(PERIOD_S)
-            self.rx = self.b.read()
-        out, self.rx = self.rx[:size], self.rx[size:]
-        return out
-
-    def close(self) -> None:
-        pass
-
-
 def client() -> Client:
     b = SimBoard(key=auth.TEST_KEY)
-    c = Client(BoardTransport(b), timeout=1.0, retries=0, clock=lambda: b.t, key=auth.TEST_KEY)
+    c = Client(SimBoardTransport(b, PERIOD_S), timeout=1.0, retries=0, clock=lambda: b.t, key=auth.TEST_KEY)
     c.connect()
     return c
 

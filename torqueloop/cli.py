@@ -929,6 +929,49 @@ def cmd_characterize(ctx: Ctx) -> int:
                               f"({e.name} is missing): pip install 'torqueloop[sim]'") from None
 
 
+def cmd_identify(ctx: Ctx) -> int:
+    """``torqueloop identify``: the axis's plant from its encoder alone, with the
+    open-loop drive (torqueloop/host/identify.py; docs/identification.md); a
+    plant file with the estimates and physical parameters consistent with
+    them (the rest of the plant from ``--base``)."""
+    from sim_models.params import PlantParamError
+    from sim_models.plantfile import export_text, plant_from_identified
+    from sim_models.variants import plant_of
+    from torqueloop.host import identify as ident
+
+    a = ctx.args
+    if a.resistance_ohm is not None and not (math.isfinite(a.resistance_ohm) and a.resistance_ohm > 0):
+        raise BadValue(f"--resistance-ohm {a.resistance_ohm:g}: the winding's resistance, a positive number of ohm")
+    try:
+        base = plant_of(a.base).params()
+    except PlantParamError as e:
+        raise BadValue(f"--base: {e}") from None
+    ctx.require_key("DRIVE")
+    c = ctx.client
+    mech = ctx.mech(a.axis)
+    window = units.parse_position(a.travel, mech, "counts")
+    if window <= 0:
+        raise BadValue(f"--travel {a.travel}: give the travel allowed on either side, e.g. 10mm")
+    r_loop = None if a.resistance_ohm is None else a.resistance_ohm + 2 * base.bridge.r_on_ohm
+    plan = ident.Plan(axis=a.axis, window_counts=window, supply_v=base.bridge.supply_V, resistance_ohm=r_loop,
+                      carrier_hz=a.pwm_freq)
+    say = (lambda m: None) if a.json else (lambda m: print(m, file=sys.stderr, flush=True))
+    res = ident.identify_axis(c, plan, say)
+    name = P.SYSTEM.axes[a.axis].name
+    est = res.estimates
+    out = {"axis": a.axis, "seconds": round(res.seconds, 2), "estimates": est, "out": a.out}
+    if a.out:
+        plant = base
+        if a.resistance_ohm is not None:
+            plant = plant_from_identified(base, a.axis, est, a.resistance_ohm, a.pwm_freq)
+        Path(a.out).write_text(export_text(plant, f"identified on axis {name}", "torqueloop identify",
+                                           a.pwm_freq, measured={name: est}))
+    ctx.out(out, lambda: "\n".join([f"axis {a.axis} ({name}) identified in {res.seconds:.1f} s:"]
+                                     + [f"  {k} = {v:.6g}" for k, v in est.items() if not k.endswith("_sigma")]
+                                     + ([f"wrote {a.out}"] if a.out else [])))
+    return 0
+
+
 def cmd_plant(ctx: Ctx) -> int:
     """``torqueloop plant export``: a plant variant or plant file as a plant
     file, with what an encoder-only identification can see of each axis
@@ -1152,6 +1195,19 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("action", choices=["new", "id"])
     sp.add_argument("file", nargs="?")
     sp.set_defaults(fn=cmd_key)
+    sp = sub.add_parser("identify", help="the axis's plant from its encoder, with the open-loop drive "
+                                         "(docs/identification.md)")
+    axis_opts(sp, False)
+    sp.add_argument("--travel", required=True, metavar="DIST",
+                    help="travel allowed on either side of where the axis stands (10mm, 2rev, 5000)")
+    sp.add_argument("--resistance-ohm", type=float, default=None, metavar="OHM",
+                    help="the winding's resistance, measured with a meter at the motor's terminals: "
+                         "without it only the voltage-domain quantities are identified")
+    sp.add_argument("--pwm-freq", type=_bounded(float, 1, 25_000, "--pwm-freq"), default=float(P.SYSTEM.working_hz),
+                    metavar="HZ", help=f"the carrier to identify at [{P.SYSTEM.working_hz}]")
+    sp.add_argument("--base", default="paper", help="the plant the rest comes from (springs, screw, table) [paper]")
+    sp.add_argument("--out", default=None, metavar="FILE", help="write a plant file")
+    sp.set_defaults(fn=cmd_identify)
     sp = sub.add_parser("plant", help="plant files: `plant export VARIANT > my.toml` (docs/identification.md)")
     sp.add_argument("action", choices=["export"])
     sp.add_argument("variant", nargs="?", default=None, help="plant variant: paper-printed, paper, lab, ... [paper]")

@@ -304,6 +304,32 @@ class SimBoard:
 _GRAY_INDEX = {(0, 0): 0, (1, 0): 1, (1, 1): 2, (0, 1): 3}   # sim_models.encoder's A/B Gray code
 
 
+class SimBoardTransport:
+    """The simulated board as a :class:`~torqueloop.host.client.Client`'s
+    transport in simulated time: it answers at once, and a read with nothing
+    waiting runs the board ``step_s`` on, so the client's clock
+    (``clock=lambda: board.t``) and its waits are the board's."""
+
+    def __init__(self, board: "SimBoard", step_s: float = 0.025) -> None:
+        self.b, self.step_s, self.rx = board, step_s, b""
+
+    def write(self, data: bytes) -> int:
+        self.b.write(data)
+        return len(data)
+
+    def read(self, size: int = 1) -> bytes:
+        if not self.rx:
+            self.rx = self.b.read()
+        if not self.rx:
+            self.b.advance(self.step_s)
+            self.rx = self.b.read()
+        out, self.rx = self.rx[:size], self.rx[size:]
+        return out
+
+    def close(self) -> None:
+        pass
+
+
 class SimBootRom:
     """The boot ROM's upload state machine (docs/bootloader.md) for the
     simulated board, in simulated time; frames and CRCs through
