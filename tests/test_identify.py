@@ -22,7 +22,6 @@ from sim_models.plantfile import export_text, identified, load_plant_file
 from sim_models.variants import PlantSpec, load_variant
 from torqueloop import cli
 from torqueloop.host.client import Client
-from torqueloop.host.identify import Plan, identify_axis
 from torqueloop.sim.simboard import SimBoard, SimBoardTransport
 from torqueloop.spec import auth
 from torqueloop.spec.system import SYSTEM
