@@ -6,8 +6,8 @@ mode and friction of sim_models/axis.py) is driven the way an open-loop
 identification drives a motor: a duty staircase per direction, a coast-down,
 a breakaway search from rest.  What the fits make of those traces is held
 against the closed forms of sim_models/identifiable.py computed from the
-true parameters.  The fits never see the parameters; the plant is the lab
-plant with its friction and rotor inertia scaled by factors the fits do
+true parameters.  The fits never see the parameters; the plant is the
+lab-2025 plant with its friction and rotor inertia scaled by factors the fits do
 not know.  This checks the fitting chain on noise-free, averaged traces:
 encoder quantisation, PWM and the board's timing are the simulated board's
 test (test_identify_simboard)."""
@@ -53,7 +53,7 @@ def test_fit_exponential_finds_a_known_time_constant(seed):
 
 
 def _scaled_lab():
-    p = load_variant("lab")
+    p = load_variant("lab-2025")        # the hard brush drop the closed form inverts exactly
     axes = tuple(a.replace(motor_coulomb_N_m=a.motor_coulomb_N_m * 1.3, motor_static_N_m=a.motor_static_N_m * 1.3,
                            rotor_inertia_kg_m2=a.rotor_inertia_kg_m2 * 0.8) for a in p.axes)
     return dataclasses.replace(p, axes=axes)
@@ -80,6 +80,7 @@ def _direction(p, axis: int, sign: int, step_s: float) -> Direction:
     while not coast or coast[-1] > 0.2 * speeds[-1]:
         plant.advance(DT, pins)
         coast.append(abs(plant.motor_speed(axis)))
+        assert len(coast) < 5.0 / DT, "the coast-down did not slow to 20 % in 5 s"
     w = np.array(coast)
     coast_line = fit_line((w[1:] + w[:-1]) / 2, np.diff(w) / DT)
 
