@@ -29,7 +29,7 @@ from torqueloop.sim.epcs import SECTOR_BYTES, Epcs
 from torqueloop.spec import protocol as P
 
 import tbutil
-from test_firmware import DEFINES, KEY, PERIOD_US, TB
+from test_firmware import KEY, PERIOD_US, TB
 
 #: the model's write times, shortened (the firmware waits by READ STATUS, whatever they are)
 PROGRAM_S, ERASE_S = 20e-6, 200e-6
@@ -123,11 +123,10 @@ async def power_loss_in_a_save_keeps_the_old_copy_or_the_whole_new_one(dut):
 
 @pytest.mark.parametrize("sim", ["verilator"])
 def test_firmware_store(sim):
-    from torqueloop.flow.firmware import build
     from torqueloop.flow.simrun import run, sims_for
+    from torqueloop.flow.tb_images import servo_tb_image
     if sim not in sims_for("soc"):
         pytest.skip(f"{sim} not selected")
-    defines = {k: str(v) for k, v in DEFINES.items()}
-    img = build("servo_tb", defines, key=KEY)
+    img = servo_tb_image(KEY)
     run("soc", sim, "test_firmware_store",
         parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'})

@@ -144,6 +144,12 @@ class RemoteClient:
     def counters(self) -> dict[str, int]:
         return self._call("counters")
 
+    def store_report(self) -> dict[str, int] | None:
+        return self._call("store_report")
+
+    def save(self) -> dict[str, int]:
+        return self._call("save")
+
     def holds(self) -> dict[str, list[str]]:
         return self._call("holds")
 

@@ -27,7 +27,7 @@ Methods (params in brackets): ``identify``, ``status`` [axis],
 ``get_param`` [name, axis], ``set_param`` [name, value, axis], ``enable``
 [mask, on], ``move`` [axis, target, trapezoid, unhomed], ``home`` [axis,
 mode, index], ``heartbeat``, ``stop`` [mask], ``clear_fault`` [mask],
-``counters``, ``stats``, ``holds``, ``subscribe`` [every], ``unsubscribe``.
+``counters``, ``store_report``, ``save``, ``stats``, ``holds``, ``subscribe`` [every], ``unsubscribe``.
 
 Holding an axis: a client that enables an axis, moves it or homes it to
 a switch holds it.  While any client holds an axis the server sends HEARTBEATs
@@ -330,6 +330,12 @@ class SessionServer:
 
     def m_counters(self, conn: _Conn) -> dict:
         return dict(self._run(self.client.counters))
+
+    def m_store_report(self, conn: _Conn) -> dict | None:
+        return self._run(self.client.store_report)
+
+    def m_save(self, conn: _Conn) -> dict:
+        return dict(self._run(self.client.save))
 
     def m_stats(self, conn: _Conn) -> dict:
         return {k: v for k, v in vars(self.client.stats).items() if k != "text_sample"}
