@@ -239,6 +239,8 @@ def test_shell_with_history_completion_and_a_live_plot(url, user_env, tmp_path: 
         sh.expect("not inside the shell")
         sh.expect_exact("[exit 2]")
         sh.expect_exact("torqueloop> ")
+        sh.sendline("set limit_sw 0")      # `home here` is for an axis without switches
+        sh.expect_exact("torqueloop> ")
         sh.sendline("home here")
         sh.expect_exact("torqueloop> ")
         sh.sendline("enable")              # held by the shell's session: the watchdog is fed between commands
@@ -253,6 +255,8 @@ def test_shell_with_history_completion_and_a_live_plot(url, user_env, tmp_path: 
         sh.sendline("status")
         sh.expect(r"axis 0: disabled, homed; position (\d+) counts.*faults: none")
         assert abs(int(sh.match.group(1)) - 4200) <= 60
+        sh.expect_exact("torqueloop> ")
+        sh.sendline("set limit_sw 1")      # the board as the other tests of this module found it
         sh.expect_exact("torqueloop> ")
         sh.sendline("quit")
         sh.expect(pexpect.EOF)

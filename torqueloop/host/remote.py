@@ -12,6 +12,8 @@ import socket
 import time
 from typing import Any
 
+from torqueloop.spec import protocol as P
+
 from . import client as C
 from .serve import PROTOCOL, VERSION, split_addr
 
@@ -31,6 +33,7 @@ def _raise(err: dict) -> None:
         e = C.CommandRejected.__new__(C.CommandRejected)
         Exception.__init__(e, msg)
         e.command, e.status = err.get("command", ""), err.get("status", -1)
+        e.why = err.get("why", P.REFUSAL["NONE"])
         raise e
     if kind in _KINDS:
         raise _KINDS[kind](msg)

@@ -18,7 +18,7 @@ Wire protocol (docs/host.md, "The session server"): TCP, by default on
   "key_id": ID or null}``;
 - a request is ``{"id": ANY, "method": NAME, "params": {...}}``; the answer
   carries the same ``id`` and either ``"result"`` or ``"error": {"kind":
-  CLASS, "message": TEXT, "command": ..., "status": ...}``;
+  CLASS, "message": TEXT, "command": ..., "status": ..., "why": ...}``;
 - ``subscribe`` ``{"every": N}`` starts ``{"type": "telemetry", "record":
   {...}}`` lines (one record every N control periods) until
   ``unsubscribe`` or the end of the connection.
@@ -140,7 +140,7 @@ def _jsonable(o: Any) -> Any:
 def error_obj(e: Exception) -> dict:
     out: dict[str, Any] = {"kind": type(e).__name__, "message": str(e)}
     if isinstance(e, CommandRejected):
-        out.update(command=e.command, status=e.status)
+        out.update(command=e.command, status=e.status, why=e.why)
     return out
 
 
