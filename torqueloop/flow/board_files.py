@@ -9,7 +9,7 @@ python -m torqueloop.flow constraints checks them; both go through this module.
 
 The board's own pin data (FPGA location and I/O standard of each board
 signal) is constraints/de0_cv_board_pins.csv, a copy of Terasic's DE0_CV.qsf
-assignments kept in the repo so the project builds without ../shared.
+assignments kept in the repo, the one the project builds from.
 """
 
 from __future__ import annotations
@@ -146,7 +146,7 @@ def split_bit(signal: str) -> tuple[str, int | None]:
 def header_pin(gpio_index: int) -> int:
     """Pin of the 40-pin header that carries GPIO_x[gpio_index].
 
-    Standard Terasic layout (../shared/board/README.md): GPIO[0..9] on pins
+    Standard Terasic layout (DE0-CV user manual, GPIO expansion headers): GPIO[0..9] on pins
     1-10, +5 V on 11, GND on 12, GPIO[10..25] on 13-28, +3.3 V on 29, GND on
     30, GPIO[26..35] on 31-40.
     """
@@ -274,7 +274,7 @@ def validate(table: PinTable, board_pins: dict[str, BoardPin]) -> list[str]:
 
 
 def compare_board_tables(ours: dict[str, BoardPin], shared: dict[str, BoardPin]) -> list[str]:
-    """Differences between the repo's board pin copy and ../shared's."""
+    """Differences between the repo's board pin copy and an outside reference table."""
     problems = []
     for sig in sorted(set(ours) | set(shared)):
         a, b = ours.get(sig), shared.get(sig)
