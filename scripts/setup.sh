@@ -16,7 +16,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 # clang + libclang-rt: libFuzzer and the sanitizer runtimes for the firmware's host tests.
-APT_PACKAGES=(iverilog ghdl yosys gcc-riscv64-unknown-elf g++ make perl clang libclang-rt-14-dev)
+# ccache: the Verilator builds of one test run share their compiled runtime (flow/tools.py).
+APT_PACKAGES=(iverilog ghdl yosys gcc-riscv64-unknown-elf g++ make perl clang libclang-rt-14-dev ccache)
 VENV=.venv
 PYTHON=${PYTHON:-python3}
 
