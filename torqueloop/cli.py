@@ -886,6 +886,10 @@ def cmd_sim(ctx: Ctx) -> int:
     if a.rtl:
         from torqueloop.sim.rtlboard import RtlBoard
 
+        if a.flash:
+            raise BadValue("sim --rtl --flash: the RTL co-simulation attaches no flash model to the board top's "
+                           "flash block (it reads as an erased flash: save fails); --flash is the "
+                           "firmware-in-the-loop board's")
         board: Any = RtlBoard(seed=a.seed, plant=plant, key=key)
         what = f"RTL board image (Verilator) + plant model, far below real time, {keyed}"
     else:
