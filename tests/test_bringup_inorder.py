@@ -82,10 +82,12 @@ def test_the_documented_bring_up_in_order(user, tmp_path, capsys) -> None:
         assert st["0"]["saved_parameters"]["saved"] is False          # a new board: nothing saved yet
 
         # 2. open-loop drive both ways: the encoder counts the way the duty says
-        up = tl(url, capsys, "drive", "5%", "--for", "1")
-        down = tl(url, capsys, "drive", "-5%", "--for", "1")
+        up = tl(url, capsys, "drive", "5%", "--for", "2")
+        down = tl(url, capsys, "drive", "-5%", "--for", "2")
         assert up["sign_matches"] and down["sign_matches"], (up, down)
-        assert up["moved_counts"] > 100 and down["moved_counts"] < -100
+        # a few hundred counts a second once it runs; a board that falls behind on a loaded machine
+        # starts later - far more than the few counts a disabled axis creeps
+        assert up["moved_counts"] > 50 and down["moved_counts"] < -50, (up["moved_counts"], down["moved_counts"])
         assert not up["faults"] and not down["faults"]
         st = tl(url, capsys, "status", "--axis", "0")
         assert not st["0"]["enabled"] and st["0"]["fault_names"] == []
@@ -99,9 +101,9 @@ def test_the_documented_bring_up_in_order(user, tmp_path, capsys) -> None:
         assert tl(url, capsys, "set", "soft_max", "15mm")["raw"] == 15 * COUNTS_PER_MM
         assert tl(url, capsys, "set", "vmax", "8mm/s")["raw"] == 8 * COUNTS_PER_MM
         kp = tl(url, capsys, "get", "kp", "--axis", "0")["kp"]["value"]
-        tl(url, capsys, "set", "kp", f"{kp * 0.8:.4f}", "--axis", "0")
+        tl(url, capsys, "set", "kp", f"{kp * 1.25:.4f}", "--axis", "0")
         kp_set = tl(url, capsys, "get", "kp", "--axis", "0")["kp"]["value"]
-        assert abs(kp_set - kp * 0.8) < 1e-3 * max(1.0, kp)
+        assert abs(kp_set - kp * 1.25) < 1e-3 * max(1.0, kp)
 
         # 5. save
         saved = tl(url, capsys, "save")
