@@ -143,11 +143,14 @@ class EpcsPins:
     """The configuration flash on the SoC's FLASH pins: ``torqueloop.sim.epcs.Epcs``
     (the EPCS command set) behind SPI mode 0 - it samples flash_mosi on each
     rising flash_dclk and drives flash_miso after each falling one, MSB first;
-    a command is framed by flash_ncs low.  The model's clock is the simulation's."""
+    a command is framed by flash_ncs low.  The model's clock is the simulation's.
+    ``miso``: the signal of ``dut`` the model drives (the board top's flash block,
+    rtl/board/tl_config_flash.v, has the SoC's lines as ports and ``model_miso``)."""
 
-    def __init__(self, dut, model) -> None:
+    def __init__(self, dut, model, miso: str = "flash_miso") -> None:
         self.dut, self.m = dut, model
-        dut.flash_miso.value = 1
+        self.miso = getattr(dut, miso)
+        self.miso.value = 1
         cocotb.start_soon(self._run())
 
     def _now(self) -> None:
@@ -160,7 +163,7 @@ class EpcsPins:
             self._now()
             self.m.select(True)
             back, n, byte = self.m.peek(), 0, 0
-            d.flash_miso.value = back >> 7 & 1
+            self.miso.value = back >> 7 & 1
             while True:
                 await First(RisingEdge(d.flash_dclk), RisingEdge(d.flash_ncs))
                 if int(d.flash_ncs.value):
@@ -173,10 +176,10 @@ class EpcsPins:
                     back, n, byte = self.m.peek(), 0, 0
                 if int(d.flash_ncs.value):
                     break
-                d.flash_miso.value = back >> (7 - n) & 1
+                self.miso.value = back >> (7 - n) & 1
             self._now()
             self.m.select(False)
-            d.flash_miso.value = 1
+            self.miso.value = 1
 
 
 # --- memory images -------------------------------------------------------------------------

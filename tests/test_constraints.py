@@ -261,11 +261,39 @@ def _core(name: str, files: list[Path]) -> Core:
     return Core(name=name, top=name, verilog=tuple(files), vhdl=())
 
 
+def _params(table) -> str:
+    """The pin table's [top_parameters] declared, as the board top declares them."""
+    return "#(" + ", ".join(f"parameter {n} = 0" for n, _ in table.top_parameters) + ")"
+
+
+def test_sources_check_sees_the_quartus_build_of_the_flash(table, pins, tmp_path):
+    """With [top_parameters] (FLASH_ASMI = 1) the top instantiates the Cyclone V's ASMI
+    block: the check elaborates that with the primitive's interface from rtl/lint_only/,
+    fails without it, and refuses a project that compiles the interface itself."""
+    stub = quartus.LINT_ONLY / "cyclonev_asmiblock.v"
+    a, top = tmp_path / "soc_a.v", tmp_path / "de0_cv_top.v"
+    a.write_text("module soc_a; endmodule\n")
+    top.write_text(f"module de0_cv_top {_params(table)}; soc_a ua();\n"
+                   "generate if (FLASH_ASMI != 0) begin : g_asmi cyclonev_asmiblock u_asmi (); end endgenerate\n"
+                   "endmodule\n")
+    soc = _core(table.board.soc_core, [a])
+    full = _core(table.board.quartus_top, [a, top, stub])
+    c = board_check.check_qsf_sources(table, board.gen_qsf(table, pins, quartus.project_sources([a, top, stub])),
+                                      {soc.name: soc, full.name: full})
+    assert c.ok, c.detail
+    bare = _core(table.board.quartus_top, [a, top])
+    c = board_check.check_qsf_sources(table, board.gen_qsf(table, pins, [a, top]), {soc.name: soc, bare.name: bare})
+    assert not c.ok and "cyclonev_asmiblock" in c.detail and "FLASH_ASMI" in c.detail, c.detail
+    c = board_check.check_qsf_sources(table, board.gen_qsf(table, pins, [a, top, stub]),
+                                      {soc.name: soc, full.name: full})
+    assert not c.ok and "vendor primitive's interface" in c.detail, c.detail
+
+
 def test_sources_check_catches_a_missing_soc_file(table, pins, tmp_path):
     a, b, top = (tmp_path / n for n in ("soc_a.v", "soc_b.v", "de0_cv_top.v"))
     a.write_text("module soc_a; endmodule\n")
     b.write_text("module soc_b; endmodule\n")
-    top.write_text("module de0_cv_top; soc_a ua(); soc_b ub(); endmodule\n")
+    top.write_text(f"module de0_cv_top {_params(table)}; soc_a ua(); soc_b ub(); endmodule\n")
     soc = _core(table.board.soc_core, [a, b])
     full = _core(table.board.quartus_top, [a, b, top])
     cores = {soc.name: soc, full.name: full}
@@ -286,7 +314,7 @@ def test_sources_check_elaborates(table, pins, tmp_path):
     """The Yosys elaboration finds a module that no listed file defines."""
     a, top = tmp_path / "soc_a.v", tmp_path / "de0_cv_top.v"
     a.write_text("module soc_a; endmodule\n")
-    top.write_text("module de0_cv_top; soc_a ua(); soc_missing um(); endmodule\n")
+    top.write_text(f"module de0_cv_top {_params(table)}; soc_a ua(); soc_missing um(); endmodule\n")
     cores = {table.board.soc_core: _core(table.board.soc_core, [a]),
              table.board.quartus_top: _core(table.board.quartus_top, [a, top])}
     c = board_check.check_qsf_sources(table, board.gen_qsf(table, pins, [a, top]), cores)

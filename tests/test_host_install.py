@@ -105,6 +105,41 @@ def test_the_host_install_characterises_without_scipy(host_env: Path, tmp_path: 
     assert r.returncode != 0 and "Traceback" not in r.stderr and "torqueloop[sim]" in r.stderr, r.stderr
 
 
+def test_the_host_install_sweeps_with_the_board_as_the_pwm_source(host_env: Path, tmp_path: Path) -> None:
+    """`torqueloop characterize sweep` (the encoder-only dead-zone sweep, the board's own
+    PWM) from the scipy-free install against a simulated lab-2025 plant: a breakaway and
+    a stop duty in each direction, the carrier restored and the axis disabled after it."""
+    from torqueloop.spec import auth
+
+    r = _run(host_env, str(host_env / "bin" / "python"), "-c", "import scipy")
+    assert r.returncode != 0, "scipy is importable: this test would not show the sweep runs without it"
+    key = tmp_path / "link.key"
+    auth.write_key_file(key, auth.new_key())
+    out = tmp_path / "sweep.json"
+    with sim_board("-k", str(key), "sim", "--port", "0", "--plant", "lab-2025") as url:
+        tl = [str(host_env / "bin" / "torqueloop"), "-u", url, "-k", str(key), "--json"]
+
+        def call(*a: str, timeout: float = 60) -> dict:
+            r = _run(host_env, *tl, *a, timeout=timeout)
+            assert r.returncode == 0 and "Traceback" not in r.stderr, (a, r.stdout, r.stderr)
+            return json.loads(r.stdout.strip().splitlines()[-1])
+
+        before = call("get", "pwm_freq")
+        res = call("characterize", "sweep", "--out", str(out), "--carriers", "450", "--start", "3",
+                   "--step", "1", "--max", "9", timeout=180)
+        after = call("get", "pwm_freq")
+        st = call("status", "--axis", "0")
+    print("host install, lab-2025 at 450 Hz:",
+          [(r["direction"], r["breakaway_percent"], r["stop_percent"]) for r in res["ramps"]])
+    assert [r["direction"] for r in res["ramps"]] == [1, -1]
+    for ramp in res["ramps"]:
+        assert not ramp["fault"] and abs(ramp["carrier_hz"] - 448.4) < 0.5, ramp
+        assert ramp["breakaway_percent"] is not None and ramp["breakaway_percent"] > 3, ramp
+        assert ramp["stop_percent"] is not None and ramp["stop_percent"] < ramp["breakaway_percent"], ramp
+    assert json.loads(out.read_text()) == res
+    assert after == before and st["0"]["enabled"] == 0 and st["0"]["faults"] == 0
+
+
 def test_host_only_sim_says_what_is_missing(host_env: Path) -> None:
     r = _run(host_env, str(host_env / "bin" / "torqueloop"), "sim", "--port", "0")
     assert r.returncode != 0

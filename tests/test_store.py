@@ -182,3 +182,8 @@ def test_cli_save_survives_a_new_sim_process_on_the_same_flash(tmp_path, capsys,
     flash.write_bytes(b"not a flash image")
     _, err = run("socket://127.0.0.1:1", capsys, "sim", "--port", "0", "--flash", str(flash), rc=1)
     assert "not a flash image" in err
+
+
+def test_the_rtl_board_refuses_a_flash_file_it_would_not_use(capsys) -> None:
+    _, err = run("socket://127.0.0.1:1", capsys, "sim", "--rtl", "--port", "0", "--flash", "x.bin", rc=2)
+    assert "no flash model" in err

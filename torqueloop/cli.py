@@ -22,6 +22,7 @@ connection refused or closed, no reply).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -515,6 +516,8 @@ def cmd_char_sweep(ctx: Ctx) -> int:
         raise BadValue(f"--carriers {a.carriers!r}: give Hz, comma-separated (450,200)") from None
     if any(not 0 < f < 1e7 for f in carriers):
         raise BadValue(f"--carriers {a.carriers}: every carrier must be above 0 Hz")
+    if a.gauge:
+        return _char_gauge_sweep(ctx)
     ctx.require_key("DRIVE")
     c = ctx.client
     clk = (c.identity or {}).get("clk_hz", units.CLK_HZ)
@@ -541,6 +544,53 @@ def cmd_char_sweep(ctx: Ctx) -> int:
     ctx.out({"axis": a.axis, "ramps": rows}, f"axis {a.axis}: {len(ramps)} ramps"
             + (f"; written to {a.out}" if a.out else ""))
     return 1 if any(r.fault for r in ramps) else 0
+
+
+def _char_gauge_sweep(ctx: Ctx) -> int:
+    """`characterize sweep --gauge DIR`: torqueloop/characterize/board.py."""
+    from torqueloop.characterize import board, command
+    from torqueloop.characterize.data import BenchConstants
+
+    a = ctx.args
+    if a.wheel_radius is None:
+        raise BadValue("--gauge: give the rope bench's --wheel-radius in metres (docs/characterization.md)")
+    try:
+        freqs = tuple(float(x) for x in a.freqs.split(",")) if a.freqs else board.PAPER_FREQS_HZ
+    except ValueError:
+        raise BadValue(f"--freqs {a.freqs!r}: give Hz, comma-separated, increasing") from None
+    if len(freqs) < 4 or any(not 0 < f < 1e7 for f in freqs) or list(freqs) != sorted(set(freqs)):
+        raise BadValue(f"--freqs {a.freqs}: at least 4 carriers above 0 Hz, increasing")
+    read = board.ReadingsTable.load(a.readings) if a.readings else \
+        board.prompt_reader(out=sys.stderr if a.json else sys.stdout)     # --json: stdout is the JSON's
+    motor = a.motor or ("x", "z")[a.axis]
+    out_dir = Path(a.gauge) / motor
+    ctx.require_key("DRIVE")
+    clk = (ctx.client.identity or {}).get("clk_hz", units.CLK_HZ)
+
+    def show(p) -> None:
+        if not a.json:
+            print(f"  {p.sweep:9s} {p.duty_pct:5.1f} % {p.carrier_hz:8.1f} Hz: "
+                  + (f"FAULT {p.fault}" if p.fault else f"{p.force_n:g} N, {p.current_a:g} A, "
+                                                          f"moved {p.moved_counts:+d} counts"), flush=True)
+
+    try:
+        res, points = board.run(ctx.client, a.axis, clk, out_dir, motor,
+                                BenchConstants(a.wheel_radius, a.theta, a.supply_v), read, freqs_hz=freqs,
+                                settle_s=a.settle, log=show)
+    except board.SweepAbandoned as e:
+        raise ProtocolError(f"characterize sweep --gauge: {e}; the axis is disabled, the sweeps so far in "
+                            f"{out_dir}") from None
+    obj = {"axis": a.axis, "motor": motor, "status": res.status, "message": res.message,
+           "dir": str(out_dir), "points": len(points),
+           "chosen_hz": res.chosen.freq_hz if res.chosen else None}
+    ctx.out(obj, f"{motor}: {res.status}; {len(points)} settings held; sweeps in {out_dir}"
+            + (f"; {res.message}" if res.message else ""))
+    if res.status != "pass":
+        return 1
+    if a.config:
+        with contextlib.redirect_stdout(sys.stderr if a.json else sys.stdout):
+            return command.main(["run", str(Path(a.gauge)), "--out", a.config])
+    return 0
 
 
 def cmd_stop(ctx: Ctx) -> int:
@@ -836,6 +886,10 @@ def cmd_sim(ctx: Ctx) -> int:
     if a.rtl:
         from torqueloop.sim.rtlboard import RtlBoard
 
+        if a.flash:
+            raise BadValue("sim --rtl --flash: the RTL co-simulation attaches no flash model to the board top's "
+                           "flash block (it reads as an erased flash: save fails); --flash is the "
+                           "firmware-in-the-loop board's")
         board: Any = RtlBoard(seed=a.seed, plant=plant, key=key)
         what = f"RTL board image (Verilator) + plant model, far below real time, {keyed}"
     else:
@@ -908,6 +962,24 @@ def _sweep_parser() -> argparse.ArgumentParser:
     cs.add_argument("--move-counts", type=_bounded(int, 1, 1_000_000, "--move-counts"), default=3, metavar="N",
                     help="counts in the duty's direction during a hold that mean 'it moves' [3]")
     cs.add_argument("--out", metavar="FILE", default=None, help="write the ramps as JSON")
+    g = cs.add_argument_group("with a force gauge (--gauge): the method's own sweeps, the board as the PWM source")
+    g.add_argument("--gauge", metavar="DIR", default=None,
+                   help="hold each setting of steps 2-6 and take the gauge's force and the supply current at it; "
+                        "the sweeps go to DIR/<motor>/, then `characterize run` on DIR")
+    g.add_argument("--readings", metavar="CSV", default=None,
+                   help="the readings from a file (sweep,freq_hz,duty_pct,force_n,current_a) [asked at the prompt]")
+    g.add_argument("--motor", default=None, help="the motor's name, its folder in DIR [x for axis 0, z for 1]")
+    g.add_argument("--wheel-radius", type=_bounded(float, 1e-4, 10, "--wheel-radius"), default=None, metavar="M",
+                   help="r of the rope bench's wheel, metres (required with --gauge)")
+    g.add_argument("--theta", type=_bounded(float, 5.8, 174.2, "--theta"), default=90.0, metavar="DEG",
+                   help="rope angle to the radius, degrees [90: a tangent]")
+    g.add_argument("--supply-v", type=_bounded(float, 0.1, 1000, "--supply-v"), default=12.0, metavar="V",
+                   help="the bridge's supply voltage [12]")
+    g.add_argument("--freqs", metavar="HZ,HZ", default=None, help="the frequency sweep's carriers [50-500 by 25]")
+    g.add_argument("--settle", type=_bounded(float, 0.05, 9, "--settle"), default=0.5, metavar="S",
+                   help="seconds each setting is held before the reading [0.5]")
+    g.add_argument("--config", metavar="FILE", default=None,
+                   help="when the method passes, write the configuration here (as `characterize run DIR --out`)")
     return cs
 
 

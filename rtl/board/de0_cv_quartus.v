@@ -13,7 +13,7 @@ module de0_cv_quartus (
     inout wire [35:0] GPIO_1
 );
 
-    de0_cv_top #(.ROM_INIT("../firmware/boot/boot_rom.hex"), .BRIDGE_FAULT_WIRED(3)) u_top (
+    de0_cv_top #(.ROM_INIT("../firmware/boot/boot_rom.hex"), .BRIDGE_FAULT_WIRED(3), .FLASH_ASMI(1)) u_top (
         .CLOCK_50(CLOCK_50), .RESET_N(RESET_N), .KEY(KEY), .SW(SW), .LEDR(LEDR), .HEX0(HEX0), .HEX1(HEX1), .HEX2(HEX2), .HEX3(HEX3), .HEX4(HEX4), .HEX5(HEX5), .GPIO_0(GPIO_0), .GPIO_1(GPIO_1)
     );
 

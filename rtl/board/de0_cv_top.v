@@ -21,7 +21,10 @@
 //   - the limit switches (header pins 6 and 10 of each axis) to the SoC;
 //   - KEY[0] as the e-stop input of the SoC as well (active high there);
 //   - LEDR[9] = drives armed, LEDR[8] = stop or fault since the last arming;
-//     LEDR[7:0], HEX0-HEX5 belong to the firmware (GPIO registers).
+//     LEDR[7:0], HEX0-HEX5 belong to the firmware (GPIO registers);
+//   - config_flash between the SoC's flash port and the EPCS64: the Cyclone V's
+//     ASMI block when FLASH_ASMI = 1 (the Quartus top), else a simulator's
+//     flash model at that block's ports (rtl/board/tl_config_flash.v).
 // The SoC synchronises every board input it reads (KEY, SW, encoders, UART,
 // e-stop, faults); the interlock's own inputs go through sync_2ff here.
 // The SoC's PWM+DIR outputs (for bridges with a direction input) are not
@@ -38,7 +41,11 @@ module de0_cv_top #(
     // that fault pin is ignored).  Wired, the comparator holds the line low
     // while the bridge is healthy, so an open line - a broken wire, an
     // unpowered comparator - reads as a fault (the FPGA's weak pull-up).
-    parameter [1:0]   BRIDGE_FAULT_WIRED = 2'b11
+    parameter [1:0]   BRIDGE_FAULT_WIRED = 2'b11,
+    // 1: the configuration flash through the Cyclone V's ASMI block (set by the
+    // Quartus top, constraints/pins.toml [top_parameters]); 0: the flash lines end
+    // at u_flash's ports for a simulator's flash model (tl_config_flash.v)
+    parameter integer FLASH_ASMI = 0
 ) (
     input  wire        CLOCK_50,
     input  wire        RESET_N,
@@ -96,11 +103,8 @@ module de0_cv_top #(
     wire [AXES-1:0] soc_rpwm, soc_lpwm, soc_r_en, soc_l_en;
     /* verilator lint_off UNUSEDSIGNAL */
     wire [AXES-1:0] soc_pwm, soc_dir;   // PWM+DIR mode: no IBT-2 input for it
-    // The configuration flash's port: its way to the EPCS64 is the Cyclone V's ASMI
-    // block (cyclonev_asmiblock), not built yet (docs/soc.md, "Configuration flash"):
-    // the SoC reads an idle-high line, as an erased flash, and stores nothing.
-    wire            flash_dclk, flash_ncs, flash_mosi;
     /* verilator lint_on UNUSEDSIGNAL */
+    wire            flash_dclk, flash_ncs, flash_mosi, flash_miso;   // the SoC's configuration-flash port
 
     tl_soc #(
         .RAM_BYTES(RAM_BYTES),
@@ -139,7 +143,15 @@ module de0_cv_top #(
         .flash_dclk(flash_dclk),
         .flash_ncs(flash_ncs),
         .flash_mosi(flash_mosi),
-        .flash_miso(1'b1)
+        .flash_miso(flash_miso)
+    );
+
+    // ---- the configuration flash (EPCS64): the parameter store's sectors ----
+    tl_config_flash #(.ASMI(FLASH_ASMI)) u_flash (
+        .flash_dclk(flash_dclk),
+        .flash_ncs(flash_ncs),
+        .flash_mosi(flash_mosi),
+        .flash_miso(flash_miso)
     );
 
     // ---- board-level drive interlock ----

@@ -34,6 +34,10 @@ A second test runs the real servo firmware (firmware/servo, built by
 torqueloop.flow.firmware with a 1 Mbaud link for simulation speed): it
 answers the link protocol's IDENTIFY through the header UART, refuses
 ENABLE while KEY[0] is held, and no bridge input moves meanwhile.
+A third runs prog/flash_probe.c against the EPCS model (torqueloop/sim/epcs.py)
+at the ports of the board top's flash block (u_flash, rtl/board/tl_config_flash.v,
+the simulators' side of the ASMI connection): what the flash held is read,
+the write-enable latch sets, a page program lands in the model and reads back.
 """
 
 from __future__ import annotations
@@ -383,6 +387,34 @@ async def servo_firmware_answers_the_protocol_on_the_header(dut):
     await _expect_all_low(dut, 2000, "e-stop held after ENABLE")
 
 
+@cocotb.test()
+async def configuration_flash_through_the_board_top(dut):
+    """The SoC's flash port through u_flash (ASMI = 0) to the EPCS model: READ, WRITE
+    ENABLE + READ STATUS, PAGE PROGRAM + the WIP poll, READ back (prog/flash_probe.c)."""
+    from torqueloop.sim.epcs import Epcs
+    from torqueloop.spec import protocol
+
+    slot = protocol.STORE["slot_a"]
+    flash = Epcs(program_s=20e-6)
+    flash.mem[slot:slot + 4] = bytes([0xFF, 0xF0, 0x5A, 0xFF])     # what an earlier save left there
+    tbutil.EpcsPins(dut.dut.u_flash, flash, miso="model_miso")
+    source, sink = await _power_up(dut, sw=0, baud=UART_BAUD)
+    got = bytearray()
+    for _ in range(40):                                  # 4 ms at most; it needs well under 1
+        await Timer(100, unit="us")
+        while not sink.empty():
+            got += sink.read_nowait()
+        if len(got) >= 10:
+            break
+    assert len(got) == 10, f"the probe sent {got.hex()}: it stopped"
+    assert got[0:4] == bytes([0xFF, 0xF0, 0x5A, 0xFF]), f"READ through u_flash gave {got[0:4].hex()}"
+    assert got[4] & protocol.STORE["status_wel"], f"READ STATUS after WRITE ENABLE: {got[4]:#04x}"
+    assert 0 < got[5] < 255, f"WIP polls: {got[5]} (the program time must be seen, and end)"
+    programmed = bytes(a & b for a, b in zip([0xFF, 0xF0, 0x5A, 0xFF], [0x54, 0x4C, 0x21, 0x0F]))
+    assert got[6:10] == programmed, f"read back {got[6:10].hex()}, want {programmed.hex()} (programming ANDs)"
+    assert bytes(flash.mem[slot:slot + 4]) == programmed and flash.log == [("program", slot)], flash.log
+
+
 def _publish(src: Path, dst: Path) -> Path:
     """Move a freshly built image into place atomically, and only if it
     changed: another make test on the same tree may be loading ``dst``."""
@@ -444,3 +476,11 @@ def test_de0_cv_top_servo_firmware(sim):
     run("de0_cv_top", sim, "test_de0_cv_top", toplevel="de0_cv_top_tb",
         extra_verilog=[CABLE_V, HERE / "de0_cv_top_tb.v"], testcase="servo_firmware_answers_the_protocol_on_the_header",
         parameters={"RAM_BYTES": regs.RAM_SIZE, "ROM_INIT": f'"{rom}"', "RAM_INIT": f'"{ram}"'})
+
+
+@pytest.mark.parametrize("sim", [s for s in sims_for("de0_cv_top") if s == "icarus"])
+def test_de0_cv_top_configuration_flash(sim):
+    rom = build_rom_image("flash_probe")
+    run("de0_cv_top", sim, "test_de0_cv_top", toplevel="de0_cv_top_tb",
+        extra_verilog=[CABLE_V, HERE / "de0_cv_top_tb.v"], testcase="configuration_flash_through_the_board_top",
+        parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"'})

@@ -35,8 +35,9 @@ from torqueloop.spec.charconfig import Config
 from torqueloop.spec.pwm import divider_for, full_scale as pwm_full_scale
 
 from .config import CLK_HZ, PWM_BITS
-from .data import BenchConstants, Sweep, read_sweep, write_sweep
-from .method import MotionDeadZone, MotorResult, Thresholds, characterize_motor, motion_dead_zone
+from .data import BenchConstants, Sweep
+from .method import MotionDeadZone, MotorResult, Thresholds, motion_dead_zone
+from .session import DUTY_PCTS, run_session
 
 CHAR_BENCH_TOP = Path(__file__).resolve().with_name("char_bench_top.v")
 CLK_PS = 20_000  # CLOCK_50
@@ -197,7 +198,7 @@ class SweepPlan:
     frequency dependence lives; duty 1-99 %."""
 
     freqs_hz: tuple[float, ...] = field(default_factory=log_frequencies)
-    duty_pcts: tuple[float, ...] = (1.0, *(float(d) for d in range(3, 100, 3)))
+    duty_pcts: tuple[float, ...] = DUTY_PCTS
     wheel_radius_m: float = 0.025
     theta_deg: float = 90.0
     supply_v: float = 12.0
@@ -295,27 +296,12 @@ def record_duty_sweep(measure: Measure, plan: SweepPlan, motor: str, freq_hz: fl
 def run_bench(measure: Measure, out_dir: Path, motor: str, plan: SweepPlan = SweepPlan(),
               th: Thresholds = Thresholds(), wf: Waveforms | None = None, max_duty_sweeps: int = 4,
               tag: str = "") -> MotorResult:
-    """A lab's session on the simulated bench: record the frequency sweep,
-    ask the method where to record a duty sweep, record it, repeat until the
-    method passes, fails, or ``max_duty_sweeps`` were recorded.  Every sweep
-    is written to ``out_dir`` as the lab's CSV files."""
+    """A lab's session on the simulated bench (:func:`.session.run_session`); every
+    sweep is written to ``out_dir`` as the lab's CSV files."""
     wf = wf or Waveforms()
-    out_dir.mkdir(parents=True, exist_ok=True)
-    fs = record_frequency_sweep(measure, plan, motor, wf)
-    fpath = out_dir / "freq_sweep.csv"
     tag = tag or f"simulated bench: {wf.source} pins, {wf.drive} off-phase, motor {motor}"
-    write_sweep(fpath, fs, comment=tag)
-    fs = read_sweep(fpath)  # the method reads what a lab would hand it
-    duty: list[Sweep] = []
-    while True:
-        r = characterize_motor(fs, duty, th)
-        if r.status != "need_duty_sweep" or len(duty) >= max_duty_sweeps:
-            return r
-        assert r.next_freq_hz is not None
-        ds = record_duty_sweep(measure, plan, motor, r.next_freq_hz, wf)
-        dpath = out_dir / f"duty_sweep_{ds.freq_hz:.0f}hz.csv"
-        write_sweep(dpath, ds, comment=tag)
-        duty.append(read_sweep(dpath))
+    return run_session(lambda: record_frequency_sweep(measure, plan, motor, wf),
+                       lambda f: record_duty_sweep(measure, plan, motor, f, wf), out_dir, tag, th, max_duty_sweeps)
 
 
 # ---------------------------------------------------------------- the plant's rope dynamometer

@@ -649,11 +649,14 @@ def top_ports(verilog: Path, top: str, headers: list[Path] = ()) -> dict[str, tu
 
 
 def elaborate(files: list[Path], top: str, cwd: Path = REPO_ROOT,
-              include_dirs: list[Path] = ()) -> tuple[bool, str]:
+              include_dirs: list[Path] = (), params: dict[str, int] | None = None) -> tuple[bool, str]:
     """Yosys hierarchy -check over exactly these files (headers found through
-    ``include_dirs``, as Quartus finds them through SEARCH_PATH): every module resolved."""
+    ``include_dirs``, as Quartus finds them through SEARCH_PATH), the top's
+    ``params`` set: every module resolved."""
     names = " ".join(str(f) for f in files)
     incdirs = " ".join(f"-I{d}" for d in include_dirs)
-    proc = subprocess.run(["yosys", "-q", "-p", f"read_verilog -defer {incdirs} {names}; hierarchy -check -top {top}"],
+    chparams = "".join(f" -chparam {k} {int(v)}" for k, v in (params or {}).items())
+    proc = subprocess.run(["yosys", "-q", "-p",
+                           f"read_verilog -defer {incdirs} {names}; hierarchy -check -top {top}{chparams}"],
                           capture_output=True, text=True, cwd=cwd)
     return proc.returncode == 0, (proc.stdout + proc.stderr).strip()

@@ -15,6 +15,10 @@ board's pin data and the HDL manifest:
     top are right; the DEV_CLRN option is off;
   - the .qsf's source files are the board top's manifest sources, include
     every file of the SoC core, exist, and elaborate (Yosys hierarchy -check);
+    none is a vendor primitive's interface (rtl/lint_only/, which Quartus
+    must take from itself), and with the table's [top_parameters] (the
+    configuration flash through the ASMI block) the design elaborates with
+    only those primitives left as black boxes;
   - the .sdc constrains CLOCK_50 at the table's period and names only ports
     that exist.
 
@@ -144,7 +148,9 @@ def check_qsf_sources(table: board.PinTable, qsf_text: str, cores: dict[str, Cor
     if top is None:
         problems.append(f"core {table.board.quartus_top} is not in rtl/manifest.toml")
     else:
-        listed = [p.resolve() for p in top.verilog if p.suffix != ".vh"]
+        listed = [p.resolve() for p in quartus.project_sources(top.verilog) if p.suffix != ".vh"]
+        problems += [f"{_rel(f)} is a vendor primitive's interface (rtl/lint_only/): Quartus has the primitive"
+                     for f in files if quartus.is_lint_only(f)]
         if files != listed:
             problems.append("VERILOG_FILE list differs from rtl/manifest.toml core "
                             f"{top.name}: qsf {[_rel(f) for f in files]}, manifest {[_rel(f) for f in listed]}")
@@ -166,6 +172,14 @@ def check_qsf_sources(table: board.PinTable, qsf_text: str, cores: dict[str, Cor
                                   include_dirs=_qsf_files(s, "SEARCH_PATH", project_dir))
         if not ok:
             problems.append("Yosys cannot elaborate the project's files:\n" + out[-2000:])
+        elif top is not None and table.top_parameters:
+            stubs = [p for p in top.verilog if quartus.is_lint_only(p)]
+            ok, out = board.elaborate(files + stubs, table.board.top,
+                                      include_dirs=_qsf_files(s, "SEARCH_PATH", project_dir),
+                                      params=dict(table.top_parameters))
+            if not ok:
+                problems.append("Yosys cannot elaborate the project's files with [top_parameters] "
+                                f"{dict(table.top_parameters)} and the vendor primitives' interfaces:\n" + out[-2000:])
     return _result(name, problems)
 
 

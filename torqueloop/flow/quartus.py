@@ -28,6 +28,9 @@ from torqueloop.flow.manifest import REPO_ROOT, load_manifest
 from torqueloop.spec import auth
 
 PROJECT = "de0_cv_top"
+#: interfaces of primitives that exist only inside Quartus (cyclonev_asmiblock): in the
+#: Quartus top's manifest list for the linters, never in the Quartus project
+LINT_ONLY = REPO_ROOT / "rtl" / "lint_only"
 
 
 @dataclass(frozen=True)
@@ -36,13 +39,23 @@ class Product:
     text: str      # full new content
 
 
+def is_lint_only(p: Path) -> bool:
+    return p.resolve().is_relative_to(LINT_ONLY.resolve())
+
+
+def project_sources(verilog: tuple[Path, ...] | list[Path]) -> list[Path]:
+    """A core's Verilog list as the Quartus project takes it: without the vendor
+    primitives' interfaces (Quartus has the primitives themselves)."""
+    return [p for p in verilog if not is_lint_only(p)]
+
+
 def top_sources(top: str) -> list[Path]:
-    """The board top's Verilog sources, in manifest order."""
+    """The board top's Verilog sources for the Quartus project, in manifest order."""
     cores = load_manifest()
     if top not in cores:
         raise SystemExit(f"quartus: core '{top}' is not in rtl/manifest.toml yet "
                          "(it is added together with rtl/soc/tl_soc.v); cannot list the project's sources")
-    return list(cores[top].verilog)
+    return project_sources(cores[top].verilog)
 
 
 def products(table: board.PinTable | None = None,

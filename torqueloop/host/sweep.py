@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
-"""The board as the characterisation's PWM source, encoder-only variant
-(``torqueloop characterize sweep``; docs/characterization.md, "Without a
+"""The board as the characterisation's PWM source (``torqueloop
+characterize sweep``).  Encoder-only (docs/characterization.md, "Without a
 force gauge"): at each PWM carrier and in each direction, the dead zone as the
 paper defines it - raise the pulse until the system moves (the breakaway
 duty), then lower it until it stops (the stop duty) - measured with the
@@ -18,12 +18,21 @@ Safety is the firmware's, unchanged: a duty of STALL_CMD or more that does
 not move the axis within STALL_MS trips RUNAWAY and ends the ramp; a motor
 whose breakaway lies above STALL_CMD needs that check raised first (with
 every axis disabled), which this tool never does by itself.
+
+With a force gauge (:func:`hold_and_read`; docs/characterization.md, "The
+board as the PWM source, with a force gauge"): the board holds each setting of
+the method's sweeps - the stall reading fully on, the 50 % frequency sweep,
+the duty sweeps - and the lab's reading of the gauge and the ammeter is taken
+while it holds (torqueloop/characterize/board.py asks for it or looks it up,
+and runs the method).  A stalled motor at STALL_CMD or more trips RUNAWAY
+STALL_MS after the setting starts: the reading must come before that.
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import asdict, dataclass
+from typing import Callable
 
 from torqueloop.host.client import Client, ProtocolError, describe_faults
 from torqueloop.host.drive import check_ready, steps_for
@@ -120,3 +129,68 @@ def sweep(c: Client, axis: int, carriers_hz: list[float], clk_hz: int, log=None,
 
 def as_rows(ramps: list[Ramp]) -> list[dict]:
     return [{k: v for k, v in asdict(r).items()} for r in ramps]
+
+
+# ---------------------------------------------------------------- with a force gauge
+
+@dataclass
+class GaugePoint:
+    """One setting of the method's sweeps held by the board, with what the lab read at it."""
+    sweep: str                     # "stall" (step 2: fully on), "frequency" (steps 3-4) or "duty" (step 6)
+    carrier_hz: float              # the carrier the board made (eq. 4: the divider's nearest)
+    duty_pct: float                # the command, percent of the full one
+    force_n: float | None          # the gauge and the ammeter, as read
+    current_a: float | None
+    moved_counts: int              # encoder counts during the hold: about 0 on a stalled motor
+    fault: str = ""
+
+
+#: (sweep, carrier Hz, duty %, keepalive) -> (force N, current A), read while the board holds the
+#: setting; ``keepalive()`` feeds the link watchdog and must be called at least every 0.1 s meanwhile
+Reader = Callable[[str, float, float, Callable[[], None]], "tuple[float, float]"]
+
+
+def hold_and_read(c: Client, axis: int, clk_hz: int, settings: list[tuple[str, float, float]], read: Reader,
+                  settle_s: float = 0.5, log=None) -> list[GaugePoint]:
+    """Hold each (sweep, carrier Hz, duty %) on ``axis`` - FDIV set while the axis is
+    disabled, then enabled and driven open-loop at the duty - for ``settle_s``, then
+    ask ``read`` for the gauge and the ammeter while it keeps holding.  The axis is
+    disabled after each setting and its FDIV restored at the end, whatever happens;
+    a fault ends the list (its point says which)."""
+    fdiv0 = c.get_param("FDIV", axis)
+    pwm_max = c.get_param("PWM_MAX_HZ")
+    out: list[GaugePoint] = []
+    check_ready(c, axis, max((steps_for(d) for _, _, d in settings), key=abs, default=0))
+    try:
+        for kind, f, duty in settings:
+            div = pwm.divider_for(f, clk_hz)
+            actual = round(pwm.carrier_hz(div, clk_hz), 3)
+            if actual > pwm_max:
+                raise ProtocolError(f"a {f:g} Hz carrier is above PWM_MAX_HZ = {pwm_max} Hz")
+            if c.get_param("FDIV", axis) != div:
+                c.set_param("FDIV", div, axis)
+            st = check_ready(c, axis, steps_for(duty))
+            c.enable(1 << axis, True)
+            try:
+                c.transact("DRIVE", axis=axis, duty=steps_for(duty))
+                _hold(c, settle_s)
+                now = c.status(axis)
+                fault = now["faults"] & ~st["faults"]
+                p = GaugePoint(kind, actual, duty, None, None, now["position"] - st["position"],
+                               describe_faults(fault) if fault else "")
+                if not fault:
+                    p.force_n, p.current_a = read(kind, actual, duty, c.heartbeat)
+                    after = c.status(axis)
+                    fault = after["faults"] & ~st["faults"]
+                    p.moved_counts = after["position"] - st["position"]
+                    p.fault = describe_faults(fault) if fault else ""
+            finally:
+                c.enable(1 << axis, False)
+            out.append(p)
+            if log:
+                log(p)
+            if p.fault:
+                return out
+    finally:
+        c.set_param("FDIV", fdiv0, axis)
+    return out
