@@ -16,7 +16,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 # clang + libclang-rt: libFuzzer and the sanitizer runtimes for the firmware's host tests.
-APT_PACKAGES=(iverilog ghdl yosys gcc-riscv64-unknown-elf g++ make perl clang libclang-rt-14-dev)
+# chromium + chromium-driver: the headless browser tests/test_dashboard.py opens the dashboard in.
+APT_PACKAGES=(iverilog ghdl yosys gcc-riscv64-unknown-elf g++ make perl clang libclang-rt-14-dev
+              chromium chromium-driver)
 VENV=.venv
 PYTHON=${PYTHON:-python3}
 
