@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT
 """The dashboard's figures, built with Bokeh and drawn in the page by
 BokehJS (served from the bokeh wheel): per axis, position and set-point,
-following error, PWM command with the duty limit (CMD_LIMIT, both signs),
+following error, PWM command with the duty limit (CMD_LIMIT, both signs, from the
+last status),
 the velocity estimate, and the current where the telemetry carries one.
 
 Each axis has one ColumnDataSource (``ax0``, ``ax1``) that the page's glue
@@ -16,7 +17,7 @@ from typing import Any
 
 from bokeh.embed import json_item
 from bokeh.layouts import gridplot
-from bokeh.models import ColumnDataSource, DataRange1d, Span
+from bokeh.models import ColumnDataSource, DataRange1d
 from bokeh.plotting import figure
 
 from torqueloop.spec import protocol as P
@@ -25,7 +26,7 @@ from .hub import AXIS_FIELDS
 
 WINDOW_S = 20.0             # the live view's width
 #: the columns of an axis's source (``t`` in s; positions in the page's unit; velocity per s)
-COLUMNS = ("t", "setpoint", "position", "error", "pwm_cmd", "velocity") + tuple(
+COLUMNS = ("t", "setpoint", "position", "error", "pwm_cmd", "limit_hi", "limit_lo", "velocity") + tuple(
     f for f in AXIS_FIELDS if f.startswith("current"))
 TOOLS = "xpan,xwheel_zoom,box_zoom,reset,save"
 
@@ -54,9 +55,8 @@ def layout(unit_label: str = "mm") -> dict[str, Any]:
         err.line("t", "error", source=src, color="#d62728")
         pwm = fig("PWM command (dashed: the limit CMD_LIMIT)", "steps of 1023", "pwm")
         pwm.line("t", "pwm_cmd", source=src, color="#2ca02c")
-        for sign in (1, -1):
-            pwm.add_layout(Span(location=sign * 1023, dimension="width", line_dash="dashed", line_color="#ff7f0e",
-                                name=f"limit{'hi' if sign > 0 else 'lo'}{a}"))
+        for lim in ("limit_hi", "limit_lo"):
+            pwm.line("t", lim, source=src, line_dash="dashed", color="#ff7f0e")
         vel = fig("velocity estimate", f"{unit_label}/s", "vel")
         vel.line("t", "velocity", source=src, color="#9467bd")
         vel.xaxis.axis_label = "time (s, board clock)"

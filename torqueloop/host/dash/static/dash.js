@@ -5,7 +5,7 @@
 "use strict";
 const tl = window.tl = {cfg: null, rows: [], pending: [], held: [], lastSeq: null, paused: false, unit: "mm",
   received: 0, gaps: 0, dropped: 0, lat: [], ws: null, id: 0, waiting: {}, us0: null, usLast: null, usWrap: 0,
-  status: null, replies: []};
+  status: null, replies: [], cmdLimit: [NaN, NaN]};
 const KEEP_ROWS = 60000, KEEP_LAT = 20000, ROLLOVER = 20000;
 const $ = (id) => document.getElementById(id);
 
@@ -61,6 +61,8 @@ function columns(items, a) {
     out.position.push(r[ix["position" + a]] * sc);
     out.error.push(r[ix["error" + a]] * sc);
     out.pwm_cmd.push(r[ix["pwm_cmd" + a]]);
+    out.limit_hi.push(tl.cmdLimit[a]);
+    out.limit_lo.push(-tl.cmdLimit[a]);
     out.velocity.push(r[ix["velocity_q8" + a]] / 256 * sc);
     for (const c of tl.cfg.columns) if (c.startsWith("current")) out[c].push(r[ix[c + a]]);
   }
@@ -181,10 +183,7 @@ function showStatus(m) {
     e.textContent = `${s.enabled ? "ENABLED" : "disabled"}${s.moving ? ", moving" : ""}, ${s.home}${held}; ` +
       `faults: ${s.fault_words}`;
     e.className = "state" + (s.faults.length ? " fault" : "");
-    for (const side of ["hi", "lo"]) {
-      const span = tl.doc.get_model_by_name(`limit${side}${a}`);
-      if (span) span.location = (side === "hi" ? 1 : -1) * s.cmd_limit;
-    }
+    tl.cmdLimit[a] = s.cmd_limit;
   });
   $("link").textContent = `connected, ${m.pages} page(s)`;
   tl.dropped = m.dropped;
