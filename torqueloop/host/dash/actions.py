@@ -57,6 +57,7 @@ class Actions:
         self.clk = int((srv.identity or {}).get("clk_hz", units.CLK_HZ))
         self._mech: dict[int, units.Mechanics] = {}
         self._drive_timers: dict[int, threading.Timer] = {}
+        self._limits: dict[int, int] = {}
 
     # ---- what the page needs to draw --------------------------------------------------
     def mech(self, axis: int) -> units.Mechanics:
@@ -81,7 +82,10 @@ class Actions:
         return out
 
     def _cmd_limit(self, axis: int) -> int:
-        return self.srv._run(lambda: self.srv.client.get_param("CMD_LIMIT", axis))
+        """CMD_LIMIT, read once and again after the page sets it (a CLI client's change shows after a restart)."""
+        if axis not in self._limits:
+            self._limits[axis] = self.srv._run(lambda: self.srv.client.get_param("CMD_LIMIT", axis))
+        return self._limits[axis]
 
     # ---- commands ---------------------------------------------------------------------
     def stop(self, conn: PageConn, **_: Any) -> str:
@@ -247,6 +251,7 @@ class Actions:
         stored = self.srv.m_set_param(conn, param, raw, a)
         if param in ("COUNTS_PER_REV", "PITCH_UM"):
             self._mech.pop(a, None)
+        self._limits.pop(a, None)
         val, unit = units.from_raw(name, stored, self.clk)
         return f"axis {a}: {name} = {val} {unit}".rstrip() + f" ({param} = {stored})"
 
