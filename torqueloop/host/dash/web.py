@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import logging
 import math
 import threading
 from concurrent.futures import ThreadPoolExecutor
@@ -99,6 +100,11 @@ class IndexHandler(_Base):
         self.write((STATIC / "index.html").read_bytes())
 
 
+class NoIcon(_Base):
+    def get(self) -> None:
+        self.set_status(204)
+
+
 class ConfigHandler(_Base):
     def get(self) -> None:
         self.set_header("Content-Type", "application/json")
@@ -139,8 +145,8 @@ class PageSocket(_Auth, tornado.websocket.WebSocketHandler):
         name = f"page {d.count} ({self.request.remote_ip}, {self.my_role})"
         self.conn = PageConn(name)
         self.page = Page(name, wake=lambda: d.loop.call_soon_threadsafe(self.push_rows))
-        since_arg = self.get_query_argument("since", None)
-        since = int(since_arg) if since_arg not in (None, "", "null") else None
+        since_arg = self.get_query_argument("since", "") or ""
+        since = int(since_arg) if since_arg.isdigit() else None
         rows, lost = d.hub.attach(self.page, since, REPLAY_ROWS)
         d.sockets.add(self)
         d.srv.log(f"dashboard: {name} connected")
@@ -236,6 +242,7 @@ class Dashboard:
         return tornado.web.Application([
             (r"/", IndexHandler, kw),
             (r"/api/config", ConfigHandler, kw),
+            (r"/favicon.ico", NoIcon, kw),
             (r"/ws", PageSocket, kw),
             (r"/static/bokeh/(.*)", StaticHandler, {"path": bokeh_static(), **kw}),
             (r"/static/dash/(.*)", StaticHandler, {"path": str(STATIC), **kw}),
@@ -254,6 +261,7 @@ class Dashboard:
         return f"http://{host}:{self.port}/"
 
     def _run(self) -> None:
+        logging.getLogger("tornado.access").setLevel(logging.ERROR)     # a refused request is no news to log
         loop = asyncio.new_event_loop()
         asyncio.set_event_loop(loop)
         self.loop = loop

@@ -7,6 +7,7 @@ const tl = window.tl = {cfg: null, rows: [], pending: [], held: [], lastSeq: nul
   received: 0, gaps: 0, dropped: 0, lat: [], ws: null, id: 0, waiting: {}, us0: null, usLast: null, usWrap: 0,
   status: null, replies: [], cmdLimit: [NaN, NaN]};
 const KEEP_ROWS = 60000, KEEP_LAT = 20000, ROLLOVER = 20000;
+const MIN_DRAW_MS = 50;                   // at most 20 redraws a second: a busy machine keeps up
 const $ = (id) => document.getElementById(id);
 
 function log(text, bad) {
@@ -69,7 +70,9 @@ function columns(items, a) {
   return out;
 }
 
-function draw() {
+function draw(now) {
+  if (now - (tl.lastDraw || 0) < MIN_DRAW_MS) { tl.frame = requestAnimationFrame(draw); return; }
+  tl.lastDraw = now;
   tl.frame = null;
   const items = tl.pending;
   tl.pending = [];
