@@ -44,6 +44,7 @@ disables that axis.
 
 from __future__ import annotations
 
+import collections
 import hashlib
 import json
 import os
@@ -64,6 +65,7 @@ DEFAULT_PORT = 7130
 KEEPALIVE_S = 0.15          # a HEARTBEAT this often keeps the firmware's link watchdog (>= 10 ms) quiet
 PUMP_S = 0.005              # the server reads the board's link this long each time it holds it idle
                             # (a record reaches its watchers at most about this much after it arrived)
+TELEMETRY_QUEUE = 2000      # records a client may fall behind before its oldest go (its own, counted)
 SERVER_ENV = "TORQUELOOP_SERVER"
 STATE_DIR_ENV = "TORQUELOOP_STATE_DIR"
 
@@ -125,6 +127,25 @@ class _Conn:
     skip: int = 0
     alive: bool = True
     wlock: threading.Lock = field(default_factory=threading.Lock)
+    # telemetry waits here for this client's writer thread: the pump never blocks on a slow client
+    tq: collections.deque = field(default_factory=lambda: collections.deque(maxlen=TELEMETRY_QUEUE))
+    tq_ready: threading.Event = field(default_factory=threading.Event)
+    dropped: int = 0
+
+    def push(self, obj: dict) -> None:
+        """Queue a telemetry line (never blocks; a full queue loses its oldest line, counted)."""
+        if len(self.tq) == self.tq.maxlen:
+            self.dropped += 1
+        self.tq.append(obj)
+        self.tq_ready.set()
+
+    def write_queued(self) -> None:
+        """This client's writer thread: its queued telemetry, until it goes."""
+        while self.alive:
+            self.tq_ready.wait(0.5)
+            self.tq_ready.clear()
+            while self.tq and self.alive:
+                self.send(self.tq.popleft())
 
     def send(self, obj: dict) -> None:
         data = (json.dumps(obj, default=_jsonable) + "\n").encode()
@@ -222,6 +243,8 @@ class SessionServer:
     # ---- one client ----------------------------------------------------------------
     def _serve_conn(self, conn: _Conn) -> None:
         self.conns.add(conn)
+        threading.Thread(target=conn.write_queued, name=f"{threading.current_thread().name}-tx",
+                         daemon=True).start()
         self.log(f"serve: {conn.name} connected")
         conn.send({"type": "hello", "protocol": PROTOCOL, "version": VERSION, "board": self.url,
                    "identity": self.identity,
@@ -283,7 +306,8 @@ class SessionServer:
         if conn.every:
             conn.every = 0
             self._retune()
-        self.log(f"serve: {conn.name} gone")
+        lost = f" (it lost {conn.dropped} telemetry lines it did not read in time)" if conn.dropped else ""
+        self.log(f"serve: {conn.name} gone{lost}")
 
     def _hold(self, conn: _Conn, mask: int) -> None:
         for a in range(P.AXIS_COUNT):
@@ -408,7 +432,7 @@ class SessionServer:
                     k = max(1, round(c.every / self.board_every))
                     for r in records:
                         if c.skip % k == 0:
-                            c.send({"type": "telemetry", "record": r})
+                            c.push({"type": "telemetry", "record": r})
                         c.skip += 1
             # let the clients' commands in between two reads of the link
             time.sleep(0.002)
