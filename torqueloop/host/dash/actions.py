@@ -12,7 +12,6 @@ message is one line for a person."""
 from __future__ import annotations
 
 import threading
-import time
 from dataclasses import dataclass
 from typing import Any
 
