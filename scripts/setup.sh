@@ -17,7 +17,9 @@ cd "$(dirname "$0")/.."
 
 # clang + libclang-rt: libFuzzer and the sanitizer runtimes for the firmware's host tests.
 # ccache: the Verilator builds of one test run share their compiled runtime (flow/tools.py).
-APT_PACKAGES=(iverilog ghdl yosys gcc-riscv64-unknown-elf g++ make perl clang libclang-rt-14-dev ccache)
+# chromium + chromium-driver: the headless browser tests/test_dashboard.py opens the dashboard in.
+APT_PACKAGES=(iverilog ghdl yosys gcc-riscv64-unknown-elf g++ make perl clang libclang-rt-14-dev ccache
+              chromium chromium-driver)
 VENV=.venv
 PYTHON=${PYTHON:-python3}
 

@@ -931,6 +931,15 @@ def cmd_serve(ctx: Ctx) -> int:
     if a.host not in ("127.0.0.1", "localhost", "::1"):
         print(f"warning: listening on {a.host}: anyone who reaches this port commands the machine "
               "without a key", file=sys.stderr)
+    stop_dash = lambda: None      # noqa: E731
+    if a.http is not None:
+        from torqueloop.host.dash.launch import start as start_dashboard
+        try:
+            stop_dash = start_dashboard(srv, a.http, a.http_tokens, lambda m: print(m, flush=True))
+        except BaseException:
+            srv.shutdown()
+            hserve.remove_state(a.url)
+            raise
     signal.signal(signal.SIGTERM, lambda *_: srv.stop())     # `kill` stops it as cleanly as Ctrl-C
     try:
         srv.serve_forever()
@@ -938,6 +947,7 @@ def cmd_serve(ctx: Ctx) -> int:
         pass
     finally:
         srv.stop()
+        stop_dash()
         hserve.remove_state(a.url)
     return 0
 
@@ -1317,6 +1327,12 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("--port", type=_bounded(int, 0, 65535, "--port"), default=hserve.DEFAULT_PORT,
                     help=f"TCP port (0 = any free one) [{hserve.DEFAULT_PORT}]")
     sp.add_argument("--quiet", action="store_true", help="do not log clients coming and going")
+    sp.add_argument("--http", nargs="?", const="127.0.0.1:7131", default=None, metavar="ADDR:PORT",
+                    help="also serve the browser dashboard there [127.0.0.1:7131]; on any other address "
+                         "every page needs a token, printed at start (docs/host.md, Dashboard)")
+    sp.add_argument("--http-tokens", metavar="FILE", default=None,
+                    help="the dashboard's tokens from FILE (lines `command TOKEN`, `watch TOKEN`; mode 600) "
+                         "instead of fresh ones at each start")
     sp.set_defaults(fn=cmd_serve)
     sp = sub.add_parser("characterize", add_help=False,
                         help="the paper's characterisation method on your sweeps: run, step5, check, show, "

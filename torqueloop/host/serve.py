@@ -27,7 +27,12 @@ Methods (params in brackets): ``identify``, ``status`` [axis],
 ``get_param`` [name, axis], ``set_param`` [name, value, axis], ``enable``
 [mask, on], ``move`` [axis, target, trapezoid, unhomed], ``home`` [axis,
 mode, index], ``heartbeat``, ``stop`` [mask], ``clear_fault`` [mask],
-``counters``, ``store_report``, ``save``, ``stats``, ``holds``, ``subscribe`` [every], ``unsubscribe``.
+``counters``, ``store_report``, ``save``, ``drive`` [axis, duty], ``stats``, ``holds``, ``subscribe`` [every],
+``unsubscribe``.
+
+In-process watchers (the dashboard of ``serve --http``, torqueloop/host/dash/)
+get every telemetry record the board sends, with the time it was read
+(:meth:`SessionServer.add_watcher`).
 
 Holding an axis: a client that enables an axis, moves it or homes it to
 a switch holds it.  While any client holds an axis the server sends HEARTBEATs
@@ -39,6 +44,7 @@ disables that axis.
 
 from __future__ import annotations
 
+import collections
 import hashlib
 import json
 import os
@@ -57,7 +63,9 @@ from .client import Client, CommandRejected, ProtocolError
 PROTOCOL, VERSION = "torqueloop-serve", 1
 DEFAULT_PORT = 7130
 KEEPALIVE_S = 0.15          # a HEARTBEAT this often keeps the firmware's link watchdog (>= 10 ms) quiet
-PUMP_S = 0.02               # the server reads the board's link this long each time it holds it idle
+PUMP_S = 0.005              # the server reads the board's link this long each time it holds it idle
+                            # (a record reaches its watchers at most about this much after it arrived)
+TELEMETRY_QUEUE = 2000      # records a client may fall behind before its oldest go (its own, counted)
 SERVER_ENV = "TORQUELOOP_SERVER"
 STATE_DIR_ENV = "TORQUELOOP_STATE_DIR"
 
@@ -119,6 +127,25 @@ class _Conn:
     skip: int = 0
     alive: bool = True
     wlock: threading.Lock = field(default_factory=threading.Lock)
+    # telemetry waits here for this client's writer thread: the pump never blocks on a slow client
+    tq: collections.deque = field(default_factory=lambda: collections.deque(maxlen=TELEMETRY_QUEUE))
+    tq_ready: threading.Event = field(default_factory=threading.Event)
+    dropped: int = 0
+
+    def push(self, obj: dict) -> None:
+        """Queue a telemetry line (never blocks; a full queue loses its oldest line, counted)."""
+        if len(self.tq) == self.tq.maxlen:
+            self.dropped += 1
+        self.tq.append(obj)
+        self.tq_ready.set()
+
+    def write_queued(self) -> None:
+        """This client's writer thread: its queued telemetry, until it goes."""
+        while self.alive:
+            self.tq_ready.wait(0.5)
+            self.tq_ready.clear()
+            while self.tq and self.alive:
+                self.send(self.tq.popleft())
 
     def send(self, obj: dict) -> None:
         data = (json.dumps(obj, default=_jsonable) + "\n").encode()
@@ -160,6 +187,7 @@ class SessionServer:
         self.conns: set[_Conn] = set()
         self.holders: dict[int, set[_Conn]] = {a: set() for a in range(P.AXIS_COUNT)}
         self.board_every = 0
+        self.watchers: list[tuple[int, Callable[[list[dict], float], None]]] = []
         self._stop = threading.Event()
         self._count = 0
         self.identity = dict(client.identity or client.identify())
@@ -215,6 +243,8 @@ class SessionServer:
     # ---- one client ----------------------------------------------------------------
     def _serve_conn(self, conn: _Conn) -> None:
         self.conns.add(conn)
+        threading.Thread(target=conn.write_queued, name=f"{threading.current_thread().name}-tx",
+                         daemon=True).start()
         self.log(f"serve: {conn.name} connected")
         conn.send({"type": "hello", "protocol": PROTOCOL, "version": VERSION, "board": self.url,
                    "identity": self.identity,
@@ -276,7 +306,8 @@ class SessionServer:
         if conn.every:
             conn.every = 0
             self._retune()
-        self.log(f"serve: {conn.name} gone")
+        lost = f" (it lost {conn.dropped} telemetry lines it did not read in time)" if conn.dropped else ""
+        self.log(f"serve: {conn.name} gone{lost}")
 
     def _hold(self, conn: _Conn, mask: int) -> None:
         for a in range(P.AXIS_COUNT):
@@ -337,6 +368,11 @@ class SessionServer:
     def m_save(self, conn: _Conn) -> dict:
         return dict(self._run(self.client.save))
 
+    def m_drive(self, conn: _Conn, axis: int, duty: int) -> None:
+        """DRIVE: open-loop command ``duty`` (signed PWM steps) on an enabled axis; this client holds it."""
+        self._run(lambda: self.client.transact("DRIVE", axis=int(axis), duty=int(duty)))
+        self._hold(conn, 1 << axis)
+
     def m_stats(self, conn: _Conn) -> dict:
         return {k: v for k, v in vars(self.client.stats).items() if k != "text_sample"}
 
@@ -355,10 +391,18 @@ class SessionServer:
         self._retune()
 
     # ---- telemetry and heartbeats ------------------------------------------------------
+    def add_watcher(self, every: int, fn: Callable[[list[dict], float], None]) -> None:
+        """``fn(records, t)`` from the pump's thread with every record the board
+        sends (``t``: ``time.time()`` when they were read); the board streams at
+        least every ``every`` periods from now on.  ``fn`` must not block."""
+        self.watchers.append((int(every), fn))
+        self._retune()
+
     def _retune(self) -> None:
         """The board streams at the fastest rate any subscriber asked for; each
         subscriber gets every k-th record of that stream."""
-        want = min((c.every for c in self.conns if c.every and c.alive), default=0)
+        want = min([c.every for c in self.conns if c.every and c.alive] + [e for e, _ in self.watchers],
+                   default=0)
         if want != self.board_every:
             with self.lock:
                 self.client.set_telemetry(want)
@@ -371,6 +415,7 @@ class SessionServer:
                 try:
                     self.client.pump(PUMP_S)
                     records = self.client.take_telemetry()
+                    t_read = time.time()
                     now = time.monotonic()
                     if any(self.holders.values()) and now - last_beat >= KEEPALIVE_S:
                         self.client.heartbeat()
@@ -379,13 +424,15 @@ class SessionServer:
                     self.log(f"serve: {e}")
                     records = []
             if records and self.board_every:
+                for _, fn in self.watchers:
+                    fn(records, t_read)
                 for c in list(self.conns):
                     if not c.every or not c.alive:
                         continue
                     k = max(1, round(c.every / self.board_every))
                     for r in records:
                         if c.skip % k == 0:
-                            c.send({"type": "telemetry", "record": r})
+                            c.push({"type": "telemetry", "record": r})
                         c.skip += 1
             # let the clients' commands in between two reads of the link
             time.sleep(0.002)
