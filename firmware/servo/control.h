@@ -60,6 +60,10 @@ typedef struct {
     int32_t cmd_limit;
     uint32_t vel_mode;          /* 0: filtered Euler (paper), 1: edge timestamps */
     int32_t vmax_cps, amax_cps2;
+    /* friction compensation (docs/firmware.md, "Friction compensation"); all 0: the plain law */
+    int32_t fc_pos, fc_neg;     /* PWM steps added to a positive / the size of a negative command */
+    int32_t izone_q16;          /* hunting guard: the integral is frozen while |e| <= this (counts q16) */
+    int32_t kvff_q16;           /* velocity feed-forward: q16 PWM steps per count/s of the profile speed */
 } tl_ctl_params_t;
 
 /* What the parameters and the period give (tl_ctl_derived): computed apart

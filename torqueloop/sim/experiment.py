@@ -25,6 +25,7 @@ the models: sample 0).  Sample j of one is compared with sample j of the other.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import asdict, dataclass, field
@@ -54,6 +55,10 @@ TAU_MAX_MNM = tuple(a.tau_max_mnm for a in SYSTEM.axes)
 BOARD_KEYS = ("FDIV", "PW0", "PWMAX", "TAU_MAX_MNM")
 AXES = (0, 1)                 # x, z: every run drives both
 BOTH_AXES = 0b11              # the axis mask of ENABLE and CLEAR_FAULT for both
+#: the law's parameters a tuned run may set (protocol.toml name: torqueloop.oracles.servo.AxisParams field)
+TUNED_FIELDS = {"LAW": "law", "KP_Q16": "kp_q16", "KD_Q16": "kd_q16", "KI_Q16": "ki_q16", "VEL_MODE": "vel_mode",
+                "DEADBAND_Q16": "deadband_q16", "FC_POS": "fc_pos", "FC_NEG": "fc_neg", "IZONE_Q16": "izone_q16",
+                "KVFF_Q16": "kvff_q16"}
 
 
 @dataclass(frozen=True)
@@ -430,9 +435,7 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
         ap = AxisParams(law=LAWS[cfg.law], kp_q16=raw[0], kd_q16=raw[1], ki_q16=raw[2], vel_mode=0)
         tuned = cfg.law_settings(ax)
         if tuned:
-            ap = AxisParams(law=tuned.get("LAW", ap.law), kp_q16=tuned.get("KP_Q16", ap.kp_q16),
-                            kd_q16=tuned.get("KD_Q16", ap.kd_q16), ki_q16=tuned.get("KI_Q16", ap.ki_q16),
-                            vel_mode=tuned.get("VEL_MODE", ap.vel_mode))
+            ap = dataclasses.replace(ap, **{TUNED_FIELDS[k]: v for k, v in tuned.items() if k in TUNED_FIELDS})
         a = Axis(ap, cfg.period_us)
         a.reset(0, 0)
         axes.append(a)
