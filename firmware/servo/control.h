@@ -73,6 +73,7 @@ typedef struct {
     int64_t ki_dt_q32;          /* PWM steps q32 added per count of error per sample */
     int32_t ki_e_max;           /* |e_q16| clamp that keeps ki_dt_q32 * e below 2^61 */
     int64_t lim_q32;            /* cmd_limit, q32: the integrator's clamp */
+    uint32_t friction;          /* any friction-compensation parameter set: the default law tests only this */
     int64_t sat_hi_q16, sat_lo_q16;   /* the command's saturation, as bounds of u_q16 + 2^15 */
     int32_t vmax_q16;           /* counts per sample, q16, 1 .. TL_CTL_VMAX_Q16_MAX */
     int32_t amax_q16;           /* counts per sample^2, q16, 1 .. TL_CTL_AMAX_Q16_MAX */

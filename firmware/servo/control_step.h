@@ -229,8 +229,10 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     int32_t i_q16 = 0;
     if (p->law == TL_LAW_PID) {
         int32_t e_sign = e > 0 ? 1 : (e < 0 ? -1 : 0);
-        int32_t ae = e < 0 ? -e : e;
-        if (!(c->sat_sign != 0 && e_sign == c->sat_sign) && !(p->izone_q16 != 0 && ae <= p->izone_q16)) {
+        bool frozen = c->sat_sign != 0 && e_sign == c->sat_sign;
+        if (c->d.friction && p->izone_q16 != 0 && (e < 0 ? -e : e) <= p->izone_q16)
+            frozen = true;   /* the hunting guard */
+        if (!frozen) {
             int32_t ek = e > c->d.ki_e_max ? c->d.ki_e_max : (e < -c->d.ki_e_max ? -c->d.ki_e_max : e);
             int64_t i = c->integ_q32 + (mul64u32s(c->d.ki_dt_q32, ek) >> 16);
             /* clamp to +-cmd_limit q32, whose low word is zero: compare high words */
@@ -246,7 +248,8 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     } else {
         c->integ_q32 = 0;
     }
-    friction_terms(c, p, &pd_q16, i_q16);
+    if (c->d.friction)
+        friction_terms(c, p, &pd_q16, i_q16);
     /* round to the nearest PWM step and saturate (eq. 19/25): u = (pd + i + 2^15) >> 16.  The
      * bounds are within +-2^26 (CMD_LIMIT <= 1023) and |i| < 2^27: with |pd| < 2^30 the sum
      * fits 32 bits, and beyond, pd's sign alone decides the saturation. */
