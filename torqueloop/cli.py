@@ -1037,6 +1037,11 @@ def cmd_tune(ctx: Ctx) -> int:
                   f"settling {analysis.fmt_s(p.settling_time_s)}, error {p.steady_state_error:.1f} counts",
                   "  board: " + " ".join(f"{k}={v}" for k, v in t.settings().items())]
         lines += [f"  note: {n}" for n in dz.notes]
+        missed = p.overshoot_pct > a.overshoot or p.settling_time_s is None or p.settling_time_s > settling
+        out["axes"][t.name]["meets_wish"] = not missed
+        if missed:
+            lines.append(f"  note: the design model misses the wish ({a.overshoot:g} %, {settling:g} s): saturation "
+                         "and friction are beyond the linear design; try another --settling, or --verify")
     if a.verify:
         try:
             from torqueloop.sim import tuneverify
