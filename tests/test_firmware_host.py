@@ -7,6 +7,7 @@ missing) and the RV32 build."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import random
 import re
@@ -59,10 +60,14 @@ def _random_run(rng: random.Random, start: int | None = None) -> tuple[list[str]
                    else rng.randrange(400_000), kd_q16=rng.randrange(5000), ki_q16=rng.randrange(2_000_000),
                    deadband_q16=rng.choice([0, 0x8000, rng.randrange(0x40000)]), cmd_limit=rng.randrange(1, 1024),
                    vel_mode=rng.randrange(2), vmax_cps=rng.randrange(1, 300_000), amax_cps2=rng.randrange(1, 10**7))
+    if rng.random() < 0.5:       # the friction compensation's terms (control_step.h friction_terms, izone)
+        p = dataclasses.replace(p, fc_pos=rng.choice([0, rng.randrange(1024)]), fc_neg=rng.choice([0, rng.randrange(1024)]),
+                                izone_q16=rng.choice([0, rng.randrange(0x80000), rng.randrange(2**31)]),
+                                kvff_q16=rng.choice([0, rng.randrange(5000), rng.randrange(0x100_0000)]))
     period = rng.randrange(200, 25_001)
     ax = Axis(p, period)
     lines = [f"P {p.law} {p.kp_q16} {p.kd_q16} {p.ki_q16} {p.deadband_q16} {p.cmd_limit} {p.vel_mode} "
-             f"{p.vmax_cps} {p.amax_cps2} {period}"]
+             f"{p.vmax_cps} {p.amax_cps2} {period} {p.fc_pos} {p.fc_neg} {p.izone_q16} {p.kvff_q16}"]
     pos, t, edge = rng.randrange(-10**6, 10**6) if start is None else start, rng.randrange(2**32), 0
     ax.reset(pos, t)
     lines.append(f"R {pos} {t}")

@@ -1054,6 +1054,121 @@ def cmd_identify(ctx: Ctx) -> int:
     return 0
 
 
+def cmd_tune(ctx: Ctx) -> int:
+    """``torqueloop tune``: gains from an identified plant file
+    (torqueloop/host/tune.py, tunedesign.py; docs/identification.md), the
+    predicted step and margins; ``--verify model|rtl`` runs them in the
+    closed loop on the plant (torqueloop/sim/tuneverify.py); ``--apply``
+    writes them to the board (``--save`` stores them)."""
+    from sim_models.identifiable import identifiable_plant
+    from sim_models.params import PlantParamError
+    from sim_models.plantfile import identified, load_plant_file
+    from sim_models.variants import PlantSpec
+    from torqueloop.host import tune as htune
+    from torqueloop.host.tunedesign import Wish
+
+    a = ctx.args
+    if a.save and not a.apply:
+        raise BadValue("--save stores what --apply writes: give both")
+    if a.bandwidth is not None and a.settling is not None:
+        raise BadValue("give --settling or --bandwidth, not both")
+    def read(path: str, how: Callable[[str], Any]) -> Any:
+        try:
+            return how(path)
+        except PlantParamError as e:
+            raise BadValue(str(e)) from None
+        except (OSError, ValueError) as e:     # unreadable, or not TOML
+            raise BadValue(f"{path}: {e}") from None
+
+    plant = read(a.plant_file, load_plant_file)
+    ident = read(a.plant_file, identified)
+    verify_spec = read(a.verify_plant or a.plant_file, PlantSpec.from_file)
+    zeta_settle = 4.6                      # settling (2 %) = 4.6 / (zeta wn): the design's own rule
+    settling = a.settling if a.settling is not None else (
+        zeta_settle / (2 * math.pi * a.bandwidth) if a.bandwidth is not None else 0.5)
+    wish = Wish(settling_s=settling, overshoot_pct=a.overshoot, tolerance_counts=a.tolerance, law=a.law,
+                period_s=a.period_us * 1e-6)
+    computed = None
+    tunes = []
+    for ax in _axes(a):
+        name = P.SYSTEM.axes[ax].name
+        d = ident.get(name)
+        where = f"{a.plant_file} [identifiable.{name}]"
+        if d is None:        # no measured section for this axis: what its physical parameters give
+            computed = computed or identifiable_plant(plant, a.pwm_freq)
+            d, where = computed[name].as_dict(), f"{a.plant_file} (axis {name} from its physical parameters)"
+        t = htune.tune_axis(ax, d, wish, a.pwm_freq, where, plant.bridge.supply_V,
+                            predict_s=a.verify_s if a.verify else 3.0)   # the same record as the verification's
+        miss = htune.check_margins(t, a.min_gm, a.min_pm)
+        if miss:
+            raise htune.TuneError(miss)
+        tunes.append(t)
+    out: dict[str, Any] = {"plant_file": a.plant_file, "wish": {"settling_s": settling, "overshoot_pct": a.overshoot,
+                                                               "tolerance_counts": a.tolerance, "law": a.law,
+                                                               "period_us": a.period_us},
+                           "axes": {t.name: t.as_dict() for t in tunes}}
+    lines = []
+    for t in tunes:
+        dz, p = t.design, t.predicted
+        lines += [f"axis {t.axis} ({t.name}): {dz.law.upper()} at {a.period_us} us, carrier {t.carrier_hz:.0f} Hz",
+                  f"  kp {dz.kp:.4g} steps/count   kd {dz.kd:.4g} steps/(count/s)   ki {dz.ki:.4g} steps/(count s)",
+                  f"  PW0 {dz.pw0} ticks ({100 * dz.pw0 / P.SYSTEM.pwm_full:.2f} %)   wn {dz.wn:.1f} rad/s   "
+                  f"zeta {dz.zeta:.2f}",
+                  f"  margins: gain {dz.gain_margin_db:.1f} dB, phase {dz.phase_margin_deg:.0f} deg",
+                  f"  predicted one-turn step ({t.step_counts} counts): overshoot {p.overshoot_pct:.2f} %, "
+                  f"settling {analysis.fmt_s(p.settling_time_s)}, error {p.steady_state_error:.1f} counts",
+                  "  board: " + " ".join(f"{k}={v}" for k, v in t.settings().items())]
+        lines += [f"  note: {n}" for n in dz.notes]
+        missed = p.overshoot_pct > a.overshoot or p.settling_time_s is None or p.settling_time_s > settling
+        out["axes"][t.name]["meets_wish"] = not missed
+        if missed:
+            lines.append(f"  note: the design model misses the wish ({a.overshoot:g} %, {settling:g} s): saturation "
+                         "and friction are beyond the linear design; try another --settling, or --verify")
+    if a.verify:
+        try:
+            from torqueloop.sim import tuneverify
+        except ImportError as e:
+            raise SimStackMissing(f"--verify needs the simulation stack ({e.name} is missing): "
+                                  "pip install 'torqueloop[sim]'") from None
+        if not a.json:
+            print("\n".join(lines), flush=True)
+            lines = []
+            print(f"verifying on the {'RTL board image (Verilator)' if a.verify == 'rtl' else 'fast model'} "
+                  f"with {verify_spec.label}, {a.verify_s:g} s ...", file=sys.stderr, flush=True)
+        v = tuneverify.verify(tunes, verify_spec, a.verify, a.verify_s, a.table1_s,
+                              log=lambda *m, **k: print(*m, file=sys.stderr, flush=True))
+        out["verify"] = v.tuned | {"path": v.path, "plant": v.plant, "seconds": v.seconds, "faults": v.faults,
+                                   "wall_s": v.wall_s}
+        out["table1"] = v.table1
+        lines.append(f"{'':24}{'predicted':>11}{'measured':>11}{'Table 1' if v.table1 else '':>11}   "
+                     f"({v.path}, {v.plant})")
+        for t in tunes:
+            m, p = v.tuned[t.name], t.predicted
+            r = v.table1.get(t.name, {k: "" for k in m})
+            for label, pv, mv, rv, f in (
+                    ("overshoot (%)", p.overshoot_pct, m["overshoot_pct"], r["overshoot_pct"], ".2f"),
+                    ("settling 2 % (s)", p.settling_time_s, m["settling_time_s"], r["settling_time_s"], ".3f"),
+                    ("settling 2 counts (s)", None, m["settling_time_2_counts_s"], r["settling_time_2_counts_s"],
+                     ".3f"),
+                    ("error (counts)", p.steady_state_error, m["steady_state_error_counts"],
+                     r["steady_state_error_counts"], ".1f")):
+                cells = ["-" if x is None else x if x == "" else format(x, f) for x in (pv, mv, rv)]
+                lines.append(f"  {t.name} {label:<22}{cells[0]:>11}{cells[1]:>11}{cells[2]:>11}")
+        if v.faults and any(v.faults):
+            lines.append(f"  faults during the run: {', '.join(describe_faults(f) for f in v.faults if f)}")
+    if a.apply:
+        ctx.require_key("SET_PARAM")
+        c = ctx.client
+        assert isinstance(c, Client) or hasattr(c, "set_param")
+        out["applied"] = htune.apply(c, tunes, a.save)    # type: ignore[arg-type]
+        lines.append(f"applied to the board (PERIOD_US {out['applied']['period_us']})"
+                     + (", saved" if a.save else "; `torqueloop save` keeps it over a power cycle"))
+    ctx.out(out, "\n".join(lines))
+    if a.verify and out["verify"]["faults"] and any(out["verify"]["faults"]):
+        return EXIT_REFUSED
+    return 0
+
+
 def cmd_plant(ctx: Ctx) -> int:
     """``torqueloop plant export``: a plant variant or plant file as a plant
     file, with what an encoder-only identification can see of each axis
@@ -1290,6 +1405,41 @@ def parser() -> argparse.ArgumentParser:
     sp.add_argument("--base", default="paper", help="the plant the rest comes from (springs, screw, table) [paper]")
     sp.add_argument("--out", default=None, metavar="FILE", help="write a plant file")
     sp.set_defaults(fn=cmd_identify)
+    sp = sub.add_parser("tune", help="gains from an identified plant file, the predicted step and margins; "
+                                     "--verify model|rtl, --apply [--save] (docs/identification.md)")
+    axis_opts(sp)
+    sp.add_argument("--plant-file", required=True, metavar="FILE",
+                    help="the plant file (`torqueloop identify --out`, `torqueloop plant export`)")
+    sp.add_argument("--law", type=str.lower, choices=["pd", "pid"], default="pid", help="control law [pid]")
+    sp.add_argument("--settling", type=_bounded(float, 0.01, 100, "--settling"), default=None, metavar="S",
+                    help="settling time wished for (2 %% band), seconds [0.5]")
+    sp.add_argument("--bandwidth", type=_bounded(float, 0.01, 1000, "--bandwidth"), default=None, metavar="HZ",
+                    help="loop bandwidth instead of --settling, Hz")
+    sp.add_argument("--overshoot", type=_bounded(float, 0, 50, "--overshoot"), default=2.0, metavar="PCT",
+                    help="overshoot limit, percent [2]")
+    sp.add_argument("--tolerance", type=_bounded(float, 0.5, 10_000, "--tolerance"), default=2.0, metavar="COUNTS",
+                    help="how far from the target a PD may stick, counts [2]")
+    sp.add_argument("--period-us", type=_bounded(int, 50, 25_000, "--period-us"), default=1000, metavar="US",
+                    help="control period the gains are for (PERIOD_US), microseconds [1000]")
+    sp.add_argument("--pwm-freq", type=_bounded(float, 100, P.SYSTEM.bridge_max_hz, "--pwm-freq"),
+                    default=float(P.SYSTEM.working_hz), metavar="HZ",
+                    help=f"carrier: the lowest the divider makes at or above HZ [{P.SYSTEM.working_hz}: 24.4 kHz]")
+    sp.add_argument("--min-gm", type=_bounded(float, 0, 60, "--min-gm"), default=6.0, metavar="DB",
+                    help="gain margin the design must keep, dB [6]")
+    sp.add_argument("--min-pm", type=_bounded(float, 0, 90, "--min-pm"), default=30.0, metavar="DEG",
+                    help="phase margin the design must keep, degrees [30]")
+    sp.add_argument("--verify", choices=["model", "rtl"], default=None,
+                    help="run the tuned one-turn step in the closed loop: on the fast model or the RTL board image")
+    sp.add_argument("--verify-plant", default=None, metavar="FILE",
+                    help="the plant file to verify on [the --plant-file]")
+    sp.add_argument("--verify-s", type=_bounded(float, 0.1, 60, "--verify-s"), default=2.0, metavar="S",
+                    help="simulated seconds of the verification [2]")
+    sp.add_argument("--table1-s", type=_bounded(float, 0, 60, "--table1-s"), default=0.0, metavar="S",
+                    help="with --verify: also run the Table 1 gains of the same law on the same plant for S "
+                         "simulated seconds (fast path, the paper's period and carriers; slow) [0: no]")
+    sp.add_argument("--apply", action="store_true", help="write the settings to the connected board")
+    sp.add_argument("--save", action="store_true", help="with --apply: store them on the board")
+    sp.set_defaults(fn=cmd_tune)
     sp = sub.add_parser("plant", help="plant files: `plant export VARIANT > my.toml` (docs/identification.md)")
     sp.add_argument("action", choices=["export"])
     sp.add_argument("variant", nargs="?", default=None, help="plant variant: paper-printed, paper, lab, ... [paper]")

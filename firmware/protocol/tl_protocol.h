@@ -374,13 +374,17 @@ static inline int tlp_needs_key(uint8_t cmd, const uint8_t *payload)
 #define TLP_P_LINK_TIMEOUT_MS 65u
 #define TLP_P_BAUD_DIV 66u
 #define TLP_P_PWM_MAX_HZ 67u
+#define TLP_P_FC_POS 31u
+#define TLP_P_FC_NEG 32u
+#define TLP_P_IZONE_Q16 33u
+#define TLP_P_KVFF_Q16 34u
 
 #define TLP_AXIS_COUNT 2u
 /* dflt[axis]: a global parameter's default is dflt[0]; tighten: +1 / -1 = while an axis is
    enabled the value may only rise / fall (a safety limit), 0 = free */
 typedef struct { uint8_t id; uint8_t global; int8_t tighten; int32_t min; int32_t max; int32_t dflt[TLP_AXIS_COUNT]; } tlp_param_info_t;
-#define TLP_PARAM_COUNT 35u
-#define TLP_PARAM_LAYOUT 0x797CC59Fu   /* the stored record's layout word ([store]) */
+#define TLP_PARAM_COUNT 39u
+#define TLP_PARAM_LAYOUT 0x988E2ED6u   /* the stored record's layout word ([store]) */
 static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {
     {0u, 0u, 0, 0L, 3L, {1L, 1L}},  /* LAW */
     {1u, 0u, 0, 0L, 2147483647L, {17134L, 23145L}},  /* KP_Q16 */
@@ -417,12 +421,16 @@ static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {
     {65u, 1u, -1, 10L, 60000L, {500L, 500L}},  /* LINK_TIMEOUT_MS */
     {66u, 1u, 0, 15L, 65535L, {433L, 433L}},  /* BAUD_DIV */
     {67u, 1u, -1, 1L, 25000L, {25000L, 25000L}},  /* PWM_MAX_HZ */
+    {31u, 0u, 0, 0L, 1023L, {0L, 0L}},  /* FC_POS */
+    {32u, 0u, 0, 0L, 1023L, {0L, 0L}},  /* FC_NEG */
+    {33u, 0u, 0, 0L, 2147483647L, {0L, 0L}},  /* IZONE_Q16 */
+    {34u, 0u, 0, 0L, 16777215L, {0L, 0L}},  /* KVFF_Q16 */
 };
 /* parameter id -> index into TLP_PARAM_INFO, -1: no such parameter */
 static const int8_t TLP_PARAM_INDEX[256] = {
      0,  1,  2,  3,  4,  5,  6,  7,  8,  9, 10, 11, 12, 13, 14, 15,
-    16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, -1,
-    -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
+    16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 35,
+    36, 37, 38, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
     -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
     31, 32, 33, 34, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
     -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,

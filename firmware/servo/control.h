@@ -60,6 +60,10 @@ typedef struct {
     int32_t cmd_limit;
     uint32_t vel_mode;          /* 0: filtered Euler (paper), 1: edge timestamps */
     int32_t vmax_cps, amax_cps2;
+    /* friction compensation (docs/firmware.md, "Friction compensation"); all 0: the plain law */
+    int32_t fc_pos, fc_neg;     /* PWM steps added to a positive / the size of a negative command */
+    int32_t izone_q16;          /* hunting guard: the integral is frozen while |e| <= this (counts q16) */
+    int32_t kvff_q16;           /* velocity feed-forward: q16 PWM steps per count/s of the profile speed */
 } tl_ctl_params_t;
 
 /* What the parameters and the period give (tl_ctl_derived): computed apart
@@ -69,6 +73,7 @@ typedef struct {
     int64_t ki_dt_q32;          /* PWM steps q32 added per count of error per sample */
     int32_t ki_e_max;           /* |e_q16| clamp that keeps ki_dt_q32 * e below 2^61 */
     int64_t lim_q32;            /* cmd_limit, q32: the integrator's clamp */
+    uint32_t friction;          /* any friction-compensation parameter set: the default law tests only this */
     int64_t sat_hi_q16, sat_lo_q16;   /* the command's saturation, as bounds of u_q16 + 2^15 */
     int32_t vmax_q16;           /* counts per sample, q16, 1 .. TL_CTL_VMAX_Q16_MAX */
     int32_t amax_q16;           /* counts per sample^2, q16, 1 .. TL_CTL_AMAX_Q16_MAX */

@@ -181,6 +181,27 @@ static inline int64_t mul64u32s(int64_t x, int32_t y)
 /* v saturated to +-0x7FFFFFFF (the law's error range). */
 static inline int32_t sat31(int64_t v) { return v > 0x7FFFFFFF ? 0x7FFFFFFF : (v < -0x7FFFFFFF ? -0x7FFFFFFF : (int32_t)v); }
 
+/* Friction compensation beyond eq. (1), added to the law's P and D part in q16 PWM steps:
+ * velocity feed-forward Kvff v_sp (v_sp the trapezoid profile's speed, q8 counts/s: counts
+ * per sample q16 times euler_k = 2^8 1e6 / T, saturated to 31 bits), then the dead zone
+ * beyond PW0 per direction: FC_POS steps added to a positive command, FC_NEG to the size of a
+ * negative one (the sign of pd + i before rounding).  Zero parameters add nothing. */
+static inline __attribute__((always_inline)) void friction_terms(const tl_ctl_t *c, const tl_ctl_params_t *p,
+                                                                  int64_t *pd_q16, int32_t i_q16)
+{
+    if (p->kvff_q16 != 0 && c->prof_v_q16 != 0) {
+        int32_t v_q8 = sat31(((int64_t)c->prof_v_q16 * c->d.euler_k) >> 16);
+        *pd_q16 += mul32(p->kvff_q16, v_q8) >> 8;
+    }
+    if ((p->fc_pos | p->fc_neg) != 0) {
+        int64_t u = *pd_q16 + i_q16;
+        if (u > 0)
+            *pd_q16 += (int64_t)p->fc_pos << 16;
+        else if (u < 0)
+            *pd_q16 -= (int64_t)p->fc_neg << 16;
+    }
+}
+
 static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, bool run_law)
 {
     /* The error, q16 counts: 32 bits within +-32767 counts (the usual case), saturated beyond. */
@@ -208,7 +229,10 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     int32_t i_q16 = 0;
     if (p->law == TL_LAW_PID) {
         int32_t e_sign = e > 0 ? 1 : (e < 0 ? -1 : 0);
-        if (!(c->sat_sign != 0 && e_sign == c->sat_sign)) {
+        bool frozen = c->sat_sign != 0 && e_sign == c->sat_sign;
+        if (c->d.friction && p->izone_q16 != 0 && (e < 0 ? -e : e) <= p->izone_q16)
+            frozen = true;   /* the hunting guard */
+        if (!frozen) {
             int32_t ek = e > c->d.ki_e_max ? c->d.ki_e_max : (e < -c->d.ki_e_max ? -c->d.ki_e_max : e);
             int64_t i = c->integ_q32 + (mul64u32s(c->d.ki_dt_q32, ek) >> 16);
             /* clamp to +-cmd_limit q32, whose low word is zero: compare high words */
@@ -224,6 +248,8 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     } else {
         c->integ_q32 = 0;
     }
+    if (c->d.friction)
+        friction_terms(c, p, &pd_q16, i_q16);
     /* round to the nearest PWM step and saturate (eq. 19/25): u = (pd + i + 2^15) >> 16.  The
      * bounds are within +-2^26 (CMD_LIMIT <= 1023) and |i| < 2^27: with |pd| < 2^30 the sum
      * fits 32 bits, and beyond, pd's sign alone decides the saturation. */

@@ -75,6 +75,27 @@ def _tdiv(a: int, b: int) -> int:
     return q if (a >= 0) == (b >= 0) else -q
 
 
+def in_izone(p: "AxisParams", e_q16: int) -> bool:
+    """The hunting guard: the integral is frozen while |e| <= IZONE_Q16 (0: off)."""
+    return p.izone_q16 != 0 and abs(e_q16) <= p.izone_q16
+
+
+def friction_terms(p: "AxisParams", u_q16: int, prof_v_q16: int, euler_k: int) -> int:
+    """The law's output (q16 PWM steps, before rounding) with the friction
+    compensation of control_step.h: the velocity feed-forward Kvff v_sp (v_sp
+    the profile's speed in q8 counts/s, saturated to 31 bits), then FC_POS
+    added to a positive output, FC_NEG to the size of a negative one (the sign
+    of P + D + I + feed-forward, before rounding)."""
+    if p.kvff_q16 and prof_v_q16:
+        v_q8 = clamp((prof_v_q16 * euler_k) >> 16, (1 << 31) - 1)
+        u_q16 += (p.kvff_q16 * v_q8) >> 8
+    if u_q16 > 0:
+        u_q16 += p.fc_pos << 16
+    elif u_q16 < 0:
+        u_q16 -= p.fc_neg << 16
+    return u_q16
+
+
 @dataclass
 class AxisParams:
     law: int = 1
@@ -86,6 +107,11 @@ class AxisParams:
     vel_mode: int = 1
     vmax_cps: int = 8400
     amax_cps2: int = 16800
+    # friction compensation (control_step.h friction_terms, the integral's hunting guard); 0: none
+    fc_pos: int = 0
+    fc_neg: int = 0
+    izone_q16: int = 0
+    kvff_q16: int = 0
 
 
 @dataclass
@@ -204,12 +230,13 @@ class Axis:
             u -= (p.kd_q16 * self.vel_q8) >> 8
         if p.law == 3:
             sign = (e > 0) - (e < 0)
-            if not (self.saturated and sign == self.sat_sign):
+            if not (self.saturated and sign == self.sat_sign) and not in_izone(p, e):
                 inc = (self.ki_dt_q32 * clamp(e, self.e_max)) >> 16
                 self.integ_q32 = clamp(self.integ_q32 + inc, lim << 32)
             u += self.integ_q32 >> 16
         else:
             self.integ_q32 = 0
+        u = friction_terms(p, u, self.prof_v_q16, self.euler_k)
         out = round_q16(u)
         self.saturated = abs(out) > lim
         self.sat_sign = 1 if out > lim else (-1 if out < -lim else 0)

@@ -25,6 +25,7 @@ the models: sample 0).  Sample j of one is compared with sample j of the other.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import asdict, dataclass, field
@@ -54,6 +55,10 @@ TAU_MAX_MNM = tuple(a.tau_max_mnm for a in SYSTEM.axes)
 BOARD_KEYS = ("FDIV", "PW0", "PWMAX", "TAU_MAX_MNM")
 AXES = (0, 1)                 # x, z: every run drives both
 BOTH_AXES = 0b11              # the axis mask of ENABLE and CLEAR_FAULT for both
+#: the law's parameters a tuned run may set (protocol.toml name: torqueloop.oracles.servo.AxisParams field)
+TUNED_FIELDS = {"LAW": "law", "KP_Q16": "kp_q16", "KD_Q16": "kd_q16", "KI_Q16": "ki_q16", "VEL_MODE": "vel_mode",
+                "DEADBAND_Q16": "deadband_q16", "FC_POS": "fc_pos", "FC_NEG": "fc_neg", "IZONE_Q16": "izone_q16",
+                "KVFF_Q16": "kvff_q16"}
 
 
 @dataclass(frozen=True)
@@ -88,6 +93,9 @@ class ExperimentConfig:
     baud_div: int | None = None         # UART clocks per bit - 1 after IDENTIFY (None: keep 115200,
                                         # the RN-XV's rate); short control periods need a faster link
     progress: bool = True
+    #: per axis, raw board settings written after the Table 1 law and gains, which they replace
+    #: (``torqueloop tune --verify``: LAW, KP_Q16, KD_Q16, KI_Q16, PW0, FDIV, VEL_MODE); None: the paper's
+    tuned: tuple[dict[str, int], ...] | None = None
 
     @property
     def target_counts(self) -> int:
@@ -114,7 +122,13 @@ class ExperimentConfig:
                 out[ax]["FDIV"] = divider_for(self.pwm_hz[ax])
             if self.pw0_off:
                 out[ax]["PW0"] = 0
+            if self.tuned is not None:
+                out[ax] |= {k: v for k, v in self.tuned[ax].items() if k in BOARD_KEYS}
         return tuple(out)
+
+    def law_settings(self, ax: int) -> dict[str, int]:
+        """The law's raw settings of an axis beyond the board's (the tuned ones), written last."""
+        return {} if self.tuned is None else {k: v for k, v in self.tuned[ax].items() if k not in BOARD_KEYS}
 
     def board(self) -> tuple[dict[str, int], ...]:
         """The settings the board runs with, per axis."""
@@ -203,6 +217,8 @@ def configure(link: Client, cfg: ExperimentConfig) -> list[dict[str, int]]:
         link.set_param("VEL_MODE", 0, ax)          # the paper's filtered Euler difference
         link.set_param("BRAKE", int(cfg.brake), ax)
         link.set_param("FOLLOW_LIMIT", TIMING.follow_limit_turns * COUNTS_PER_REV, ax)
+        for k, v in cfg.law_settings(ax).items():
+            link.set_param(k, v, ax)
     return [{k: link.get_param(k, ax) for k in BOARD_KEYS} for ax in AXES]
 
 
@@ -416,21 +432,31 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
         g = TABLE1[cfg.law][ax]
         raw = [tp.gain_raw_from_phys(round(k * 1e6), board[ax]["TAU_MAX_MNM"], COUNTS_PER_REV) if k else 0
                for k in (g.kp, g.kd, g.ki)]
-        a = Axis(AxisParams(law=LAWS[cfg.law], kp_q16=raw[0], kd_q16=raw[1], ki_q16=raw[2], vel_mode=0),
-                 cfg.period_us)
+        ap = AxisParams(law=LAWS[cfg.law], kp_q16=raw[0], kd_q16=raw[1], ki_q16=raw[2], vel_mode=0)
+        tuned = cfg.law_settings(ax)
+        if tuned:
+            ap = dataclasses.replace(ap, **{TUNED_FIELDS[k]: v for k, v in tuned.items() if k in TUNED_FIELDS})
+        a = Axis(ap, cfg.period_us)
         a.reset(0, 0)
         axes.append(a)
     n = int(round(cfg.t_end_s * 1e6 / cfg.period_us)) + 1
     out = {k: np.zeros((n, 2)) for k in ("pos", "vel", "cmd", "err", "true", "q", "q2")}
     w0 = time.monotonic()
+    edge_clk, edge_gap = [0, 0], [0, 0]      # the decoder's last edge and the interval before it (VEL_MODE 1)
+
+    def on_edges(start: int, edges: list) -> None:
+        for e in edges:
+            at = start + int(e.t * CLK_HZ)
+            edge_gap[e.axis], edge_clk[e.axis] = at - edge_clk[e.axis], at
+
     for k in range(n):
         ts = k * period
-        run_until(plant, channels, (k - 1) * period if k else 0, ts)
+        run_until(plant, channels, (k - 1) * period if k else 0, ts, CLK_HZ, on_edges)
         for a in AXES:
             if k == 0:
                 axes[a].move(cfg.target_counts, False)
             pos = plant.count(a)
-            cmd = axes[a].step(pos, 0, ts)
+            cmd = axes[a].step(pos, edge_clk[a] & 0xFFFF_FFFF, ts & 0xFFFF_FFFF, interval=min(edge_gap[a], 0xFFFF_FFFF))
             channels[a].load(PwmSetting(cmd=cmd, **setting[a]))
             out["pos"][k, a] = pos
             out["vel"][k, a] = axes[a].vel_q8 / 256

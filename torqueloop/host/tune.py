@@ -1,0 +1,145 @@
+# SPDX-License-Identifier: MIT
+"""``torqueloop tune``: gains for an axis from its identified plant, the
+board settings that carry them, and writing them to a board.
+
+The design is torqueloop/host/tunedesign.py's (poles, margins, stiction,
+the predicted step); this module turns a :class:`~.tunedesign.Design` into
+the firmware's raw parameters (protocol.toml: LAW, KP_Q16, KD_Q16, KI_Q16
+in PWM steps per count, per count/s and per count s, q16; PW0 in PWM ticks;
+FDIV for the carrier; VEL_MODE 1, the edge-timestamp speed the derivative
+of the design is taken on; PERIOD_US, the control period the design was
+discretised at) and writes them through the normal client, refusing while
+the axis moves.  The verification on the fast model and on the RTL board
+image is torqueloop/sim/tuneverify.py's (it needs the simulation stack).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from torqueloop.host.client import Client, ProtocolError
+from torqueloop.host.tunedesign import AxisModel, Design, Wish, design, predict
+from torqueloop.spec import protocol as P
+from torqueloop.spec.metrics import StepMetrics
+from torqueloop.spec.pwm import carrier_hz, full_scale
+from torqueloop.spec.system import SYSTEM
+
+LAW_CODE = {"pd": 2, "pid": 3}
+#: the PID's real pole at this fraction of wn (tunedesign's alpha): a slow integral, Ki a quarter of
+#: alpha = 1's, which keeps the overshoot of a saturated one-turn step near the wish's
+PID_ALPHA = 0.25
+#: the keys of the identified axis the design reads (plant file, [identifiable.<axis>])
+NEEDED = ("speed_gain_rad_per_s_per_v", "time_constant_s", "friction_v_pos", "friction_v_neg",
+          "dead_zone_pos_pct", "dead_zone_neg_pct")
+
+
+class TuneError(ProtocolError):
+    """The design or its application cannot go on; one line."""
+
+
+@dataclass(frozen=True)
+class AxisTune:
+    axis: int
+    name: str
+    model: AxisModel
+    design: Design
+    fdiv: int
+    predicted: StepMetrics
+    step_counts: int
+
+    @property
+    def carrier_hz(self) -> float:
+        return carrier_hz(self.fdiv)
+
+    def settings(self) -> dict[str, int]:
+        """The axis's raw parameters (protocol.toml names), in the order they are written."""
+        return {"FDIV": self.fdiv, "PW0": self.design.pw0, "LAW": LAW_CODE[self.design.law],
+                **self.design.q16(), "VEL_MODE": 1}
+
+    def as_dict(self) -> dict[str, Any]:
+        d = self.design
+        p = self.predicted
+        return {"axis": self.axis, "name": self.name, "law": d.law, "settings": self.settings(),
+                "period_us": round(d.period_s * 1e6), "carrier_hz": self.carrier_hz,
+                "kp_steps_per_count": d.kp, "kd_steps_per_count_per_s": d.kd, "ki_steps_per_count_s": d.ki,
+                "wn_rad_s": d.wn, "zeta": d.zeta, "gain_margin_db": d.gain_margin_db,
+                "phase_margin_deg": d.phase_margin_deg, "stick_band_counts": d.stick_band_counts,
+                "notes": list(d.notes), "step_counts": self.step_counts,
+                "predicted": {"overshoot_pct": p.overshoot_pct, "settling_time_s": p.settling_time_s,
+                              "steady_state_error_counts": p.steady_state_error}}
+
+
+def divider_at_least(f_hz: float) -> int:
+    """FDIV of the lowest carrier the divider makes at or above ``f_hz`` (eq. 4), within the bridge's rating."""
+    fdiv = max(1, math.floor(SYSTEM.clk_hz / (f_hz * full_scale())))
+    if carrier_hz(fdiv) > SYSTEM.bridge_max_hz:
+        raise TuneError(f"--pwm-freq {f_hz:g} Hz: the divider's carrier at or above it, {carrier_hz(fdiv):.0f} Hz, "
+                        f"is beyond the bridge's {SYSTEM.bridge_max_hz} Hz")
+    return fdiv
+
+
+def axis_model(ident: dict[str, float], where: str, supply_v: float) -> AxisModel:
+    """The identified axis from a plant file's keys; a missing or non-physical one in one line."""
+    for k in NEEDED:
+        v = ident.get(k)
+        if not isinstance(v, (int, float)) or v != v:
+            raise TuneError(f"{where}: {k} missing (run `torqueloop identify --out` or `plant export`)")
+    if ident["speed_gain_rad_per_s_per_v"] <= 0 or ident["time_constant_s"] <= 0:
+        raise TuneError(f"{where}: speed_gain_rad_per_s_per_v and time_constant_s must be positive")
+    return AxisModel.from_identified(ident, supply_v)
+
+
+def tune_axis(axis: int, ident: dict[str, float], wish: Wish, pwm_hz: float, where: str, supply_v: float = 12.0,
+              step_counts: int = SYSTEM.counts_per_turn, predict_s: float = 3.0) -> AxisTune:
+    m = axis_model(ident, where, supply_v)
+    d = design(m, wish, alpha=PID_ALPHA)
+    top = P.gain_raw_from_phys(P.PARAMS["KP_UNM_RAD"].max, SYSTEM.axes[axis].tau_max_mnm, SYSTEM.counts_per_turn)
+    for k, v in d.q16().items():
+        if v > top:
+            raise TuneError(f"axis {axis}: {k} = {v} is beyond what the board holds ({top}: "
+                            f"{P.PARAMS['KP_UNM_RAD'].max / 1e6:g} N m/rad at its tau_max): ask for a slower settling")
+    _, _, met = predict(m, d, step_counts, predict_s, wish.cmd_limit)
+    return AxisTune(axis, SYSTEM.axes[axis].name, m, d, divider_at_least(pwm_hz), met, step_counts)
+
+
+def check_margins(t: AxisTune, min_gm_db: float, min_pm_deg: float) -> str | None:
+    """None when the design keeps the margins asked for, else what it misses (one line)."""
+    d = t.design
+    if d.gain_margin_db < min_gm_db or d.phase_margin_deg < min_pm_deg:
+        return (f"axis {t.axis}: the design keeps a gain margin of {d.gain_margin_db:.1f} dB and a phase margin of "
+                f"{d.phase_margin_deg:.0f} deg, asked {min_gm_db:g} dB and {min_pm_deg:g} deg: ask for a slower "
+                "settling or a shorter period")
+    return None
+
+
+def apply(c: Client, tunes: list[AxisTune], save: bool) -> dict[str, Any]:
+    """Write the tuned settings to the board and read them back; ``save``
+    stores them (the board's parameter store, every axis disabled).  Refused
+    while an axis being tuned moves; PERIOD_US is the board's (both axes)."""
+    period = {round(t.design.period_s * 1e6) for t in tunes}
+    if len(period) != 1:
+        raise TuneError("the axes were designed at different control periods")
+    period_us = period.pop()
+    for t in tunes:
+        s = c.status(t.axis)
+        if s["moving"] or (s["enabled"] and s["velocity_q8"] != 0):
+            raise TuneError(f"axis {t.axis} is moving: wait until it stands, or `torqueloop stop`")
+    if save:
+        for a in range(P.AXIS_COUNT):
+            if c.status(a)["enabled"]:
+                raise TuneError(f"--save stores with every axis disabled and axis {a} is enabled: "
+                                "`torqueloop disable --all` first")
+    c.set_param("PERIOD_US", period_us)
+    back: dict[str, dict[str, int]] = {}
+    for t in tunes:
+        for k, v in t.settings().items():
+            c.set_param(k, v, t.axis)
+        back[t.name] = {k: c.get_param(k, t.axis) for k in t.settings()}
+        if back[t.name] != t.settings():
+            raise TuneError(f"axis {t.axis}: the board reads back {back[t.name]}, not {t.settings()}")
+    out: dict[str, Any] = {"period_us": c.get_param("PERIOD_US"), "read_back": back}
+    if save:
+        out["store"] = c.save()
+    return out
