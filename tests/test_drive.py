@@ -15,14 +15,13 @@ in one line before the axis is enabled.
 
 from __future__ import annotations
 
-import json
 import os
 
 import pytest
 
+from simproc import run_cli as run
 from simproc import sim_board
 from test_safety_simboard import PERIOD_S, Host
-from torqueloop import cli
 from torqueloop.sim.simboard import LIM_POS, SimBoard
 from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
@@ -166,19 +165,6 @@ def url(tmp_path_factory):
         del os.environ[auth.KEY_FILE_ENV]
     else:
         os.environ[auth.KEY_FILE_ENV] = old
-
-
-def run(url: str, capsys, *args: str, rc: int = 0) -> tuple[dict | None, str]:
-    capsys.readouterr()
-    try:
-        got = cli.main(["-u", url, "--json", *args])
-    except SystemExit as e:
-        got = e.code
-    out, err = capsys.readouterr()
-    assert got == rc, f"torqueloop {' '.join(args)} -> {got}\n{out}\n{err}"
-    if rc:
-        assert "Traceback" not in err and len(err.strip().splitlines()) == 1, f"not one line: {err!r}"
-    return (json.loads(out.strip().splitlines()[-1]) if out.strip() and not rc else None), err
 
 
 def test_cli_drive_both_ways_reads_the_encoder_sign_and_disables(url, capsys) -> None:

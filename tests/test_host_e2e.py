@@ -32,6 +32,7 @@ from pathlib import Path
 
 import pytest
 
+from simproc import run_cli as run
 from simproc import sim_board
 from torqueloop import cli
 from torqueloop.spec import auth
@@ -63,19 +64,6 @@ def _sim(keyless: bool = False):
 @pytest.fixture(scope="module")
 def url(keyfile):
     yield from _sim()
-
-
-def run(url: str, capsys, *args: str, rc: int = 0):
-    capsys.readouterr()
-    try:
-        got = cli.main(["-u", url, "--json", *args])
-    except SystemExit as e:          # argparse: a usage error
-        got = e.code
-    out, err = capsys.readouterr()
-    assert got == rc, f"torqueloop {' '.join(args)} -> {got}\n{out}\n{err}"
-    if rc:
-        assert "Traceback" not in err and len(err.strip().splitlines()) == 1, f"not one line: {err!r}"
-    return (json.loads(out.strip().splitlines()[-1]) if out.strip() and not rc else None), err
 
 
 def test_info(url, capsys) -> None:

@@ -17,14 +17,13 @@ back, and ``status`` says whether the running ones are the saved ones.
 
 from __future__ import annotations
 
-import json
 import os
 
 import pytest
 
+from simproc import run_cli as run
 from simproc import sim_board
 from test_safety_simboard import Host
-from torqueloop import cli
 from torqueloop.sim.epcs import SECTOR_BYTES
 from torqueloop.sim.simboard import SimBoard
 from torqueloop.spec import auth
@@ -136,20 +135,6 @@ def test_save_is_refused_while_enabled_without_a_mac_and_with_a_dead_flash(board
 
 
 # ---- the CLI against `torqueloop sim --flash FILE` -------------------------------------
-
-def run(url: str, capsys, *args: str, rc: int = 0, json_out: bool = True) -> tuple[object, str]:
-    capsys.readouterr()
-    try:
-        got = cli.main(["-u", url, *(["--json"] if json_out else []), *args])
-    except SystemExit as e:
-        got = e.code
-    out, err = capsys.readouterr()
-    assert got == rc, f"torqueloop {' '.join(args)} -> {got}\n{out}\n{err}"
-    if rc:
-        assert "Traceback" not in err and len(err.strip().splitlines()) == 1, f"not one line: {err!r}"
-        return None, err
-    return (json.loads(out.strip().splitlines()[-1]) if json_out else out), err
-
 
 def test_cli_save_survives_a_new_sim_process_on_the_same_flash(tmp_path, capsys, monkeypatch) -> None:
     key = tmp_path / "link.key"

@@ -6,6 +6,7 @@
 library ieee;
 use ieee.std_logic_1164.all;
 use ieee.numeric_std.all;
+use work.tl_util_pkg.all;
 
 entity tl_drive_interlock is
     generic (
@@ -34,17 +35,7 @@ entity tl_drive_interlock is
 end entity tl_drive_interlock;
 
 architecture rtl of tl_drive_interlock is
-    -- $clog2(FAULT_FILTER_CLKS + 1) of the Verilog twin.
-    function filter_width return positive is
-        variable bits : positive := 1;
-    begin
-        while 2 ** bits < FAULT_FILTER_CLKS + 1 loop
-            bits := bits + 1;
-        end loop;
-        return bits;
-    end function;
-
-    constant FILTER_BITS : positive := filter_width;
+    constant FILTER_BITS : positive := clog2(FAULT_FILTER_CLKS + 1);   -- >= 1: the generic is positive
     constant FILTER_MAX  : unsigned(FILTER_BITS - 1 downto 0) := to_unsigned(FAULT_FILTER_CLKS mod 2 ** FILTER_BITS, FILTER_BITS);
 
     signal fault_cnt : unsigned(FILTER_BITS * AXES - 1 downto 0);   -- consecutive clocks with fault, per axis

@@ -5,6 +5,7 @@
 library ieee;
 use ieee.std_logic_1164.all;
 use ieee.numeric_std.all;
+use work.tl_util_pkg.all;
 
 entity tl_debounce is
     generic (
@@ -21,23 +22,6 @@ entity tl_debounce is
 end entity tl_debounce;
 
 architecture rtl of tl_debounce is
-    function clog2(n : natural) return natural is
-        variable r : natural := 0;
-    begin
-        while 2 ** r < n loop
-            r := r + 1;
-        end loop;
-        return r;
-    end function;
-
-    function rst_level return std_logic is
-    begin
-        if RESET_VAL mod 2 = 1 then
-            return '1';
-        end if;
-        return '0';
-    end function;
-
     constant CNT_BITS : natural := clog2(STABLE_CLKS + 1);
     constant LAST     : unsigned(CNT_BITS - 1 downto 0) := to_unsigned(STABLE_CLKS - 1, CNT_BITS);
 
@@ -48,7 +32,7 @@ begin
     begin
         if rising_edge(clk) then
             if rst = '1' then
-                out_q <= (others => rst_level);
+                out_q <= (others => bit0(RESET_VAL));
                 cnt   <= (others => '0');
             else
                 for i in 0 to WIDTH - 1 loop

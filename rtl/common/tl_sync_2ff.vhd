@@ -4,6 +4,7 @@
 -- file for the reasoning.  Proven equivalent by scripts/equiv.py.
 library ieee;
 use ieee.std_logic_1164.all;
+use work.tl_util_pkg.all;
 
 entity tl_sync_2ff is
     generic (
@@ -19,15 +20,7 @@ entity tl_sync_2ff is
 end entity tl_sync_2ff;
 
 architecture rtl of tl_sync_2ff is
-    function rst_level return std_logic is
-    begin
-        if RESET_VAL mod 2 = 1 then
-            return '1';
-        end if;
-        return '0';
-    end function;
-
-    constant RST_VEC : std_logic_vector(WIDTH - 1 downto 0) := (others => rst_level);
+    constant RST_VEC : std_logic_vector(WIDTH - 1 downto 0) := (others => bit0(RESET_VAL));
 
     signal meta   : std_logic_vector(WIDTH - 1 downto 0);
     signal stable : std_logic_vector(WIDTH - 1 downto 0);

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 `default_nettype none
+`include "tl_cpu_bus.vh"
 // torqueloop CPU: RV32IM + Zicsr, machine mode only, multi-cycle with the
 // next instruction fetch overlapped with the completing cycle.
 //
@@ -35,32 +36,8 @@
 // pc), or during a multiply/divide, which is then abandoned and re-executed
 // after mret; loads and stores always complete.
 //
-// Port contract unchanged since the first version (rtl/soc instantiates it).
-module tl_cpu #(
-    parameter [31:0] RESET_PC = 32'h0000_0000,
-    parameter [31:0] HART_ID  = 32'd0
-) (
-    input  wire        clk,
-    input  wire        rst,
-    output wire        ibus_req,
-    output wire [31:0] ibus_addr,
-    input  wire        ibus_ack,
-    input  wire [31:0] ibus_rdata,
-    input  wire        ibus_err,
-    output wire        dbus_req,
-    output wire [31:0] dbus_addr,
-    output wire        dbus_we,
-    output wire [3:0]  dbus_be,
-    output wire [31:0] dbus_wdata,
-    input  wire        dbus_ack,
-    input  wire [31:0] dbus_rdata,
-    input  wire        dbus_err,
-    input  wire        irq_timer,
-    input  wire        irq_external,
-    input  wire        irq_software,
-    input  wire [63:0] mtime,
-    output wire        retire
-);
+// Parameters and ports: `CPU_CORE_PARAMS and `CPU_CORE_PORTS of tl_cpu_bus.vh.
+module tl_cpu #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
 `include "tl_cpu_causes.vh"
     localparam [1:0] S_FETCH = 2'd0, S_EXEC = 2'd1, S_MEM = 2'd2, S_MULDIV = 2'd3;
     reg [1:0]  state;
@@ -104,13 +81,7 @@ module tl_cpu #(
     wire [31:0] imm_d;
     wire [16:0] flags_d;
     tl_cpu_decode u_decode (
-        .insn(insn_next), .rd(rd_d), .rs1(rs1_d), .funct3(funct3_d), .imm(imm_d),
-        .is_lui(flags_d[0]), .is_auipc(flags_d[1]), .is_jal(flags_d[2]), .is_jalr(flags_d[3]),
-        .is_branch(flags_d[4]), .is_load(flags_d[5]), .is_store(flags_d[6]),
-        .alu_use_imm(flags_d[7]), .alu_alt(flags_d[8]), .is_muldiv(flags_d[9]),
-        .is_csr(flags_d[10]), .csr_writes(flags_d[11]), .is_ecall(flags_d[12]),
-        .is_ebreak(flags_d[13]), .is_mret(flags_d[14]),
-        .writes_rd(flags_d[15]), .illegal(flags_d[16])
+        .insn(insn_next), .rd(rd_d), .rs1(rs1_d), .funct3(funct3_d), .imm(imm_d), .flags(flags_d)
     );
     reg [61:0] dec_q;            // {flags, imm, funct3, rs1, rd} of the word in insn
     always @(posedge clk) begin
@@ -256,9 +227,7 @@ module tl_cpu #(
         .trap(trap && !rst), .trap_irq(trap_irq), .trap_code(trap_code), .trap_pc(pc),
         .trap_tval(trap_tval), .trap_target(trap_target),
         .mret(exec_go && is_mret), .mepc_out(mepc),
-        .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
-        .irq_pending(irq_pending), .irq_code(irq_code),
-        .retire(retire), .mtime(mtime)
+        `CPU_IRQ_CONNECT, .irq_pending(irq_pending), .irq_code(irq_code), .retire(retire)
     );
 
     // ---- multiply / divide (md_done, md_done_q, md_fin declared above) ---------

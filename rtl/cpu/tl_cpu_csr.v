@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 `default_nettype none
+`include "tl_cpu_bus.vh"
 // Machine-mode CSRs (privileged spec, M-mode only), trap entry and mret.
 //
 // Implemented: mstatus (MIE, MPIE; MPP reads 11), misa (RV32IM, read-only),
@@ -30,15 +31,12 @@ module tl_cpu_csr #(
     output wire [31:0] trap_target, // where the handler starts (valid with trap_irq/trap_code)
     input  wire        mret,
     output wire [31:0] mepc_out,
-    // interrupts (levels, synchronous to clk)
-    input  wire        irq_timer,
-    input  wire        irq_external,
-    input  wire        irq_software,
+    // interrupts (levels, synchronous to clk) and the machine timer (the time CSRs)
+    `CPU_IRQ_PORTS(input),
     output wire        irq_pending,
     output wire [3:0]  irq_code,
-    // counters
-    input  wire        retire,
-    input  wire [63:0] mtime
+    // instruction counter
+    input  wire        retire
 );
     reg        mstatus_mie, mstatus_mpie;
     reg        mie_msie, mie_mtie, mie_meie;

@@ -11,24 +11,18 @@ module tl_cpu_decode (
     output wire [4:0]  rs1,
     output wire [2:0]  funct3,
     output reg  [31:0] imm,
-    output wire        is_lui,
-    output wire        is_auipc,
-    output wire        is_jal,
-    output wire        is_jalr,
-    output wire        is_branch,
-    output wire        is_load,
-    output wire        is_store,
-    output wire        alu_use_imm,  // OP-IMM: operand b is the immediate
-    output wire        alu_alt,      // SUB / SRA / SRAI
-    output wire        is_muldiv,
-    output wire        is_csr,
-    output wire        csr_writes,   // CSRRW(I) always, CSRRS/C(I) only with rs1/zimm != 0
-    output wire        is_ecall,
-    output wire        is_ebreak,
-    output wire        is_mret,
-    output wire        writes_rd,
-    output wire        illegal
+    // the instruction class, bit 0 first: is_lui, is_auipc, is_jal, is_jalr,
+    // is_branch, is_load, is_store, alu_use_imm (OP-IMM: operand b is the
+    // immediate), alu_alt (SUB / SRA / SRAI), is_muldiv, is_csr, csr_writes
+    // (CSRRW(I) always, CSRRS/C(I) only with rs1/zimm != 0), is_ecall,
+    // is_ebreak, is_mret, writes_rd, illegal
+    output wire [16:0] flags
 );
+    wire is_lui, is_auipc, is_jal, is_jalr, is_branch, is_load, is_store, alu_use_imm, alu_alt;
+    wire is_muldiv, is_csr, csr_writes, is_ecall, is_ebreak, is_mret, writes_rd, illegal;
+    assign flags = {illegal, writes_rd, is_mret, is_ebreak, is_ecall, csr_writes, is_csr, is_muldiv,
+                    alu_alt, alu_use_imm, is_store, is_load, is_branch, is_jalr, is_jal, is_auipc, is_lui};
+
     wire [6:0] opcode = insn[6:0];
     wire [6:0] funct7 = insn[31:25];
     assign rd     = insn[11:7];

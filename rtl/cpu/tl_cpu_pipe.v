@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 `default_nettype none
+`include "tl_cpu_bus.vh"
 // torqueloop CPU, pipelined: RV32IM + Zicsr, machine mode only.  The same
 // ports, CSRs, traps and bus contract as tl_cpu (docs/cpu.md), in four
 // stages with the instruction fetch in front of them:
@@ -33,31 +34,8 @@
 // <= req, see tb/cpu/cpu_sim_top.v PIPELINED) each bus moves one word per
 // cycle; with one that does not (ack <= req & ~ack, rtl/soc/tl_soc_fabric.v)
 // the core works unchanged at one word every two cycles.
-module tl_cpu_pipe #(
-    parameter [31:0] RESET_PC = 32'h0000_0000,
-    parameter [31:0] HART_ID  = 32'd0
-) (
-    input  wire        clk,
-    input  wire        rst,
-    output wire        ibus_req,
-    output wire [31:0] ibus_addr,
-    input  wire        ibus_ack,
-    input  wire [31:0] ibus_rdata,
-    input  wire        ibus_err,
-    output wire        dbus_req,
-    output wire [31:0] dbus_addr,
-    output wire        dbus_we,
-    output wire [3:0]  dbus_be,
-    output wire [31:0] dbus_wdata,
-    input  wire        dbus_ack,
-    input  wire [31:0] dbus_rdata,
-    input  wire        dbus_err,
-    input  wire        irq_timer,
-    input  wire        irq_external,
-    input  wire        irq_software,
-    input  wire [63:0] mtime,
-    output wire        retire
-);
+// Parameters and ports: `CPU_CORE_PARAMS and `CPU_CORE_PORTS of tl_cpu_bus.vh.
+module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
 `include "tl_cpu_causes.vh"
 
     // Control signals used before the stage that drives them.
@@ -100,13 +78,7 @@ module tl_cpu_pipe #(
     wire [31:0] d_imm;
     wire [16:0] d_flags;
     tl_cpu_decode u_decode (
-        .insn(d_insn), .rd(d_rd), .rs1(d_rs1), .funct3(d_funct3), .imm(d_imm),
-        .is_lui(d_flags[0]), .is_auipc(d_flags[1]), .is_jal(d_flags[2]), .is_jalr(d_flags[3]),
-        .is_branch(d_flags[4]), .is_load(d_flags[5]), .is_store(d_flags[6]),
-        .alu_use_imm(d_flags[7]), .alu_alt(d_flags[8]), .is_muldiv(d_flags[9]),
-        .is_csr(d_flags[10]), .csr_writes(d_flags[11]), .is_ecall(d_flags[12]),
-        .is_ebreak(d_flags[13]), .is_mret(d_flags[14]),
-        .writes_rd(d_flags[15]), .illegal(d_flags[16])
+        .insn(d_insn), .rd(d_rd), .rs1(d_rs1), .funct3(d_funct3), .imm(d_imm), .flags(d_flags)
     );
     wire [4:0] d_rs2      = d_insn[24:20];
     wire [6:0] d_opcode   = d_insn[6:0];
@@ -311,9 +283,7 @@ module tl_cpu_pipe #(
         .trap(take_trap && !rst), .trap_irq(w_trap && w_irq), .trap_code(trap_code), .trap_pc(w_pc),
         .trap_tval(trap_tval), .trap_target(trap_target),
         .mret(retire && w_mret), .mepc_out(mepc),
-        .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
-        .irq_pending(irq_pending), .irq_code(irq_code),
-        .retire(retire), .mtime(mtime)
+        `CPU_IRQ_CONNECT, .irq_pending(irq_pending), .irq_code(irq_code), .retire(retire)
     );
 
     wire [31:0] load_data;

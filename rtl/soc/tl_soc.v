@@ -12,10 +12,12 @@
 // torqueloop/spec/regmap.toml; docs/soc.md describes the blocks.
 //
 // The board top (rtl/board/de0_cv_top.v) supplies clk and a synchronous
-// reset (reset_sync) and wires the pins; every asynchronous input is
-// synchronised inside the fabric.
+// reset (reset_sync) and wires the pins (tl_soc_board.vh); every
+// asynchronous input is synchronised inside the fabric.
 // the register map's TL_* names (generated; the include guard makes a second include empty)
 `include "regmap.vh"
+`include "tl_cpu_bus.vh"
+`include "tl_soc_board.vh"
 `default_nettype none
 
 module tl_soc #(
@@ -32,46 +34,10 @@ module tl_soc #(
 ) (
     input  wire        clk,
     input  wire        rst,            // synchronous, active high
-    output wire [9:0]  ledr,
-    input  wire [9:0]  sw,
-    input  wire [3:0]  key_n,
-    output wire [6:0]  hex0_n,
-    output wire [6:0]  hex1_n,
-    output wire [6:0]  hex2_n,
-    output wire [6:0]  hex3_n,
-    output wire [6:0]  hex4_n,
-    output wire [6:0]  hex5_n,
-    output wire [1:0]  rpwm,
-    output wire [1:0]  lpwm,
-    output wire [1:0]  r_en,
-    output wire [1:0]  l_en,
-    output wire [1:0]  pwm,
-    output wire [1:0]  dir,
-    input  wire [1:0]  bridge_fault,
-    input  wire [1:0]  enc_a,
-    input  wire [1:0]  enc_b,
-    input  wire [1:0]  enc_z,
-    input  wire        uart_rx,
-    output wire        uart_tx,
-    input  wire        uart_cts_n,
-    output wire        uart_rts_n,
-    input  wire        estop,
-    input  wire [1:0]  lim_neg,        // limit switches, asynchronous, 1 = open (tripped), per axis
-    input  wire [1:0]  lim_pos,
-    output wire        wdog_alive,     // hardware watchdog armed and not expired (to the drive interlock)
-    output wire        flash_dclk,     // configuration flash, SPI mode 0 (FLASH page)
-    output wire        flash_ncs,
-    output wire        flash_mosi,
-    input  wire        flash_miso
+    `SOC_BOARD_PORTS     // tl_soc_board.vh
 );
 
-    wire        ibus_req, ibus_ack, ibus_err;
-    wire [31:0] ibus_addr, ibus_rdata;
-    wire        dbus_req, dbus_we, dbus_ack, dbus_err;
-    wire [3:0]  dbus_be;
-    wire [31:0] dbus_addr, dbus_wdata, dbus_rdata;
-    wire [63:0] mtime;
-    wire        irq_timer, irq_software, irq_external;
+    `CPU_BUS_WIRES
     /* verilator lint_off UNUSEDSIGNAL */
     wire        retire;   // instruction-retired pulse: for test benches (instruction counts)
     /* verilator lint_on UNUSEDSIGNAL */
@@ -79,23 +45,11 @@ module tl_soc #(
     generate
         if (CPU_PIPELINED != 0) begin : g_pipe
             tl_cpu_pipe #(.RESET_PC(`TL_BOOT_ROM_BASE), .HART_ID(HART_ID)) u_cpu (
-                .clk(clk), .rst(rst),
-                .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
-                .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
-                .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
-                .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
-                .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
-                .mtime(mtime), .retire(retire)
+                `CPU_CORE_CONNECT
             );
         end else begin : g_multi
             tl_cpu #(.RESET_PC(`TL_BOOT_ROM_BASE), .HART_ID(HART_ID)) u_cpu (
-                .clk(clk), .rst(rst),
-                .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
-                .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
-                .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
-                .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
-                .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
-                .mtime(mtime), .retire(retire)
+                `CPU_CORE_CONNECT
             );
         end
     endgenerate
@@ -105,18 +59,8 @@ module tl_soc #(
         .CLK_HZ(CLK_HZ), .LIMIT_DEBOUNCE_CLKS(LIMIT_DEBOUNCE_CLKS), .PIPELINED(CPU_PIPELINED)
     ) u_fabric (
         .clk(clk), .rst(rst),
-        .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
-        .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
-        .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
-        .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
-        .mtime(mtime), .irq_timer(irq_timer), .irq_software(irq_software), .irq_external(irq_external),
-        .ledr(ledr), .sw(sw), .key_n(key_n),
-        .hex0_n(hex0_n), .hex1_n(hex1_n), .hex2_n(hex2_n), .hex3_n(hex3_n), .hex4_n(hex4_n), .hex5_n(hex5_n),
-        .rpwm(rpwm), .lpwm(lpwm), .r_en(r_en), .l_en(l_en), .pwm(pwm), .dir(dir),
-        .bridge_fault(bridge_fault), .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z),
-        .uart_rx(uart_rx), .uart_tx(uart_tx), .uart_cts_n(uart_cts_n), .uart_rts_n(uart_rts_n),
-        .estop(estop), .lim_neg(lim_neg), .lim_pos(lim_pos), .wdog_alive(wdog_alive),
-        .flash_dclk(flash_dclk), .flash_ncs(flash_ncs), .flash_mosi(flash_mosi), .flash_miso(flash_miso)
+        `CPU_BUS_CONNECT, `CPU_IRQ_CONNECT,
+        `SOC_BOARD_CONNECT
     );
 
 endmodule

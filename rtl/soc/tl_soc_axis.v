@@ -19,6 +19,7 @@
 // Bus slave: see tl_soc_timer.v.
 // the register map's TL_* names (generated; the include guard makes a second include empty)
 `include "regmap.vh"
+`include "tl_soc_page.vh"
 `default_nettype none
 
 module tl_soc_axis #(
@@ -47,9 +48,8 @@ module tl_soc_axis #(
     output wire        period_event,  // PWM period start (pulse)
     output wire        index_event,   // index latched (level, rises once per arm)
     output wire        fault_event,   // illegal encoder transition or bridge fault (level)
-    // bus (docs/soc.md, Bus): tl_soc_fabric's request to this page, this block's answer
-    input  wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,
-    output wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp    // combinational; the fabric registers it
+    // bus (docs/soc.md, Bus; tl_soc_page.vh)
+    `SOC_PAGE_PORTS
 );
 
     localparam integer PWM_BITS = `TL_AXIS_PWM_PW0_PW0_WIDTH;
@@ -64,14 +64,9 @@ module tl_soc_axis #(
     localparam [31:0] CTRL_RESET  = `TL_AXIS_PWM_CTRL_RESET;
     localparam [31:0] CFG_RESET   = `TL_AXIS_ENC_CFG_RESET;
 
-    reg  [31:0] rdata;          // read decode at the end
-    reg         err;
-    assign bus_rsp = {err, rdata};   // regmap.vh's layout: TL_BUS_RSP_ERR_LSB = 32
+    `SOC_PAGE_RSP         // rdata, err: the read decode at the end
 
-    wire        wr    = bus_req[`TL_BUS_REQ_STB_LSB] && bus_req[`TL_BUS_REQ_WE_LSB];
-    wire [9:0]  idx   = bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB];
-    wire [31:0] wmask = bus_req[`TL_BUS_REQ_WMASK_MSB:`TL_BUS_REQ_WMASK_LSB];
-    wire [31:0] wbits = bus_req[`TL_BUS_REQ_WBITS_MSB:`TL_BUS_REQ_WBITS_LSB];
+    `SOC_PAGE_WRITE       // wr, idx, wmask, wbits
 
     // A register after a write: the written bytes, restricted to the bits `keep` software may change.
     function [31:0] merge(input [31:0] old, input [31:0] mask, input [31:0] bits, input [31:0] keep);

@@ -27,6 +27,8 @@
 // they never wait for each other.
 // the register map's TL_* names (generated; the include guard makes a second include empty)
 `include "regmap.vh"
+`include "tl_cpu_bus.vh"
+`include "tl_soc_board.vh"
 `default_nettype none
 
 module tl_soc_fabric #(
@@ -40,65 +42,12 @@ module tl_soc_fabric #(
 ) (
     input  wire        clk,
     input  wire        rst,            // synchronous, active high
-    // instruction bus (from the CPU)
-    input  wire        ibus_req,
-    input  wire [31:0] ibus_addr,
-    output wire        ibus_ack,
-    output wire [31:0] ibus_rdata,
-    output wire        ibus_err,
-    // data bus (from the CPU)
-    input  wire        dbus_req,
-    input  wire [31:0] dbus_addr,
-    input  wire        dbus_we,
-    input  wire [3:0]  dbus_be,
-    input  wire [31:0] dbus_wdata,
-    output wire        dbus_ack,
-    output wire [31:0] dbus_rdata,
-    output wire        dbus_err,
+    // instruction and data bus (from the CPU)
+    `CPU_BUS_PORTS(input, output),
     // to the CPU
-    output wire [63:0] mtime,
-    output wire        irq_timer,
-    output wire        irq_software,
-    output wire        irq_external,
-    // board: DE0-CV
-    output wire [9:0]  ledr,
-    input  wire [9:0]  sw,
-    input  wire [3:0]  key_n,
-    output wire [6:0]  hex0_n,
-    output wire [6:0]  hex1_n,
-    output wire [6:0]  hex2_n,
-    output wire [6:0]  hex3_n,
-    output wire [6:0]  hex4_n,
-    output wire [6:0]  hex5_n,
-    // board: two IBT-2 bridges, index = axis
-    output wire [1:0]  rpwm,
-    output wire [1:0]  lpwm,
-    output wire [1:0]  r_en,
-    output wire [1:0]  l_en,
-    output wire [1:0]  pwm,            // PWM+DIR mode (PWM_CTRL.DIR_MODE = 1)
-    output wire [1:0]  dir,
-    input  wire [1:0]  bridge_fault,   // asynchronous, 1 = fault (comparator on R_IS/L_IS); tie 0 if absent
-    // board: two encoders
-    input  wire [1:0]  enc_a,
-    input  wire [1:0]  enc_b,
-    input  wire [1:0]  enc_z,
-    // board: UART to the RN-XV
-    input  wire        uart_rx,
-    output wire        uart_tx,
-    input  wire        uart_cts_n,
-    output wire        uart_rts_n,
-    // board: e-stop
-    input  wire        estop,          // asynchronous, 1 = stop
-    // limit switches, asynchronous, 1 = open (tripped or wire broken), per axis
-    input  wire [1:0]  lim_neg,
-    input  wire [1:0]  lim_pos,
-    // configuration flash (FLASH page; the board reaches it through the ASMI block)
-    output wire        flash_dclk,
-    output wire        flash_ncs,
-    output wire        flash_mosi,
-    input  wire        flash_miso,
-    // the hardware watchdog: armed and not expired (the board's drive interlock arms only then)
-    output wire        wdog_alive
+    `CPU_IRQ_PORTS(output),
+    // the board (tl_soc_board.vh)
+    `SOC_BOARD_PORTS
 );
 
     localparam integer RAM_AW = $clog2(RAM_BYTES);

@@ -14,6 +14,7 @@
 // Bus slave: see tl_soc_timer.v.
 // the register map's TL_* names (generated; the include guard makes a second include empty)
 `include "regmap.vh"
+`include "tl_soc_page.vh"
 `default_nettype none
 
 module tl_soc_flash #(
@@ -25,18 +26,15 @@ module tl_soc_flash #(
     output wire        flash_ncs,          // active low
     output wire        flash_mosi,         // to the flash (ASDO)
     input  wire        flash_miso,         // from the flash (DATA0)
-    // bus (docs/soc.md, Bus): tl_soc_fabric's request to this page, this block's answer
+    // bus (docs/soc.md, Bus; tl_soc_page.vh)
     /* verilator lint_off UNUSEDSIGNAL */  // a block reads the bits of the bundle it needs
-    input  wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,
+    `SOC_PAGE_PORTS
     /* verilator lint_on UNUSEDSIGNAL */
-    output wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp    // combinational; the fabric registers it
 );
 
     localparam integer DW = (HALF_CLKS > 1) ? $clog2(HALF_CLKS) : 1;
 
-    reg  [31:0] rdata;
-    reg         err;
-    assign bus_rsp = {err, rdata};   // regmap.vh's layout: TL_BUS_RSP_ERR_LSB = 32
+    `SOC_PAGE_RSP         // rdata, err: the read decode at the end
 
     wire        wr    = bus_req[`TL_BUS_REQ_STB_LSB] && bus_req[`TL_BUS_REQ_WE_LSB];
     wire [9:0]  idx   = bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB];

@@ -10,6 +10,7 @@
 // Bus slave: see tl_soc_timer.v.
 // the register map's TL_* names (generated; the include guard makes a second include empty)
 `include "regmap.vh"
+`include "tl_soc_page.vh"
 `default_nettype none
 
 module tl_soc_gpio (
@@ -26,20 +27,17 @@ module tl_soc_gpio (
     output wire [6:0]  hex4_n,
     output wire [6:0]  hex5_n,
     output wire        key_event, // one-cycle pulse: a key was pressed
-    // bus (docs/soc.md, Bus): tl_soc_fabric's request to this page, this block's answer
+    // bus (docs/soc.md, Bus; tl_soc_page.vh)
     /* verilator lint_off UNUSEDSIGNAL */  // a block reads the bits of the bundle it needs
-    input  wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,
+    `SOC_PAGE_PORTS
     /* verilator lint_on UNUSEDSIGNAL */
-    output wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp    // combinational; the fabric registers it
 );
 
     localparam [31:0] LEDR_RESET   = `TL_GPIO_LEDR_RESET;
     localparam [31:0] HEX_LO_RESET = `TL_GPIO_HEX_LO_RESET;
     localparam [31:0] HEX_HI_RESET = `TL_GPIO_HEX_HI_RESET;
 
-    reg  [31:0] rdata;          // read decode at the end
-    reg         err;
-    assign bus_rsp = {err, rdata};   // regmap.vh's layout: TL_BUS_RSP_ERR_LSB = 32
+    `SOC_PAGE_RSP         // rdata, err: the read decode at the end
 
     wire [9:0] sw_s;
     wire [3:0] key_n_s;
@@ -57,10 +55,7 @@ module tl_soc_gpio (
     reg [3:0]  key_edge;
     reg        key_event_q;
 
-    wire        wr    = bus_req[`TL_BUS_REQ_STB_LSB] && bus_req[`TL_BUS_REQ_WE_LSB];
-    wire [9:0]  idx   = bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB];
-    wire [31:0] wmask = bus_req[`TL_BUS_REQ_WMASK_MSB:`TL_BUS_REQ_WMASK_LSB];
-    wire [31:0] wbits = bus_req[`TL_BUS_REQ_WBITS_MSB:`TL_BUS_REQ_WBITS_LSB];
+    `SOC_PAGE_WRITE       // wr, idx, wmask, wbits
     wire [3:0]  press = key & ~key_q;
     wire [3:0]  clr   = (wr && idx == `TL_GPIO_KEY_EDGE_IDX) ? wbits[3:0] : 4'd0;
 

@@ -9,6 +9,7 @@
 // torqueloop/spec/regmap.toml.  Bus slave: see tl_soc_timer.v.
 // the register map's TL_* names (generated; the include guard makes a second include empty)
 `include "regmap.vh"
+`include "tl_soc_page.vh"
 `default_nettype none
 
 module tl_soc_intc #(
@@ -18,19 +19,16 @@ module tl_soc_intc #(
     input  wire             rst,
     input  wire [N_SRC-1:0] src,
     output wire             irq_external,
-    // bus (docs/soc.md, Bus): tl_soc_fabric's request to this page, this block's answer
+    // bus (docs/soc.md, Bus; tl_soc_page.vh)
     /* verilator lint_off UNUSEDSIGNAL */  // a block reads the bits of the bundle it needs
-    input  wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,
+    `SOC_PAGE_PORTS
     /* verilator lint_on UNUSEDSIGNAL */
-    output wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp    // combinational; the fabric registers it
 );
 
     localparam [31:0] PENDING_RESET = `TL_INTC_PENDING_RESET;
     localparam [31:0] ENABLE_RESET  = `TL_INTC_ENABLE_RESET;
 
-    reg  [31:0] rdata;          // read decode at the end
-    reg         err;
-    assign bus_rsp = {err, rdata};   // regmap.vh's layout: TL_BUS_RSP_ERR_LSB = 32
+    `SOC_PAGE_RSP         // rdata, err: the read decode at the end
 
     reg [N_SRC-1:0] src_q;
     reg [N_SRC-1:0] pending;

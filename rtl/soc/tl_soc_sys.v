@@ -22,6 +22,7 @@
 // Bus slave: see tl_soc_timer.v.
 // the register map's TL_* names (generated; the include guard makes a second include empty)
 `include "regmap.vh"
+`include "tl_soc_page.vh"
 `default_nettype none
 
 module tl_soc_sys #(
@@ -37,19 +38,16 @@ module tl_soc_sys #(
     output wire        safety_event, // one-cycle pulse: a cause bit was newly set
     output wire        wdog_armed,   // the watchdog is armed (only reset disarms it)
     output wire        wdog_alive,   // armed and not expired: the board's drive interlock may arm
-    // bus (docs/soc.md, Bus): tl_soc_fabric's request to this page, this block's answer
+    // bus (docs/soc.md, Bus; tl_soc_page.vh)
     /* verilator lint_off UNUSEDSIGNAL */  // a block reads the bits of the bundle it needs
-    input  wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,
+    `SOC_PAGE_PORTS
     /* verilator lint_on UNUSEDSIGNAL */
-    output wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp    // combinational; the fabric registers it
 );
 
     localparam [31:0] ID_RESET      = `TL_SYS_ID_RESET;
     localparam [31:0] VERSION_RESET = `TL_SYS_VERSION_RESET;
 
-    reg  [31:0] rdata;          // read decode at the end
-    reg         err;
-    assign bus_rsp = {err, rdata};   // regmap.vh's layout: TL_BUS_RSP_ERR_LSB = 32
+    `SOC_PAGE_RSP         // rdata, err: the read decode at the end
 
     wire estop_s;
     wire [1:0] fault_s;
@@ -67,10 +65,7 @@ module tl_soc_sys #(
     reg  [3:0]  latch;          // {wdog, fault1, fault0, estop}, as SAFETY[11:8]
     reg         event_q;
 
-    wire        wr    = bus_req[`TL_BUS_REQ_STB_LSB] && bus_req[`TL_BUS_REQ_WE_LSB];
-    wire [9:0]  idx   = bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB];
-    wire [31:0] wmask = bus_req[`TL_BUS_REQ_WMASK_MSB:`TL_BUS_REQ_WMASK_LSB];
-    wire [31:0] wbits = bus_req[`TL_BUS_REQ_WBITS_MSB:`TL_BUS_REQ_WBITS_LSB];
+    `SOC_PAGE_WRITE       // wr, idx, wmask, wbits
     wire        full  = wmask == 32'hFFFF_FFFF;   // keys count only as whole-word writes
 
     wire        kick_wr   = wr && idx == `TL_SYS_WDOG_KICK_IDX;

@@ -10,6 +10,7 @@
 // same cycle; tl_soc_fabric acknowledges (docs/soc.md, Bus).
 // the register map's TL_* names (generated; the include guard makes a second include empty)
 `include "regmap.vh"
+`include "tl_soc_page.vh"
 `default_nettype none
 
 module tl_soc_timer (
@@ -18,23 +19,17 @@ module tl_soc_timer (
     output wire [63:0] mtime,
     output wire        irq_timer,
     output wire        irq_software,
-    // bus (docs/soc.md, Bus): tl_soc_fabric's request to this page, this block's answer
-    input  wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,
-    output wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp    // combinational; the fabric registers it
+    // bus (docs/soc.md, Bus; tl_soc_page.vh)
+    `SOC_PAGE_PORTS
 );
 
-    reg  [31:0] rdata;          // read decode at the end
-    reg         err;
-    assign bus_rsp = {err, rdata};   // regmap.vh's layout: TL_BUS_RSP_ERR_LSB = 32
+    `SOC_PAGE_RSP         // rdata, err: the read decode at the end
 
     reg [63:0] mtime_q;
     reg [63:0] mtimecmp_q;
     reg        msip_q;
 
-    wire        wr    = bus_req[`TL_BUS_REQ_STB_LSB] && bus_req[`TL_BUS_REQ_WE_LSB];
-    wire [9:0]  idx   = bus_req[`TL_BUS_REQ_IDX_MSB:`TL_BUS_REQ_IDX_LSB];
-    wire [31:0] wmask = bus_req[`TL_BUS_REQ_WMASK_MSB:`TL_BUS_REQ_WMASK_LSB];
-    wire [31:0] wbits = bus_req[`TL_BUS_REQ_WBITS_MSB:`TL_BUS_REQ_WBITS_LSB];
+    `SOC_PAGE_WRITE       // wr, idx, wmask, wbits
 
     function [31:0] merge(input [31:0] old, input [31:0] mask, input [31:0] bits);
         merge = (old & ~mask) | bits;

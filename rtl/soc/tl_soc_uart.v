@@ -10,6 +10,7 @@
 // Bus slave: see tl_soc_timer.v.
 // the register map's TL_* names (generated; the include guard makes a second include empty)
 `include "regmap.vh"
+`include "tl_soc_page.vh"
 `default_nettype none
 
 module tl_soc_uart #(
@@ -26,20 +27,17 @@ module tl_soc_uart #(
     // interrupt sources (levels; the INTC latches their rising edges)
     output wire        rx_event,      // RX FIFO not empty
     output wire        tx_event,      // TX FIFO empty
-    // bus (docs/soc.md, Bus): tl_soc_fabric's request to this page, this block's answer
+    // bus (docs/soc.md, Bus; tl_soc_page.vh)
     /* verilator lint_off UNUSEDSIGNAL */  // a block reads the bits of the bundle it needs
-    input  wire [`TL_BUS_REQ_WIDTH-1:0] bus_req,
+    `SOC_PAGE_PORTS
     /* verilator lint_on UNUSEDSIGNAL */
-    output wire [`TL_BUS_RSP_WIDTH-1:0] bus_rsp    // combinational; the fabric registers it
 );
 
     localparam integer LVL_BITS = $clog2(FIFO_DEPTH) + 1;
     localparam [31:0]  BAUD_RESET = `TL_UART_BAUD_DIV_RESET;
     localparam [31:0]  CTRL_RESET = `TL_UART_CTRL_RESET;
 
-    reg  [31:0] rdata;          // read decode at the end
-    reg         err;
-    assign bus_rsp = {err, rdata};   // regmap.vh's layout: TL_BUS_RSP_ERR_LSB = 32
+    `SOC_PAGE_RSP         // rdata, err: the read decode at the end
 
     wire        stb   = bus_req[`TL_BUS_REQ_STB_LSB];
     wire        wr    = stb && bus_req[`TL_BUS_REQ_WE_LSB];

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // the register map's TL_* names (generated; the include guard makes a second include empty)
 `include "regmap.vh"
+`include "tl_cpu_bus.vh"
 `default_nettype none
 // Test harness of the CPU (simulation only, not part of the SoC): the core,
 // a two-port RAM, a boot ROM stub, the SoC's own machine timer and interrupt
@@ -53,9 +54,8 @@ module cpu_sim_top #(
     localparam [31:0]  PER_MASK  = ~(`TL_PERIPH_SIZE - 1);
     localparam [N_PAGES-1:0] PAGE_USED = (1 << `TL_TIMER_PAGE) | (1 << `TL_INTC_PAGE);
 
-    wire        ibus_req, dbus_req, dbus_we, retire;
-    wire [31:0] ibus_addr, dbus_addr, dbus_wdata;
-    wire [3:0]  dbus_be;
+    `CPU_BUS_MASTER_WIRES
+    wire        retire;
     reg         ibus_ack, ibus_err, dbus_ack, dbus_err;
     reg  [31:0] ibus_rdata, dbus_rdata;
     wire [63:0] mtime;
@@ -64,23 +64,11 @@ module cpu_sim_top #(
     generate
         if (PIPELINED != 0) begin : g_pipe
             tl_cpu_pipe #(.RESET_PC(`TL_BOOT_ROM_BASE)) u_cpu (
-                .clk(clk), .rst(rst),
-                .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
-                .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
-                .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
-                .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
-                .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
-                .mtime(mtime), .retire(retire)
+                `CPU_CORE_CONNECT
             );
         end else begin : g_multi
             tl_cpu #(.RESET_PC(`TL_BOOT_ROM_BASE)) u_cpu (
-                .clk(clk), .rst(rst),
-                .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
-                .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
-                .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
-                .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
-                .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
-                .mtime(mtime), .retire(retire)
+                `CPU_CORE_CONNECT
             );
         end
     endgenerate

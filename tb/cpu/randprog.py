@@ -53,6 +53,16 @@ def generate(seed: int, count: int) -> str:
             return f"x{rng.choice(recent)}"
         return f"x{rng.choice(FREE + [0])}"
 
+    def forward(jump: list[str], filler: str, skip: int) -> int:
+        """``jump`` (which names the next label, .Lf{label}), ``skip`` filler
+        instructions it jumps over, then that label; returns ``skip``."""
+        nonlocal label
+        out.extend(jump)
+        out.extend(f"    {filler} {reg()}, {src()}, {rng.randint(-50, 50)}" for _ in range(skip))
+        out.append(f".Lf{label}:")
+        label += 1
+        return skip
+
     n = 0
     while n < count:
         kind = rng.choices(["rr", "ri", "sh", "md", "ld", "st", "br", "jal", "jalr", "lui", "csr", "corner"],
@@ -82,27 +92,14 @@ def generate(seed: int, count: int) -> str:
                 out.append(f"    {op} {src()}, {off}(x{BASE_REG})")
         elif kind == "br":
             skip = rng.randint(0, 3)
-            out.append(f"    {rng.choice(BRANCHES)} {src()}, {src()}, .Lf{label}")
-            out += [f"    addi {reg()}, {src()}, {rng.randint(-50, 50)}" for _ in range(skip)]
-            out.append(f".Lf{label}:")
-            label += 1
-            n += skip
+            n += forward([f"    {rng.choice(BRANCHES)} {src()}, {src()}, .Lf{label}"], "addi", skip)
         elif kind == "jal":
             skip = rng.randint(0, 2)
-            out.append(f"    jal {src()}, .Lf{label}")
-            out += [f"    xori {reg()}, {src()}, {rng.randint(-50, 50)}" for _ in range(skip)]
-            out.append(f".Lf{label}:")
-            label += 1
-            n += skip
+            n += forward([f"    jal {src()}, .Lf{label}"], "xori", skip)
         elif kind == "jalr":
             skip = rng.randint(0, 2)
             rd = rng.choice(FREE + [0])
-            out.append(f"    la x{LINK_REG}, .Lf{label}")
-            out.append(f"    jalr x{rd}, 0(x{LINK_REG})")
-            out += [f"    ori {reg()}, {src()}, {rng.randint(-50, 50)}" for _ in range(skip)]
-            out.append(f".Lf{label}:")
-            label += 1
-            n += skip + 2
+            n += 2 + forward([f"    la x{LINK_REG}, .Lf{label}", f"    jalr x{rd}, 0(x{LINK_REG})"], "ori", skip)
         elif kind == "lui":
             op = rng.choice(["lui", "auipc"])
             out.append(f"    {op} {reg()}, {rng.getrandbits(20)}")

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 `default_nettype none
+`include "tl_cpu_bus.vh"
 // Bus-contract properties of the CPU, proven by Yosys SAT (k-induction) for
 // every input sequence: any wait states, any instruction words, acks and
 // errors at any time (the environment is not constrained at all).
@@ -12,21 +13,14 @@
 //     -> unchanged in t+1);
 //   * retire never pulses in reset.
 // cpu_bus_contract holds the properties; cpu_bus_props proves them for
-// tl_cpu, cpu_pipe_bus_props for tl_cpu_pipe.
+// tl_cpu, cpu_pipe_bus_props for tl_cpu_pipe (both through cpu_bus_check).
 module cpu_bus_contract #(
     parameter integer HOLD_THROUGH_ACK = 1
 ) (
     input wire        clk,
     input wire        rst,
-    input wire        ibus_req,
-    input wire [31:0] ibus_addr,
-    input wire        ibus_ack,
-    input wire        dbus_req,
-    input wire [31:0] dbus_addr,
-    input wire        dbus_we,
-    input wire [3:0]  dbus_be,
-    input wire [31:0] dbus_wdata,
-    input wire        dbus_ack,
+    /* the answers (rdata, err) are not part of the contract */
+    `CPU_BUS_PORTS(input, input),
     input wire        retire
 );
     localparam HOLD = HOLD_THROUGH_ACK != 0;
@@ -55,75 +49,31 @@ module cpu_bus_contract #(
     end
 endmodule
 
-module cpu_bus_props #(
-    parameter integer HOLD_THROUGH_ACK = 1
-) (
-    input wire        clk,
-    input wire        rst,
-    input wire        ibus_ack,
-    input wire [31:0] ibus_rdata,
-    input wire        ibus_err,
-    input wire        dbus_ack,
-    input wire [31:0] dbus_rdata,
-    input wire        dbus_err,
-    input wire        irq_timer,
-    input wire        irq_external,
-    input wire        irq_software,
-    input wire [63:0] mtime
-);
-    wire        ibus_req, dbus_req, dbus_we, retire;
-    wire [31:0] ibus_addr, dbus_addr, dbus_wdata;
-    wire [3:0]  dbus_be;
-
-    tl_cpu u_cpu (
-        .clk(clk), .rst(rst),
-        .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
-        .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
-        .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
-        .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
-        .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
-        .mtime(mtime), .retire(retire)
-    );
-    cpu_bus_contract #(.HOLD_THROUGH_ACK(HOLD_THROUGH_ACK)) u_contract (
-        .clk(clk), .rst(rst), .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
-        .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
-        .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .retire(retire)
+// The core under the contract; a top below picks which.  PIPELINED has no
+// default core: Yosys elaborates every module of the file with its
+// defaults, and each manifest core holds only its own CPU.
+module cpu_bus_check #(
+    parameter integer PIPELINED = -1     // 0: tl_cpu, 1: tl_cpu_pipe
+) (`CPU_CORE_PORTS);
+    generate
+        if (PIPELINED == 1) begin : g_pipe
+            tl_cpu_pipe u_cpu (`CPU_CORE_CONNECT);
+        end else if (PIPELINED == 0) begin : g_multi
+            tl_cpu u_cpu (`CPU_CORE_CONNECT);
+        end
+    endgenerate
+    cpu_bus_contract #(.HOLD_THROUGH_ACK(PIPELINED == 0)) u_contract (
+        .clk(clk), .rst(rst), `CPU_BUS_CONNECT, .retire(retire)
     );
 endmodule
 
-module cpu_pipe_bus_props #(
-    parameter integer HOLD_THROUGH_ACK = 0
-) (
-    input wire        clk,
-    input wire        rst,
-    input wire        ibus_ack,
-    input wire [31:0] ibus_rdata,
-    input wire        ibus_err,
-    input wire        dbus_ack,
-    input wire [31:0] dbus_rdata,
-    input wire        dbus_err,
-    input wire        irq_timer,
-    input wire        irq_external,
-    input wire        irq_software,
-    input wire [63:0] mtime
-);
-    wire        ibus_req, dbus_req, dbus_we, retire;
-    wire [31:0] ibus_addr, dbus_addr, dbus_wdata;
-    wire [3:0]  dbus_be;
+// The tops (rtl/manifest.toml): the core's ports are theirs, the slave side
+// and the interrupts free inputs.
+module cpu_bus_props (`CPU_CORE_PORTS);
+    cpu_bus_check #(.PIPELINED(0)) u_check (`CPU_CORE_CONNECT);
+endmodule
 
-    tl_cpu_pipe u_cpu (
-        .clk(clk), .rst(rst),
-        .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
-        .ibus_rdata(ibus_rdata), .ibus_err(ibus_err),
-        .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
-        .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .dbus_rdata(dbus_rdata), .dbus_err(dbus_err),
-        .irq_timer(irq_timer), .irq_external(irq_external), .irq_software(irq_software),
-        .mtime(mtime), .retire(retire)
-    );
-    cpu_bus_contract #(.HOLD_THROUGH_ACK(HOLD_THROUGH_ACK)) u_contract (
-        .clk(clk), .rst(rst), .ibus_req(ibus_req), .ibus_addr(ibus_addr), .ibus_ack(ibus_ack),
-        .dbus_req(dbus_req), .dbus_addr(dbus_addr), .dbus_we(dbus_we), .dbus_be(dbus_be),
-        .dbus_wdata(dbus_wdata), .dbus_ack(dbus_ack), .retire(retire)
-    );
+module cpu_pipe_bus_props (`CPU_CORE_PORTS);
+    cpu_bus_check #(.PIPELINED(1)) u_check (`CPU_CORE_CONNECT);
 endmodule
 `default_nettype wire

@@ -11,27 +11,35 @@ the watchdog expiring (alive falling) latches ``tripped``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 
 @dataclass
-class InterlockInputs:
+class BridgeLines:
+    """The four IBT-2 logic lines of every axis, a bit per axis (one axis's
+    are torqueloop.spec.bridge.Pins): the demand going in, and out again
+    only while the drives are armed."""
+
+    rpwm: int = 0
+    lpwm: int = 0
+    r_en: int = 0
+    l_en: int = 0
+
+    def gated(self, mask: int) -> dict[str, int]:
+        """Each line ANDed with ``mask`` (all axes' bits, or none)."""
+        return {f.name: getattr(self, f.name) & mask for f in fields(BridgeLines)}
+
+
+@dataclass
+class InterlockInputs(BridgeLines):
     estop: bool = False
     arm_sw: bool = False
     fault: int = 0          # bit per axis
     alive: bool = True      # the SoC's watchdog armed and not expired
-    rpwm: int = 0
-    lpwm: int = 0
-    r_en: int = 0
-    l_en: int = 0
 
 
 @dataclass
-class InterlockOutputs:
-    rpwm: int = 0
-    lpwm: int = 0
-    r_en: int = 0
-    l_en: int = 0
+class InterlockOutputs(BridgeLines):
     armed: bool = False
     tripped: bool = False
     fault_latched: int = 0
@@ -76,9 +84,7 @@ class DriveInterlockModel:
         elif not self._switch_was_up:
             armed, tripped, latched = True, False, 0
         gate = (1 << self.axes) - 1 if prev.armed else 0
-        self._out = InterlockOutputs(
-            rpwm=i.rpwm & gate, lpwm=i.lpwm & gate, r_en=i.r_en & gate, l_en=i.l_en & gate,
-            armed=armed, tripped=tripped, fault_latched=latched)
+        self._out = InterlockOutputs(**i.gated(gate), armed=armed, tripped=tripped, fault_latched=latched)
         self._switch_was_up = i.arm_sw
         self._was_alive = i.alive
         for a in range(self.axes):
