@@ -204,25 +204,27 @@ class FastAxis:
             se=ax.elec_mode(self.c, self.z[:ax.N_STATE], self.e_pos, self.e_neg))
 
     # ---- flow ----------------------------------------------------------
-    def _system(self) -> _ModeSystem:
-        key = (self.mode, self.e_pos, self.e_neg)
+    def _system(self, key: tuple[ax.Mode, float, float] | None = None) -> _ModeSystem:
+        """The flow data of (mode, e_pos, e_neg), by default the axis's own, built on first use."""
+        key = key or (self.mode, self.e_pos, self.e_neg)
         s = self._systems.get(key)
         if s is None:
-            a, b = ax.affine(self.c, self.mode, self.e_pos, self.e_neg)
+            mode, e_pos, e_neg = key
+            a, b = ax.affine(self.c, mode, e_pos, e_neg)
             m = np.zeros((NZ, NZ))
             m[:ax.N_STATE, :ax.N_STATE] = a
             m[:ax.N_STATE, ax.N_STATE] = b
-            gl = ax.guards(self.c, self.mode, self.e_pos, self.e_neg)
+            gl = ax.guards(self.c, mode, e_pos, e_neg)
             g = np.array([x.row for x in gl]) if gl else None
             _, (bal, _) = matrix_balance(m, permute=False, separate=True)
-            s = _ModeSystem(self.mode, self.e_pos, self.e_neg, m, gl, g,
+            s = _ModeSystem(mode, e_pos, e_neg, m, gl, g,
                             None if g is None else g @ m,
                             None if g is None else np.array([x.tol for x in gl]), {},
                             bal, m * bal[None, :] / bal[:, None],
                             self.h_contact_ticks if any(x.part in ("gear", "nut") for x in gl)
                             # the mesh sign changes the dynamics only while the rotor turns
                             # (a stuck rotor passes the same torque either way)
-                            else self.h_mesh_ticks if self.mode.sm != 0 and any(x.part == "mesh" for x in gl)
+                            else self.h_mesh_ticks if mode.sm != 0 and any(x.part == "mesh" for x in gl)
                             else self.h_max_ticks)
             self._systems[key] = s
         return s
@@ -261,7 +263,8 @@ class FastAxis:
     def _digit_integrals(self, s: _ModeSystem, k: int, d: int) -> tuple[np.ndarray, np.ndarray]:
         """(r, G) of one digit's length (d * 16^k ticks): r = e_i' int expm(m t) dt
         and G = int expm(m' t) e_i e_i' expm(m t) dt.  One tick is done by Van
-        Loan's block exponential of the balanced matrix (scipy's expm; over a
+        Loan's block exponential of the balanced matrix (:func:`expm_balanced`,
+        checked against scipy's expm in tests/test_plant_stepper.py; over a
         tick its growing block cannot overflow), longer lengths by doubling
         (r(2L) = r + r P, G(2L) = G + P' G P)."""
         hit = s.idigits.get((k, d))
@@ -287,8 +290,6 @@ class FastAxis:
         return r, g
 
     def _tick_integrals(self, s: _ModeSystem) -> tuple[np.ndarray, np.ndarray]:
-        from scipy.linalg import expm as sp_expm
-
         tau = self.tick
         n = NZ
         mb, bal = s.mb, s.bal
@@ -296,10 +297,11 @@ class FastAxis:
         cb[ax.I_] = bal[ax.I_]                   # e_i in balanced coordinates (D c)
         a = np.zeros((2 * n, 2 * n))
         a[:n, :n], a[:n, n:] = mb, np.eye(n)
-        hb = sp_expm(a * tau)[:n, n:]            # int expm(mb t) dt
+        ones = np.ones(2 * n)
+        hb = expm_balanced(a, ones, tau)[:n, n:]            # int expm(mb t) dt
         v = np.zeros((2 * n, 2 * n))
         v[:n, :n], v[:n, n:], v[n:, n:] = -mb.T, np.outer(cb, cb), mb
-        e = sp_expm(v * tau)
+        e = expm_balanced(v, ones, tau)
         gb = e[n:, n:].T @ e[:n, n:]
         # back to the state's coordinates: c' expm(Mt) = (D c)' expm(mb t) D^-1
         return (cb @ hb) / bal, gb / bal[:, None] / bal[None, :]
@@ -558,42 +560,219 @@ class FastAxis:
         """The winding resistance the plant runs with now (R(T))."""
         return self._r_wind
 
-    def _run(self, remaining: int, out: list[Edge], t: float) -> float:
+    def _run(self, remaining: int, out: list[Edge] | None, t: float) -> float:
         """Integrate ``remaining`` ticks with the outputs as they are."""
         while remaining > 0:
             s = self._system()
             k = min(remaining, s.h_ticks)
             remaining -= k
-            tau = k * self.tick
-            p = self._flow(s, k)
-            for _ in range(self.MAX_EVENTS_PER_CHUNK):
-                z1 = p @ self.z
-                ev = None if s.g is None else self._find_event(s, self.z, z1, tau)
-                if ev is None:
-                    if self.energy:
-                        self._accumulate(s, self.z, tau)
-                    self._encode(self.z, z1, t, tau, out)
-                    self.z = z1
-                    t += tau
-                    break
-                te, j, ze = ev
-                if self.energy:
-                    self._accumulate(s, self.z, te)
-                self._encode(self.z, ze, t, te, out)
-                self.z = ze
-                t += te
-                tau -= te
-                self.events += 1
-                self.mode = ax.next_mode(self.c, self.z[:ax.N_STATE], self.mode, s.guards[j],
-                                         self.e_pos, self.e_neg)
-                s = self._system()
-                if tau <= 1e-13:
-                    break
-                p = self._expm_at(s, tau)
-            else:
-                raise RuntimeError(f"axis {self.index}: more than {self.MAX_EVENTS_PER_CHUNK} "
-                                   f"mode switches in one chunk (Zeno?) mode={self.mode}")
+            t = self._chunk(s, k, out, t)
         return t
+
+    def _chunk(self, s: _ModeSystem, k: int, out: list[Edge] | None, t: float) -> float:
+        """One chunk of ``k`` ticks from the state in system ``s`` (the
+        axis's mode), through every mode switch inside it; encoder edges go
+        to ``out`` (None: no edges, and the count is left to the caller)."""
+        tau = k * self.tick
+        p = self._flow(s, k)
+        for _ in range(self.MAX_EVENTS_PER_CHUNK):
+            z1 = p @ self.z
+            ev = None if s.g is None else self._find_event(s, self.z, z1, tau)
+            if ev is None:
+                if self.energy:
+                    self._accumulate(s, self.z, tau)
+                if out is not None:
+                    self._encode(self.z, z1, t, tau, out)
+                self.z = z1
+                t += tau
+                break
+            te, j, ze = ev
+            if self.energy:
+                self._accumulate(s, self.z, te)
+            if out is not None:
+                self._encode(self.z, ze, t, te, out)
+            self.z = ze
+            t += te
+            tau -= te
+            self.events += 1
+            self.mode = ax.next_mode(self.c, self.z[:ax.N_STATE], self.mode, s.guards[j],
+                                     self.e_pos, self.e_neg)
+            s = self._system()
+            if tau <= 1e-13:
+                break
+            p = self._expm_at(s, tau)
+        else:
+            raise RuntimeError(f"axis {self.index}: more than {self.MAX_EVENTS_PER_CHUNK} "
+                               f"mode switches in one chunk (Zeno?) mode={self.mode}")
+        return t
+
+    # ---- many edges at once (the fast path) ------------------------------
+    #: most chunks integrated before their guards are checked together
+    #: (run_pins); fewer after a mode switch, as many again after none
+    BATCH = 64
+    _batch = 8
+
+    def run_pins(self, changes: Sequence[tuple[int, Pins]], ticks: int) -> None:
+        """Advance ``ticks`` ticks while the bridge's inputs change to each
+        ``(offset, pins)`` of ``changes`` (offsets in ticks from now, sorted,
+        below ``ticks``): the same flow as :meth:`set_pins` and
+        :meth:`advance` at every change, for a caller that reads the count
+        only between calls.  It makes no encoder edges (the count is the
+        angle's at the end, as the edges would have left it), checks the
+        guards of many chunks in one product (:meth:`_run_batch`) and heats
+        the winding once per call."""
+        start = self._ticks
+        end = start + ticks
+        q2 = self.q_i2
+        self._run_batch(self._segments(changes, start, end))
+        self._ticks = end
+        self._t_req = end * self.tick
+        self.count = count_of(float(self.z[ax.PHI_M]), self.enc)
+        if self.heats and ticks > 0:
+            self._heat(ticks * self.tick, self.q_i2 - q2)
+
+    def _segments(self, changes: Sequence[tuple[int, Pins]], start: int, end: int) -> list[tuple[int, Pins]]:
+        """(ticks, output pins) from ``start`` to ``end``: the commanded
+        changes, through the bridge's delays and minimum pulse when it has
+        them (:meth:`_command`, which this drives as :meth:`advance` does).
+        A change of zero length is kept: the outputs pass through it."""
+        segs: list[tuple[int, Pins]] = []
+        cur, shown = start, self.pins
+
+        def show_until(t: int) -> None:
+            nonlocal cur, shown
+            while self._sched and self._sched[0][0] <= t:
+                at, pins = self._sched[0]
+                self._sched = self._sched[1:]
+                segs.append((max(0, at - cur), shown))
+                cur, shown = max(cur, at), pins
+
+        for off, pins in changes:
+            at = start + off
+            if self.timing:
+                show_until(at)
+                self._ticks = at
+                self._command(pins)
+            else:
+                segs.append((at - cur, shown))
+                cur, shown = at, pins
+        if self.timing:
+            show_until(end)
+        segs.append((end - cur, shown))
+        return segs
+
+    def _run_batch(self, segs: list[tuple[int, Pins]]) -> None:
+        """Integrate the output segments: up to :attr:`BATCH` chunks by their
+        cached flows one after the other, then the guards of all of them in
+        one product (the tests of :meth:`_find_event`, vectorised); the
+        chunks before the first that may hold a mode switch are taken, that
+        one is integrated by :meth:`_chunk` (the exact event handling), and
+        the batch goes on from there (from its next chunk unchanged if no
+        switch happened).  The current integrals of the taken chunks are
+        summed in one product too."""
+        n_state = ax.N_STATE
+        i, left, entered = 0, segs[0][0], False      # where the axis stands
+        batch = self._batch
+        while True:
+            # 1. integrate ahead
+            z, mode, pins, e_pos, e_neg = self.z, self.mode, self.pins, self.e_pos, self.e_neg
+            si, sl, ent = i, left, entered
+            recs: list[tuple[_ModeSystem, int, Pins, int, int]] = []    # system, ticks, pins, where after
+            zs = [z]
+            while len(recs) < batch:
+                if not ent:
+                    ent = True
+                    p = segs[si][1]
+                    if p != pins:
+                        pins = p
+                        e_pos, e_neg = ax.terminal_levels(self.c, *armature_voltages(pins, self.bridge))
+                        mode = mode._replace(se=ax.elec_mode(self.c, z[:n_state], e_pos, e_neg))
+                if sl == 0:
+                    if si + 1 == len(segs):
+                        break
+                    si, sl, ent = si + 1, segs[si + 1][0], False
+                    continue
+                s = self._system((mode, e_pos, e_neg))
+                k = min(sl, s.h_ticks)
+                sl -= k
+                z = self._flow(s, k) @ z
+                recs.append((s, k, pins, si, sl))
+                zs.append(z)
+            if not recs:
+                self.mode, self.pins, self.e_pos, self.e_neg = mode, pins, e_pos, e_neg
+                return
+            # 2. which chunks may hold a switch
+            zz = np.array(zs)
+            flagged = self._flags(recs, zz)
+            # 3. take the chunks before it; the flagged one exactly
+            done = 0
+            restart = False
+            for j in flagged + [len(recs)]:
+                if j > done:
+                    self._take(recs, zz, done, j)
+                    done = j
+                if j == len(recs):
+                    break
+                s, k, p, ri, rl = recs[j]
+                self.z = zz[j]
+                self.mode, self.pins, self.e_pos, self.e_neg = s.mode, p, s.e_pos, s.e_neg
+                ev = self.events
+                self._chunk(s, k, None, 0.0)
+                done = j + 1
+                i, left, entered = ri, rl, True
+                if self.events != ev:
+                    restart = True       # the mode changed: integrate ahead anew from here
+                    break
+            # as many chunks ahead as there are between switches, within bounds
+            batch = max(4, batch // 2) if restart else min(self.BATCH, 2 * batch)
+            self._batch = batch
+            if not restart:
+                s, k, p, i, left = recs[-1]
+                entered = True
+                self.z = zz[-1]
+                self.mode, self.pins, self.e_pos, self.e_neg = s.mode, p, s.e_pos, s.e_neg
+                if ent and sl == 0 and si + 1 == len(segs):    # the segments are done
+                    self.mode, self.pins, self.e_pos, self.e_neg = mode, pins, e_pos, e_neg
+                    return
+
+    def _flags(self, recs: list, zz: np.ndarray) -> list[int]:
+        """Indices of the chunks whose guards cross, or may dip, below zero
+        (the tests of :meth:`_find_event`, on all chunks at once)."""
+        by: dict[int, list[int]] = {}
+        for j, r in enumerate(recs):
+            if r[0].g is not None:
+                by.setdefault(id(r[0]), []).append(j)
+        out: list[int] = []
+        for idx in by.values():
+            s = recs[idx[0]][0]
+            n = len(s.tol_list)
+            ia = np.array(idx)
+            tau = np.array([recs[j][1] for j in idx], float) * self.tick
+            v0 = zz[ia] @ s.gg.T
+            v1 = zz[ia + 1] @ s.gg.T
+            g0, g1 = v0[:, :n], v1[:, :n]
+            d0, d1 = v0[:, n:] * tau[:, None], v1[:, n:] * tau[:, None]
+            hit = (g1 < -s.tol).any(axis=1)
+            dip = (d0 < 0) & (d1 > 0)
+            if dip.any():
+                hit |= (dip & _hermite_dips(g0, d0, g1, d1)).any(axis=1)
+            out.extend(ia[hit].tolist())
+        out.sort()
+        return out
+
+    def _take(self, recs: list, zz: np.ndarray, a: int, b: int) -> None:
+        """Chunks a..b-1 hold no switch: their current integrals."""
+        if not self.energy:
+            return
+        by: dict[tuple[int, int], list[int]] = {}
+        for j in range(a, b):
+            by.setdefault((id(recs[j][0]), recs[j][1]), []).append(j)
+        for idx in by.values():
+            s, k = recs[idx[0]][0], recs[idx[0]][1]
+            r, g = self._integrals_at(s, k * self.tick)
+            z0 = zz[idx]
+            self.q_i += float((z0 @ r).sum())
+            self.q_i2 += float(((z0 @ g) * z0).sum())
 
 
 def _driving(p: Pins) -> bool:
@@ -611,7 +790,7 @@ def expm_balanced(mb: np.ndarray, bal: np.ndarray, tau: float) -> np.ndarray:
     nrm = float(np.abs(a).sum(axis=0).max())
     sq = max(0, math.ceil(math.log2(nrm / 0.25))) if nrm > 0.25 else 0
     a = a * (0.5**sq)
-    eye = _EYE
+    eye = _EYE if len(a) == NZ else np.eye(len(a))
     e = eye + a / 10.0
     for k in range(9, 0, -1):
         e = eye + (a @ e) / k
@@ -665,6 +844,21 @@ def _hermite_min(g0: float, d0: float, g1: float, d1: float) -> float | None:
     return None if best is None else best[0]
 
 
+def _hermite_dips(g0: np.ndarray, d0: np.ndarray, g1: np.ndarray, d1: np.ndarray) -> np.ndarray:
+    """Elementwise: whether the cubic Hermite through (g0, d0), (g1, d1) has
+    a stationary point in (0, 1) below zero (:func:`_hermite_min`'s test)."""
+    a = 2 * g0 + d0 - 2 * g1 + d1
+    b = -3 * g0 - 2 * d0 + 3 * g1 - d1
+    out = np.zeros(g0.shape, bool)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        small = np.abs(a) < 1e-300
+        r = np.sqrt(b * b - 3 * a * d0)
+        for sr, valid in (((-b - r) / (3 * a), ~small), ((-b + r) / (3 * a), ~small), (-d0 / (2 * b), small)):
+            v = ((a * sr + b) * sr + d0) * sr + g0
+            out |= valid & (sr > 0) & (sr < 1) & (v < 0)
+    return out
+
+
 class TwoAxisPlant:
     """The two-axis stage for co-simulation (axis 0 = x, axis 1 = z)."""
 
@@ -699,6 +893,16 @@ class TwoAxisPlant:
                                self._pin_state, self._rng)
         self.t += dt
         return out
+
+    def run_pins(self, ticks: int, changes: Sequence[Sequence[tuple[int, Pins]]]) -> None:
+        """Advance ``ticks`` ticks (``tick_s`` each) with each axis's bridge
+        inputs changing as its list of ``(offset in ticks, pins)`` says
+        (:meth:`FastAxis.run_pins`): no encoder edges, the counts read
+        between calls; for a caller that knows every pin change of a
+        control period in advance (the fast path)."""
+        for a, ch in zip(self.axes, changes):
+            a.run_pins(ch, ticks)
+        self.t += ticks * self.axes[0].tick
 
     def snapshot(self) -> tuple:
         """The plant's whole state (both axes, clock, glitch generator), for a

@@ -17,7 +17,8 @@ the FPGA clock:
   again from the first period start after it is enabled.
 
 :class:`PwmChannel` is one axis; :func:`run_until` advances a plant through
-the pin changes of several channels.  (The plant's own tests drive it with
+the pin changes of several channels; :func:`pin_changes` lists one
+channel's changes over a stretch of time.  (The plant's own tests drive it with
 arbitrary waveforms instead: sim_models.waveforms.)
 """
 
@@ -115,3 +116,17 @@ def run_until(plant: Plant, channels: Sequence[PwmChannel], now: int, end: int,
         if on_edges is not None and edges:
             on_edges(now, edges)
         now = nxt
+
+
+def pin_changes(channel: PwmChannel, now: int, end: int) -> list[tuple[int, Pins]]:
+    """The pins ``channel`` shows from clock ``now`` to ``end``, as
+    (clock, pins) at ``now`` and at each of its events before ``end`` (the
+    steps :func:`run_until` takes for this channel); events at ``end`` are
+    processed, as there."""
+    out: list[tuple[int, Pins]] = []
+    while True:
+        pins = channel.fire(now)
+        if now >= end:
+            return out
+        out.append((now, pins))
+        now = min(end, channel.next_event())
