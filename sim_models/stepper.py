@@ -65,6 +65,7 @@ class _ModeSystem:
     # length, (r, G) with r z = integral of i, z' G z = integral of i^2
     idigits: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     icache: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=dict)
+    iseen: set[int] = field(default_factory=set)   # lengths met once (the second time they are cached)
 
     def __post_init__(self) -> None:
         if self.g is not None and self.gm is not None and self.tol is not None:
@@ -341,26 +342,70 @@ class FastAxis:
         return r, g
 
     def _accumulate(self, s: _ModeSystem, z: np.ndarray, tau: float) -> None:
-        r, g = self._integrals_at(s, tau)
-        self.q_i += float(r @ z)
-        self.q_i2 += float(z @ g @ z)
+        """The current integrals over a flow of length tau from state z.  A
+        length met before is done by its (r, G) (:meth:`_integrals_at`,
+        cached); a new one (an event's) by carrying the vector through the
+        digits (r(a+b) z = r(a) z + r(b) P(a) z, and likewise for G), which
+        costs products with a vector instead of matrix products."""
+        n_t = int(tau / self.tick)
+        if n_t in s.icache or n_t in s.iseen:
+            r, g = self._integrals_at(s, tau)
+            self.q_i += float(r @ z)
+            self.q_i2 += float(z @ g @ z)
+            return
+        s.iseen.add(n_t)
+        rem = tau - n_t * self.tick
+        q = q2 = 0.0
+        v = z
+        n, k = n_t, 0
+        while n:
+            d = n & 15
+            if d:
+                rd, gd = self._digit_integrals(s, k, d)
+                q += float(rd @ v)
+                q2 += float(v @ gd @ v)
+                v = self._digit(s, k, d) @ v
+            n >>= 4
+            k += 1
+        if rem > 0.0:
+            q += rem * float(v[ax.I_])
+            q2 += rem * float(v[ax.I_]) ** 2
+        self.q_i += q
+        self.q_i2 += q2
 
-    def _expm_at(self, s: _ModeSystem, t: float) -> np.ndarray:
-        """expm(m t) for an arbitrary t: the whole ticks from the digit flows,
-        the remainder (under one 10 ns tick) by a 5th-order Taylor series of
-        the balanced matrix, whose norm times a tick is about 1e-2 for the
-        stiffest mode (183 kHz): truncation below 1e-12.  About 5 times
-        cheaper than a new exponential; event location runs on it."""
+    def _digit(self, s: _ModeSystem, k: int, d: int) -> np.ndarray:
+        """The flow of d * 16^k ticks, computed once."""
+        f = s.digits.get((k, d))
+        if f is None:
+            f = s.digits[(k, d)] = s.expm((d << (4 * k)) * self.tick)
+        return f
+
+    def _state_at(self, s: _ModeSystem, t: float, z: np.ndarray) -> np.ndarray:
+        """expm(m t) z for an arbitrary t, by products with the vector: the
+        sub-tick remainder (under one 10 ns tick) by a 5th-order Taylor
+        series of the balanced matrix, whose norm times a tick is about 1e-2
+        for the stiffest mode (183 kHz): truncation below 1e-12; then the
+        whole ticks through the digit flows (they commute).  Event location
+        runs on it."""
         n = int(t / self.tick)
         rem = t - n * self.tick
-        p = self._compose(s, n)
-        if rem <= 0.0:
-            return p
-        a = s.mb * rem
-        e = _EYE + a / 5.0
-        for k in (4, 3, 2, 1):
-            e = _EYE + (a @ e) / k
-        return p @ (e * s.bal[:, None] / s.bal[None, :])
+        if rem > 0.0:
+            u = z / s.bal
+            w = u
+            for k in (5, 4, 3, 2, 1):
+                w = u + (s.mb @ w) * (rem / k)
+            z = w * s.bal
+        p = s.phi.get(n)
+        if p is not None:
+            return p @ z
+        k = 0
+        while n:
+            d = n & 15
+            if d:
+                z = self._digit(s, k, d) @ z
+            n >>= 4
+            k += 1
+        return z
 
     def _find_event(self, s: _ModeSystem, z0: np.ndarray, z1: np.ndarray,
                     tau: float) -> tuple[float, int, np.ndarray] | None:
@@ -381,7 +426,7 @@ class FastAxis:
                 sm = _hermite_min(v0[j], d0, g1, d1)
                 if sm is not None:
                     tm = sm * tau
-                    if float(s.g[j] @ (self._expm_at(s, tm) @ z0)) < -tol:  # type: ignore[index]
+                    if float(s.g[j] @ self._state_at(s, tm, z0)) < -tol:  # type: ignore[index]
                         brackets.append((j, tm, tau * _hermite_root(v0[j], d0, g1, d1, sm)))
         if not brackets:
             return None
@@ -411,26 +456,26 @@ class FastAxis:
                 return 0.0, z0
             lo = 1e-9
             while lo < hi:
-                glo = float(row @ (self._expm_at(s, lo) @ z0))
+                glo = float(row @ self._state_at(s, lo, z0))
                 if glo > tol:
                     break
                 lo *= 4.0
             else:
-                return hi, self._expm_at(s, hi) @ z0
+                return hi, self._state_at(s, hi, z0)
         if guess is not None and lo < guess < hi:
             # the Hermite root is close: bracket it from above by a hair so
             # Newton lands on the guard's negative side in one or two steps
             zhi, ghi = None, -math.inf
             t = guess
         else:
-            zhi = self._expm_at(s, hi) @ z0
+            zhi = self._state_at(s, hi, z0)
             ghi = float(row @ zhi)
             t = (lo * ghi - hi * glo) / (ghi - glo) if ghi != glo else 0.5 * hi
         g_prev = math.inf
         for _ in range(80):
             if not (lo < t < hi):
                 t = 0.5 * (lo + hi)
-            zt = self._expm_at(s, t) @ z0
+            zt = self._state_at(s, t, z0)
             gt = float(row @ zt)
             if -tol <= gt <= 0.0:
                 return t, zt
@@ -451,7 +496,7 @@ class FastAxis:
                 t = 0.5 * (lo + hi)      # no progress: bisect the bracket
             g_prev = abs(gt)
         if zhi is None:
-            zhi = self._expm_at(s, hi) @ z0
+            zhi = self._state_at(s, hi, z0)
         return hi, zhi
 
     def _encode(self, z0: np.ndarray, z1: np.ndarray, t0: float, tau: float,
@@ -574,9 +619,9 @@ class FastAxis:
         axis's mode), through every mode switch inside it; encoder edges go
         to ``out`` (None: no edges, and the count is left to the caller)."""
         tau = k * self.tick
-        p = self._flow(s, k)
+        p: np.ndarray | None = self._flow(s, k)
         for _ in range(self.MAX_EVENTS_PER_CHUNK):
-            z1 = p @ self.z
+            z1 = p @ self.z if p is not None else self._state_at(s, tau, self.z)
             ev = None if s.g is None else self._find_event(s, self.z, z1, tau)
             if ev is None:
                 if self.energy:
@@ -600,7 +645,7 @@ class FastAxis:
             s = self._system()
             if tau <= 1e-13:
                 break
-            p = self._expm_at(s, tau)
+            p = None                     # the rest of the chunk: an arbitrary length
         else:
             raise RuntimeError(f"axis {self.index}: more than {self.MAX_EVENTS_PER_CHUNK} "
                                f"mode switches in one chunk (Zeno?) mode={self.mode}")
@@ -679,6 +724,8 @@ class FastAxis:
             si, sl, ent = i, left, entered
             recs: list[tuple[_ModeSystem, int, Pins, int, int]] = []    # system, ticks, pins, where after
             zs = [z]
+            s = self._system()
+            flows, h = s.phi, s.h_ticks
             while len(recs) < batch:
                 if not ent:
                     ent = True
@@ -687,15 +734,17 @@ class FastAxis:
                         pins = p
                         e_pos, e_neg = ax.terminal_levels(self.c, *armature_voltages(pins, self.bridge))
                         mode = mode._replace(se=ax.elec_mode(self.c, z[:n_state], e_pos, e_neg))
+                        s = self._system((mode, e_pos, e_neg))
+                        flows, h = s.phi, s.h_ticks
                 if sl == 0:
                     if si + 1 == len(segs):
                         break
                     si, sl, ent = si + 1, segs[si + 1][0], False
                     continue
-                s = self._system((mode, e_pos, e_neg))
-                k = min(sl, s.h_ticks)
+                k = h if sl > h else sl
                 sl -= k
-                z = self._flow(s, k) @ z
+                f = flows.get(k)
+                z = (f if f is not None else self._flow(s, k)) @ z
                 recs.append((s, k, pins, si, sl))
                 zs.append(z)
             if not recs:
@@ -747,15 +796,18 @@ class FastAxis:
             s = recs[idx[0]][0]
             n = len(s.tol_list)
             ia = np.array(idx)
-            tau = np.array([recs[j][1] for j in idx], float) * self.tick
-            v0 = zz[ia] @ s.gg.T
-            v1 = zz[ia + 1] @ s.gg.T
+            tau = np.array([recs[j][1] for j in idx], float)[:, None] * self.tick
+            w = zz @ s.gg.T              # every state once: a chunk's start is the one before's end
+            v0, v1 = w[ia], w[ia + 1]
             g0, g1 = v0[:, :n], v1[:, :n]
-            d0, d1 = v0[:, n:] * tau[:, None], v1[:, n:] * tau[:, None]
+            d0, d1 = v0[:, n:] * tau, v1[:, n:] * tau
             hit = (g1 < -s.tol).any(axis=1)
-            dip = (d0 < 0) & (d1 > 0)
-            if dip.any():
-                hit |= (dip & _hermite_dips(g0, d0, g1, d1)).any(axis=1)
+            # a dip needs the slope to turn, and the cubic can fall at most
+            # 4/27 (|d0| + |d1|) below the lower end (Hermite basis bounds)
+            dip = (d0 < 0) & (d1 > 0) & (np.minimum(g0, g1) < (4 / 27) * (d1 - d0))
+            rows = dip.any(axis=1)
+            if rows.any():
+                hit[rows] |= (dip[rows] & _hermite_dips(g0[rows], d0[rows], g1[rows], d1[rows])).any(axis=1)
             out.extend(ia[hit].tolist())
         out.sort()
         return out
