@@ -28,6 +28,7 @@ the caller's clock by more than half a tick.
 
 from __future__ import annotations
 
+import bisect
 import math
 import random
 from dataclasses import dataclass, field
@@ -66,6 +67,7 @@ class _ModeSystem:
     idigits: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     icache: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=dict)
     iseen: set[int] = field(default_factory=set)   # lengths met once (the second time they are cached)
+    hpow: np.ndarray | None = None  # flows of 1, 2, ... whole chunks (FastAxis._powers)
 
     def __post_init__(self) -> None:
         if self.g is not None and self.gm is not None and self.tol is not None:
@@ -124,6 +126,7 @@ class FastAxis:
         self.mode = ax.initial_mode(self.c, self.z[:ax.N_STATE], self.e_pos, self.e_neg)
         self.count = count_of(0.0, self.enc)
         self._systems: dict[tuple[ax.Mode, float, float], _ModeSystem] = {}
+        self._pin_levels: dict[Pins, tuple[float, float]] = {}
         self.events = 0             # mode switches handled (for benchmarks)
         self._t_req = 0.0           # time asked for so far (s)
         self._ticks = 0             # time advanced so far (ticks)
@@ -599,6 +602,7 @@ class FastAxis:
             self._r_wind = r
             self.c = dataclasses.replace(self.c, R=r + 2.0 * self.bridge.r_on_ohm)
             self._systems = {}
+            self._pin_levels = {}
 
     @property
     def winding_ohm(self) -> float:
@@ -653,8 +657,8 @@ class FastAxis:
 
     # ---- many edges at once (the fast path) ------------------------------
     #: most chunks integrated before their guards are checked together
-    #: (run_pins); fewer after a mode switch, as many again after none
-    BATCH = 64
+    #: (run_pins); fewer after a mode switch, twice as many after none
+    BATCH = 256
     _batch = 8
 
     def run_pins(self, changes: Sequence[tuple[int, Pins]], ticks: int) -> None:
@@ -707,68 +711,78 @@ class FastAxis:
         return segs
 
     def _run_batch(self, segs: list[tuple[int, Pins]]) -> None:
-        """Integrate the output segments: up to :attr:`BATCH` chunks by their
-        cached flows one after the other, then the guards of all of them in
-        one product (the tests of :meth:`_find_event`, vectorised); the
-        chunks before the first that may hold a mode switch are taken, that
-        one is integrated by :meth:`_chunk` (the exact event handling), and
-        the batch goes on from there (from its next chunk unchanged if no
-        switch happened).  The current integrals of the taken chunks are
-        summed in one product too."""
+        """Integrate the output segments: up to :attr:`_batch` chunks ahead
+        by their cached flows (a segment's whole chunks in one product with
+        the stacked powers of the chunk's flow, :meth:`_powers`), then the
+        guards of all of them in one product (the tests of
+        :meth:`_find_event`, vectorised, :meth:`_flags`); the chunks before
+        the first that may hold a mode switch are taken, that one is
+        integrated by :meth:`_chunk` (the exact event handling), and the
+        batch goes on from there (from its next chunk unchanged if no switch
+        happened).  The current integrals of the taken chunks are summed in
+        one product too (:meth:`_take`)."""
         n_state = ax.N_STATE
         i, left, entered = 0, segs[0][0], False      # where the axis stands
         batch = self._batch
         while True:
-            # 1. integrate ahead
+            # 1. integrate ahead: pieces of m chunks of k ticks in one system
             z, mode, pins, e_pos, e_neg = self.z, self.mode, self.pins, self.e_pos, self.e_neg
             si, sl, ent = i, left, entered
-            recs: list[tuple[_ModeSystem, int, Pins, int, int]] = []    # system, ticks, pins, where after
-            zs = [z]
+            pieces: list[tuple[int, int, _ModeSystem, int, Pins, int, int]] = []  # first, m, s, k, pins, seg, left
+            blocks = [z[None, :]]
+            n = 0
             s = self._system()
-            flows, h = s.phi, s.h_ticks
-            while len(recs) < batch:
+            while n < batch:
                 if not ent:
                     ent = True
                     p = segs[si][1]
                     if p != pins:
                         pins = p
-                        e_pos, e_neg = ax.terminal_levels(self.c, *armature_voltages(pins, self.bridge))
-                        mode = mode._replace(se=ax.elec_mode(self.c, z[:n_state], e_pos, e_neg))
+                        e_pos, e_neg = self._levels(pins)
+                        se = ax.elec_mode(self.c, z[:n_state], e_pos, e_neg)
+                        if se != mode.se:
+                            mode = mode._replace(se=se)
                         s = self._system((mode, e_pos, e_neg))
-                        flows, h = s.phi, s.h_ticks
                 if sl == 0:
                     if si + 1 == len(segs):
                         break
                     si, sl, ent = si + 1, segs[si + 1][0], False
                     continue
-                k = h if sl > h else sl
-                sl -= k
-                f = flows.get(k)
-                z = (f if f is not None else self._flow(s, k)) @ z
-                recs.append((s, k, pins, si, sl))
-                zs.append(z)
-            if not recs:
+                h = s.h_ticks
+                if sl >= h:
+                    k, m = h, min(sl // h, batch - n)
+                    zb = self._powers(s, m) @ z
+                else:
+                    k, m = sl, 1
+                    zb = (self._flow(s, sl) @ z)[None, :]
+                pieces.append((n, m, s, k, pins, si, sl))
+                blocks.append(zb)
+                z = zb[-1]
+                sl -= m * k
+                n += m
+            if n == 0:
                 self.mode, self.pins, self.e_pos, self.e_neg = mode, pins, e_pos, e_neg
                 return
             # 2. which chunks may hold a switch
-            zz = np.array(zs)
-            flagged = self._flags(recs, zz)
+            zz = np.concatenate(blocks)
+            flagged = self._flags(pieces, zz)
             # 3. take the chunks before it; the flagged one exactly
             done = 0
             restart = False
-            for j in flagged + [len(recs)]:
+            firsts = [pc[0] for pc in pieces]
+            for j in flagged + [n]:
                 if j > done:
-                    self._take(recs, zz, done, j)
+                    self._take(pieces, zz, done, j)
                     done = j
-                if j == len(recs):
+                if j == n:
                     break
-                s, k, p, ri, rl = recs[j]
+                first, m, s, k, p, ri, rl = pieces[bisect.bisect_right(firsts, j) - 1]
                 self.z = zz[j]
                 self.mode, self.pins, self.e_pos, self.e_neg = s.mode, p, s.e_pos, s.e_neg
                 ev = self.events
                 self._chunk(s, k, None, 0.0)
                 done = j + 1
-                i, left, entered = ri, rl, True
+                i, left, entered = ri, rl - (j - first + 1) * k, True
                 if self.events != ev:
                     restart = True       # the mode changed: integrate ahead anew from here
                     break
@@ -776,27 +790,50 @@ class FastAxis:
             batch = max(4, batch // 2) if restart else min(self.BATCH, 2 * batch)
             self._batch = batch
             if not restart:
-                s, k, p, i, left = recs[-1]
-                entered = True
+                first, m, s, k, p, ri, rl = pieces[-1]
+                i, left, entered = ri, rl - m * k, True
                 self.z = zz[-1]
                 self.mode, self.pins, self.e_pos, self.e_neg = s.mode, p, s.e_pos, s.e_neg
                 if ent and sl == 0 and si + 1 == len(segs):    # the segments are done
                     self.mode, self.pins, self.e_pos, self.e_neg = mode, pins, e_pos, e_neg
                     return
 
-    def _flags(self, recs: list, zz: np.ndarray) -> list[int]:
+    def _levels(self, pins: Pins) -> tuple[float, float]:
+        """(e_pos, e_neg) the bridge presents with these output pins (as
+        :meth:`_apply_pins` sets them), per pins once."""
+        lv = self._pin_levels.get(pins)
+        if lv is None:
+            lv = self._pin_levels[pins] = ax.terminal_levels(self.c, *armature_voltages(pins, self.bridge))
+        return lv
+
+    def _powers(self, s: _ModeSystem, m: int) -> np.ndarray:
+        """The flows of 1..m whole chunks of ``s.h_ticks`` (m x 14 x 14), built once."""
+        pw = s.hpow
+        if pw is None or len(pw) < m:
+            f = self._flow(s, s.h_ticks)
+            out = [f] if pw is None else list(pw)
+            while len(out) < self.BATCH:
+                out.append(f @ out[-1])
+            pw = s.hpow = np.array(out)
+        return pw[:m]
+
+    def _flags(self, pieces: list, zz: np.ndarray) -> list[int]:
         """Indices of the chunks whose guards cross, or may dip, below zero
         (the tests of :meth:`_find_event`, on all chunks at once)."""
-        by: dict[int, list[int]] = {}
-        for j, r in enumerate(recs):
-            if r[0].g is not None:
-                by.setdefault(id(r[0]), []).append(j)
+        by: dict[int, tuple[_ModeSystem, list]] = {}
+        for pc in pieces:
+            if pc[2].g is not None:
+                by.setdefault(id(pc[2]), (pc[2], []))[1].append(pc)
         out: list[int] = []
-        for idx in by.values():
-            s = recs[idx[0]][0]
+        for s, pcs in by.values():
             n = len(s.tol_list)
-            ia = np.array(idx)
-            tau = np.array([recs[j][1] for j in idx], float)[:, None] * self.tick
+            rows_l: list[int] = []
+            ticks_l: list[int] = []
+            for first, m, _, k, *_ in pcs:
+                rows_l.extend(range(first, first + m))
+                ticks_l.extend([k] * m)
+            ia = np.array(rows_l)
+            tau = np.array(ticks_l, float)[:, None] * self.tick
             w = zz @ s.gg.T              # every state once: a chunk's start is the one before's end
             v0, v1 = w[ia], w[ia + 1]
             g0, g1 = v0[:, :n], v1[:, :n]
@@ -812,17 +849,18 @@ class FastAxis:
         out.sort()
         return out
 
-    def _take(self, recs: list, zz: np.ndarray, a: int, b: int) -> None:
+    def _take(self, pieces: list, zz: np.ndarray, a: int, b: int) -> None:
         """Chunks a..b-1 hold no switch: their current integrals."""
         if not self.energy:
             return
-        by: dict[tuple[int, int], list[int]] = {}
-        for j in range(a, b):
-            by.setdefault((id(recs[j][0]), recs[j][1]), []).append(j)
-        for idx in by.values():
-            s, k = recs[idx[0]][0], recs[idx[0]][1]
+        by: dict[tuple[int, int], tuple[_ModeSystem, int, list[int]]] = {}
+        for first, m, s, k, *_ in pieces:
+            lo, hi = max(a, first), min(b, first + m)
+            if lo < hi:
+                by.setdefault((id(s), k), (s, k, []))[2].extend(range(lo, hi))
+        for s, k, rows in by.values():
             r, g = self._integrals_at(s, k * self.tick)
-            z0 = zz[idx]
+            z0 = zz[rows]
             self.q_i += float((z0 @ r).sum())
             self.q_i2 += float(((z0 @ g) * z0).sum())
 
