@@ -21,6 +21,12 @@ Co-simulation API (sim_models.stepper.TwoAxisPlant)::
     for t, axis, a, b, z in edges: ...          # t: seconds after the call's start
     plant.table_mm(0), plant.screw_angle(1), plant.current(0), plant.is_currents(0)
 
+A caller that reads the plant only between control periods and knows each
+period's pin changes in advance (the experiment's fast path) gives them all
+at once, ``plant.run_pins(ticks, changes_per_axis)``: no encoder edges, and
+many chunks integrated before their guards are checked in one product
+(``FastAxis.run_pins``; docs/plant.md, "The fast path").
+
 Time advances in integers of ``tick_s`` (default 10 ns); the running total
 of the requested dt is rounded (not each dt), so the plant never drifts from
 the caller's clock by more than half a tick.
