@@ -21,6 +21,12 @@ Co-simulation API (sim_models.stepper.TwoAxisPlant)::
     for t, axis, a, b, z in edges: ...          # t: seconds after the call's start
     plant.table_mm(0), plant.screw_angle(1), plant.current(0), plant.is_currents(0)
 
+A caller that reads the plant only between control periods and knows each
+period's pin changes in advance (the experiment's fast path) gives them all
+at once, ``plant.run_pins(ticks, changes_per_axis)``: no encoder edges, and
+many chunks integrated before their guards are checked in one product
+(``FastAxis.run_pins``; docs/plant.md, "The fast path").
+
 Time advances in integers of ``tick_s`` (default 10 ns); the running total
 of the requested dt is rounded (not each dt), so the plant never drifts from
 the caller's clock by more than half a tick.
@@ -28,6 +34,7 @@ the caller's clock by more than half a tick.
 
 from __future__ import annotations
 
+import bisect
 import math
 import random
 from dataclasses import dataclass, field
@@ -65,6 +72,8 @@ class _ModeSystem:
     # length, (r, G) with r z = integral of i, z' G z = integral of i^2
     idigits: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     icache: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=dict)
+    iseen: set[int] = field(default_factory=set)   # lengths met once (the second time they are cached)
+    hpow: np.ndarray | None = None  # flows of 1, 2, ... whole chunks (FastAxis._powers)
 
     def __post_init__(self) -> None:
         if self.g is not None and self.gm is not None and self.tol is not None:
@@ -123,6 +132,7 @@ class FastAxis:
         self.mode = ax.initial_mode(self.c, self.z[:ax.N_STATE], self.e_pos, self.e_neg)
         self.count = count_of(0.0, self.enc)
         self._systems: dict[tuple[ax.Mode, float, float], _ModeSystem] = {}
+        self._pin_levels: dict[Pins, tuple[float, float]] = {}
         self.events = 0             # mode switches handled (for benchmarks)
         self._t_req = 0.0           # time asked for so far (s)
         self._ticks = 0             # time advanced so far (ticks)
@@ -204,25 +214,27 @@ class FastAxis:
             se=ax.elec_mode(self.c, self.z[:ax.N_STATE], self.e_pos, self.e_neg))
 
     # ---- flow ----------------------------------------------------------
-    def _system(self) -> _ModeSystem:
-        key = (self.mode, self.e_pos, self.e_neg)
+    def _system(self, key: tuple[ax.Mode, float, float] | None = None) -> _ModeSystem:
+        """The flow data of (mode, e_pos, e_neg), by default the axis's own, built on first use."""
+        key = key or (self.mode, self.e_pos, self.e_neg)
         s = self._systems.get(key)
         if s is None:
-            a, b = ax.affine(self.c, self.mode, self.e_pos, self.e_neg)
+            mode, e_pos, e_neg = key
+            a, b = ax.affine(self.c, mode, e_pos, e_neg)
             m = np.zeros((NZ, NZ))
             m[:ax.N_STATE, :ax.N_STATE] = a
             m[:ax.N_STATE, ax.N_STATE] = b
-            gl = ax.guards(self.c, self.mode, self.e_pos, self.e_neg)
+            gl = ax.guards(self.c, mode, e_pos, e_neg)
             g = np.array([x.row for x in gl]) if gl else None
             _, (bal, _) = matrix_balance(m, permute=False, separate=True)
-            s = _ModeSystem(self.mode, self.e_pos, self.e_neg, m, gl, g,
+            s = _ModeSystem(mode, e_pos, e_neg, m, gl, g,
                             None if g is None else g @ m,
                             None if g is None else np.array([x.tol for x in gl]), {},
                             bal, m * bal[None, :] / bal[:, None],
                             self.h_contact_ticks if any(x.part in ("gear", "nut") for x in gl)
                             # the mesh sign changes the dynamics only while the rotor turns
                             # (a stuck rotor passes the same torque either way)
-                            else self.h_mesh_ticks if self.mode.sm != 0 and any(x.part == "mesh" for x in gl)
+                            else self.h_mesh_ticks if mode.sm != 0 and any(x.part == "mesh" for x in gl)
                             else self.h_max_ticks)
             self._systems[key] = s
         return s
@@ -261,7 +273,8 @@ class FastAxis:
     def _digit_integrals(self, s: _ModeSystem, k: int, d: int) -> tuple[np.ndarray, np.ndarray]:
         """(r, G) of one digit's length (d * 16^k ticks): r = e_i' int expm(m t) dt
         and G = int expm(m' t) e_i e_i' expm(m t) dt.  One tick is done by Van
-        Loan's block exponential of the balanced matrix (scipy's expm; over a
+        Loan's block exponential of the balanced matrix (:func:`expm_balanced`,
+        checked against scipy's expm in tests/test_plant_stepper.py; over a
         tick its growing block cannot overflow), longer lengths by doubling
         (r(2L) = r + r P, G(2L) = G + P' G P)."""
         hit = s.idigits.get((k, d))
@@ -287,8 +300,6 @@ class FastAxis:
         return r, g
 
     def _tick_integrals(self, s: _ModeSystem) -> tuple[np.ndarray, np.ndarray]:
-        from scipy.linalg import expm as sp_expm
-
         tau = self.tick
         n = NZ
         mb, bal = s.mb, s.bal
@@ -296,10 +307,11 @@ class FastAxis:
         cb[ax.I_] = bal[ax.I_]                   # e_i in balanced coordinates (D c)
         a = np.zeros((2 * n, 2 * n))
         a[:n, :n], a[:n, n:] = mb, np.eye(n)
-        hb = sp_expm(a * tau)[:n, n:]            # int expm(mb t) dt
+        ones = np.ones(2 * n)
+        hb = expm_balanced(a, ones, tau)[:n, n:]            # int expm(mb t) dt
         v = np.zeros((2 * n, 2 * n))
         v[:n, :n], v[:n, n:], v[n:, n:] = -mb.T, np.outer(cb, cb), mb
-        e = sp_expm(v * tau)
+        e = expm_balanced(v, ones, tau)
         gb = e[n:, n:].T @ e[:n, n:]
         # back to the state's coordinates: c' expm(Mt) = (D c)' expm(mb t) D^-1
         return (cb @ hb) / bal, gb / bal[:, None] / bal[None, :]
@@ -339,26 +351,70 @@ class FastAxis:
         return r, g
 
     def _accumulate(self, s: _ModeSystem, z: np.ndarray, tau: float) -> None:
-        r, g = self._integrals_at(s, tau)
-        self.q_i += float(r @ z)
-        self.q_i2 += float(z @ g @ z)
+        """The current integrals over a flow of length tau from state z.  A
+        length met before is done by its (r, G) (:meth:`_integrals_at`,
+        cached); a new one (an event's) by carrying the vector through the
+        digits (r(a+b) z = r(a) z + r(b) P(a) z, and likewise for G), which
+        costs products with a vector instead of matrix products."""
+        n_t = int(tau / self.tick)
+        if n_t in s.icache or n_t in s.iseen:
+            r, g = self._integrals_at(s, tau)
+            self.q_i += float(r @ z)
+            self.q_i2 += float(z @ g @ z)
+            return
+        s.iseen.add(n_t)
+        rem = tau - n_t * self.tick
+        q = q2 = 0.0
+        v = z
+        n, k = n_t, 0
+        while n:
+            d = n & 15
+            if d:
+                rd, gd = self._digit_integrals(s, k, d)
+                q += float(rd @ v)
+                q2 += float(v @ gd @ v)
+                v = self._digit(s, k, d) @ v
+            n >>= 4
+            k += 1
+        if rem > 0.0:
+            q += rem * float(v[ax.I_])
+            q2 += rem * float(v[ax.I_]) ** 2
+        self.q_i += q
+        self.q_i2 += q2
 
-    def _expm_at(self, s: _ModeSystem, t: float) -> np.ndarray:
-        """expm(m t) for an arbitrary t: the whole ticks from the digit flows,
-        the remainder (under one 10 ns tick) by a 5th-order Taylor series of
-        the balanced matrix, whose norm times a tick is about 1e-2 for the
-        stiffest mode (183 kHz): truncation below 1e-12.  About 5 times
-        cheaper than a new exponential; event location runs on it."""
+    def _digit(self, s: _ModeSystem, k: int, d: int) -> np.ndarray:
+        """The flow of d * 16^k ticks, computed once."""
+        f = s.digits.get((k, d))
+        if f is None:
+            f = s.digits[(k, d)] = s.expm((d << (4 * k)) * self.tick)
+        return f
+
+    def _state_at(self, s: _ModeSystem, t: float, z: np.ndarray) -> np.ndarray:
+        """expm(m t) z for an arbitrary t, by products with the vector: the
+        sub-tick remainder (under one 10 ns tick) by a 5th-order Taylor
+        series of the balanced matrix, whose norm times a tick is about 1e-2
+        for the stiffest mode (183 kHz): truncation below 1e-12; then the
+        whole ticks through the digit flows (they commute).  Event location
+        runs on it."""
         n = int(t / self.tick)
         rem = t - n * self.tick
-        p = self._compose(s, n)
-        if rem <= 0.0:
-            return p
-        a = s.mb * rem
-        e = _EYE + a / 5.0
-        for k in (4, 3, 2, 1):
-            e = _EYE + (a @ e) / k
-        return p @ (e * s.bal[:, None] / s.bal[None, :])
+        if rem > 0.0:
+            u = z / s.bal
+            w = u
+            for k in (5, 4, 3, 2, 1):
+                w = u + (s.mb @ w) * (rem / k)
+            z = w * s.bal
+        p = s.phi.get(n)
+        if p is not None:
+            return p @ z
+        k = 0
+        while n:
+            d = n & 15
+            if d:
+                z = self._digit(s, k, d) @ z
+            n >>= 4
+            k += 1
+        return z
 
     def _find_event(self, s: _ModeSystem, z0: np.ndarray, z1: np.ndarray,
                     tau: float) -> tuple[float, int, np.ndarray] | None:
@@ -379,7 +435,7 @@ class FastAxis:
                 sm = _hermite_min(v0[j], d0, g1, d1)
                 if sm is not None:
                     tm = sm * tau
-                    if float(s.g[j] @ (self._expm_at(s, tm) @ z0)) < -tol:  # type: ignore[index]
+                    if float(s.g[j] @ self._state_at(s, tm, z0)) < -tol:  # type: ignore[index]
                         brackets.append((j, tm, tau * _hermite_root(v0[j], d0, g1, d1, sm)))
         if not brackets:
             return None
@@ -409,26 +465,26 @@ class FastAxis:
                 return 0.0, z0
             lo = 1e-9
             while lo < hi:
-                glo = float(row @ (self._expm_at(s, lo) @ z0))
+                glo = float(row @ self._state_at(s, lo, z0))
                 if glo > tol:
                     break
                 lo *= 4.0
             else:
-                return hi, self._expm_at(s, hi) @ z0
+                return hi, self._state_at(s, hi, z0)
         if guess is not None and lo < guess < hi:
             # the Hermite root is close: bracket it from above by a hair so
             # Newton lands on the guard's negative side in one or two steps
             zhi, ghi = None, -math.inf
             t = guess
         else:
-            zhi = self._expm_at(s, hi) @ z0
+            zhi = self._state_at(s, hi, z0)
             ghi = float(row @ zhi)
             t = (lo * ghi - hi * glo) / (ghi - glo) if ghi != glo else 0.5 * hi
         g_prev = math.inf
         for _ in range(80):
             if not (lo < t < hi):
                 t = 0.5 * (lo + hi)
-            zt = self._expm_at(s, t) @ z0
+            zt = self._state_at(s, t, z0)
             gt = float(row @ zt)
             if -tol <= gt <= 0.0:
                 return t, zt
@@ -449,7 +505,7 @@ class FastAxis:
                 t = 0.5 * (lo + hi)      # no progress: bisect the bracket
             g_prev = abs(gt)
         if zhi is None:
-            zhi = self._expm_at(s, hi) @ z0
+            zhi = self._state_at(s, hi, z0)
         return hi, zhi
 
     def _encode(self, z0: np.ndarray, z1: np.ndarray, t0: float, tau: float,
@@ -552,48 +608,267 @@ class FastAxis:
             self._r_wind = r
             self.c = dataclasses.replace(self.c, R=r + 2.0 * self.bridge.r_on_ohm)
             self._systems = {}
+            self._pin_levels = {}
 
     @property
     def winding_ohm(self) -> float:
         """The winding resistance the plant runs with now (R(T))."""
         return self._r_wind
 
-    def _run(self, remaining: int, out: list[Edge], t: float) -> float:
+    def _run(self, remaining: int, out: list[Edge] | None, t: float) -> float:
         """Integrate ``remaining`` ticks with the outputs as they are."""
         while remaining > 0:
             s = self._system()
             k = min(remaining, s.h_ticks)
             remaining -= k
-            tau = k * self.tick
-            p = self._flow(s, k)
-            for _ in range(self.MAX_EVENTS_PER_CHUNK):
-                z1 = p @ self.z
-                ev = None if s.g is None else self._find_event(s, self.z, z1, tau)
-                if ev is None:
-                    if self.energy:
-                        self._accumulate(s, self.z, tau)
-                    self._encode(self.z, z1, t, tau, out)
-                    self.z = z1
-                    t += tau
-                    break
-                te, j, ze = ev
-                if self.energy:
-                    self._accumulate(s, self.z, te)
-                self._encode(self.z, ze, t, te, out)
-                self.z = ze
-                t += te
-                tau -= te
-                self.events += 1
-                self.mode = ax.next_mode(self.c, self.z[:ax.N_STATE], self.mode, s.guards[j],
-                                         self.e_pos, self.e_neg)
-                s = self._system()
-                if tau <= 1e-13:
-                    break
-                p = self._expm_at(s, tau)
-            else:
-                raise RuntimeError(f"axis {self.index}: more than {self.MAX_EVENTS_PER_CHUNK} "
-                                   f"mode switches in one chunk (Zeno?) mode={self.mode}")
+            t = self._chunk(s, k, out, t)
         return t
+
+    def _chunk(self, s: _ModeSystem, k: int, out: list[Edge] | None, t: float) -> float:
+        """One chunk of ``k`` ticks from the state in system ``s`` (the
+        axis's mode), through every mode switch inside it; encoder edges go
+        to ``out`` (None: no edges, and the count is left to the caller)."""
+        tau = k * self.tick
+        p: np.ndarray | None = self._flow(s, k)
+        for _ in range(self.MAX_EVENTS_PER_CHUNK):
+            z1 = p @ self.z if p is not None else self._state_at(s, tau, self.z)
+            ev = None if s.g is None else self._find_event(s, self.z, z1, tau)
+            if ev is None:
+                if self.energy:
+                    self._accumulate(s, self.z, tau)
+                if out is not None:
+                    self._encode(self.z, z1, t, tau, out)
+                self.z = z1
+                t += tau
+                break
+            te, j, ze = ev
+            if self.energy:
+                self._accumulate(s, self.z, te)
+            if out is not None:
+                self._encode(self.z, ze, t, te, out)
+            self.z = ze
+            t += te
+            tau -= te
+            self.events += 1
+            self.mode = ax.next_mode(self.c, self.z[:ax.N_STATE], self.mode, s.guards[j],
+                                     self.e_pos, self.e_neg)
+            s = self._system()
+            if tau <= 1e-13:
+                break
+            p = None                     # the rest of the chunk: an arbitrary length
+        else:
+            raise RuntimeError(f"axis {self.index}: more than {self.MAX_EVENTS_PER_CHUNK} "
+                               f"mode switches in one chunk (Zeno?) mode={self.mode}")
+        return t
+
+    # ---- many edges at once (the fast path) ------------------------------
+    #: most chunks integrated before their guards are checked together
+    #: (run_pins); fewer after a mode switch, twice as many after none
+    BATCH = 256
+    _batch = 8
+
+    def run_pins(self, changes: Sequence[tuple[int, Pins]], ticks: int) -> None:
+        """Advance ``ticks`` ticks while the bridge's inputs change to each
+        ``(offset, pins)`` of ``changes`` (offsets in ticks from now, sorted,
+        below ``ticks``): the same flow as :meth:`set_pins` and
+        :meth:`advance` at every change, for a caller that reads the count
+        only between calls.  It makes no encoder edges (the count is the
+        angle's at the end, as the edges would have left it), checks the
+        guards of many chunks in one product (:meth:`_run_batch`) and heats
+        the winding once per call."""
+        start = self._ticks
+        end = start + ticks
+        q2 = self.q_i2
+        self._run_batch(self._segments(changes, start, end))
+        self._ticks = end
+        self._t_req = end * self.tick
+        self.count = count_of(float(self.z[ax.PHI_M]), self.enc)
+        if self.heats and ticks > 0:
+            self._heat(ticks * self.tick, self.q_i2 - q2)
+
+    def _segments(self, changes: Sequence[tuple[int, Pins]], start: int, end: int) -> list[tuple[int, Pins]]:
+        """(ticks, output pins) from ``start`` to ``end``: the commanded
+        changes, through the bridge's delays and minimum pulse when it has
+        them (:meth:`_command`, which this drives as :meth:`advance` does).
+        A change of zero length is kept: the outputs pass through it."""
+        segs: list[tuple[int, Pins]] = []
+        cur, shown = start, self.pins
+
+        def show_until(t: int) -> None:
+            nonlocal cur, shown
+            while self._sched and self._sched[0][0] <= t:
+                at, pins = self._sched[0]
+                self._sched = self._sched[1:]
+                segs.append((max(0, at - cur), shown))
+                cur, shown = max(cur, at), pins
+
+        for off, pins in changes:
+            at = start + off
+            if self.timing:
+                show_until(at)
+                self._ticks = at
+                self._command(pins)
+            else:
+                segs.append((at - cur, shown))
+                cur, shown = at, pins
+        if self.timing:
+            show_until(end)
+        segs.append((end - cur, shown))
+        return segs
+
+    def _run_batch(self, segs: list[tuple[int, Pins]]) -> None:
+        """Integrate the output segments: up to :attr:`_batch` chunks ahead
+        by their cached flows (a segment's whole chunks in one product with
+        the stacked powers of the chunk's flow, :meth:`_powers`), then the
+        guards of all of them in one product (the tests of
+        :meth:`_find_event`, vectorised, :meth:`_flags`); the chunks before
+        the first that may hold a mode switch are taken, that one is
+        integrated by :meth:`_chunk` (the exact event handling), and the
+        batch goes on from there (from its next chunk unchanged if no switch
+        happened).  The current integrals of the taken chunks are summed in
+        one product too (:meth:`_take`)."""
+        n_state = ax.N_STATE
+        i, left, entered = 0, segs[0][0], False      # where the axis stands
+        batch = self._batch
+        while True:
+            # 1. integrate ahead: pieces of m chunks of k ticks in one system
+            z, mode, pins, e_pos, e_neg = self.z, self.mode, self.pins, self.e_pos, self.e_neg
+            si, sl, ent = i, left, entered
+            pieces: list[tuple[int, int, _ModeSystem, int, Pins, int, int]] = []  # first, m, s, k, pins, seg, left
+            blocks = [z[None, :]]
+            n = 0
+            s = self._system()
+            while n < batch:
+                if not ent:
+                    ent = True
+                    p = segs[si][1]
+                    if p != pins:
+                        pins = p
+                        e_pos, e_neg = self._levels(pins)
+                        se = ax.elec_mode(self.c, z[:n_state], e_pos, e_neg)
+                        if se != mode.se:
+                            mode = mode._replace(se=se)
+                        s = self._system((mode, e_pos, e_neg))
+                if sl == 0:
+                    if si + 1 == len(segs):
+                        break
+                    si, sl, ent = si + 1, segs[si + 1][0], False
+                    continue
+                h = s.h_ticks
+                if sl >= h:
+                    k, m = h, min(sl // h, batch - n)
+                    zb = self._powers(s, m) @ z
+                else:
+                    k, m = sl, 1
+                    zb = (self._flow(s, sl) @ z)[None, :]
+                pieces.append((n, m, s, k, pins, si, sl))
+                blocks.append(zb)
+                z = zb[-1]
+                sl -= m * k
+                n += m
+            if n == 0:
+                self.mode, self.pins, self.e_pos, self.e_neg = mode, pins, e_pos, e_neg
+                return
+            # 2. which chunks may hold a switch
+            zz = np.concatenate(blocks)
+            flagged = self._flags(pieces, zz)
+            # 3. take the chunks before it; the flagged one exactly
+            done = 0
+            restart = False
+            firsts = [pc[0] for pc in pieces]
+            for j in flagged + [n]:
+                if j > done:
+                    self._take(pieces, zz, done, j)
+                    done = j
+                if j == n:
+                    break
+                first, m, s, k, p, ri, rl = pieces[bisect.bisect_right(firsts, j) - 1]
+                self.z = zz[j]
+                self.mode, self.pins, self.e_pos, self.e_neg = s.mode, p, s.e_pos, s.e_neg
+                ev = self.events
+                self._chunk(s, k, None, 0.0)
+                done = j + 1
+                i, left, entered = ri, rl - (j - first + 1) * k, True
+                if self.events != ev:
+                    restart = True       # the mode changed: integrate ahead anew from here
+                    break
+            # as many chunks ahead as there are between switches, within bounds
+            batch = max(4, batch // 2) if restart else min(self.BATCH, 2 * batch)
+            self._batch = batch
+            if not restart:
+                first, m, s, k, p, ri, rl = pieces[-1]
+                i, left, entered = ri, rl - m * k, True
+                self.z = zz[-1]
+                self.mode, self.pins, self.e_pos, self.e_neg = s.mode, p, s.e_pos, s.e_neg
+                if ent and sl == 0 and si + 1 == len(segs):    # the segments are done
+                    self.mode, self.pins, self.e_pos, self.e_neg = mode, pins, e_pos, e_neg
+                    return
+
+    def _levels(self, pins: Pins) -> tuple[float, float]:
+        """(e_pos, e_neg) the bridge presents with these output pins (as
+        :meth:`_apply_pins` sets them), per pins once."""
+        lv = self._pin_levels.get(pins)
+        if lv is None:
+            lv = self._pin_levels[pins] = ax.terminal_levels(self.c, *armature_voltages(pins, self.bridge))
+        return lv
+
+    def _powers(self, s: _ModeSystem, m: int) -> np.ndarray:
+        """The flows of 1..m whole chunks of ``s.h_ticks`` (m x 14 x 14), built once."""
+        pw = s.hpow
+        if pw is None or len(pw) < m:
+            f = self._flow(s, s.h_ticks)
+            out = [f] if pw is None else list(pw)
+            while len(out) < self.BATCH:
+                out.append(f @ out[-1])
+            pw = s.hpow = np.array(out)
+        return pw[:m]
+
+    def _flags(self, pieces: list, zz: np.ndarray) -> list[int]:
+        """Indices of the chunks whose guards cross, or may dip, below zero
+        (the tests of :meth:`_find_event`, on all chunks at once)."""
+        by: dict[int, tuple[_ModeSystem, list]] = {}
+        for pc in pieces:
+            if pc[2].g is not None:
+                by.setdefault(id(pc[2]), (pc[2], []))[1].append(pc)
+        out: list[int] = []
+        for s, pcs in by.values():
+            n = len(s.tol_list)
+            rows_l: list[int] = []
+            ticks_l: list[int] = []
+            for first, m, _, k, *_ in pcs:
+                rows_l.extend(range(first, first + m))
+                ticks_l.extend([k] * m)
+            ia = np.array(rows_l)
+            tau = np.array(ticks_l, float)[:, None] * self.tick
+            w = zz @ s.gg.T              # every state once: a chunk's start is the one before's end
+            v0, v1 = w[ia], w[ia + 1]
+            g0, g1 = v0[:, :n], v1[:, :n]
+            d0, d1 = v0[:, n:] * tau, v1[:, n:] * tau
+            hit = (g1 < -s.tol).any(axis=1)
+            # a dip needs the slope to turn, and the cubic can fall at most
+            # 4/27 (|d0| + |d1|) below the lower end (Hermite basis bounds)
+            dip = (d0 < 0) & (d1 > 0) & (np.minimum(g0, g1) < (4 / 27) * (d1 - d0))
+            rows = dip.any(axis=1)
+            if rows.any():
+                hit[rows] |= (dip[rows] & _hermite_dips(g0[rows], d0[rows], g1[rows], d1[rows])).any(axis=1)
+            out.extend(ia[hit].tolist())
+        out.sort()
+        return out
+
+    def _take(self, pieces: list, zz: np.ndarray, a: int, b: int) -> None:
+        """Chunks a..b-1 hold no switch: their current integrals."""
+        if not self.energy:
+            return
+        by: dict[tuple[int, int], tuple[_ModeSystem, int, list[int]]] = {}
+        for first, m, s, k, *_ in pieces:
+            lo, hi = max(a, first), min(b, first + m)
+            if lo < hi:
+                by.setdefault((id(s), k), (s, k, []))[2].extend(range(lo, hi))
+        for s, k, rows in by.values():
+            r, g = self._integrals_at(s, k * self.tick)
+            z0 = zz[rows]
+            self.q_i += float((z0 @ r).sum())
+            self.q_i2 += float(((z0 @ g) * z0).sum())
 
 
 def _driving(p: Pins) -> bool:
@@ -611,7 +886,7 @@ def expm_balanced(mb: np.ndarray, bal: np.ndarray, tau: float) -> np.ndarray:
     nrm = float(np.abs(a).sum(axis=0).max())
     sq = max(0, math.ceil(math.log2(nrm / 0.25))) if nrm > 0.25 else 0
     a = a * (0.5**sq)
-    eye = _EYE
+    eye = _EYE if len(a) == NZ else np.eye(len(a))
     e = eye + a / 10.0
     for k in range(9, 0, -1):
         e = eye + (a @ e) / k
@@ -665,6 +940,21 @@ def _hermite_min(g0: float, d0: float, g1: float, d1: float) -> float | None:
     return None if best is None else best[0]
 
 
+def _hermite_dips(g0: np.ndarray, d0: np.ndarray, g1: np.ndarray, d1: np.ndarray) -> np.ndarray:
+    """Elementwise: whether the cubic Hermite through (g0, d0), (g1, d1) has
+    a stationary point in (0, 1) below zero (:func:`_hermite_min`'s test)."""
+    a = 2 * g0 + d0 - 2 * g1 + d1
+    b = -3 * g0 - 2 * d0 + 3 * g1 - d1
+    out = np.zeros(g0.shape, bool)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        small = np.abs(a) < 1e-300
+        r = np.sqrt(b * b - 3 * a * d0)
+        for sr, valid in (((-b - r) / (3 * a), ~small), ((-b + r) / (3 * a), ~small), (-d0 / (2 * b), small)):
+            v = ((a * sr + b) * sr + d0) * sr + g0
+            out |= valid & (sr > 0) & (sr < 1) & (v < 0)
+    return out
+
+
 class TwoAxisPlant:
     """The two-axis stage for co-simulation (axis 0 = x, axis 1 = z)."""
 
@@ -699,6 +989,16 @@ class TwoAxisPlant:
                                self._pin_state, self._rng)
         self.t += dt
         return out
+
+    def run_pins(self, ticks: int, changes: Sequence[Sequence[tuple[int, Pins]]]) -> None:
+        """Advance ``ticks`` ticks (``tick_s`` each) with each axis's bridge
+        inputs changing as its list of ``(offset in ticks, pins)`` says
+        (:meth:`FastAxis.run_pins`): no encoder edges, the counts read
+        between calls; for a caller that knows every pin change of a
+        control period in advance (the fast path)."""
+        for a, ch in zip(self.axes, changes):
+            a.run_pins(ch, ticks)
+        self.t += ticks * self.axes[0].tick
 
     def snapshot(self) -> tuple:
         """The plant's whole state (both axes, clock, glitch generator), for a

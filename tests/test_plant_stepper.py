@@ -140,3 +140,26 @@ def test_current_integrals_are_exact_through_events() -> None:
     assert coarse.q_i2 == pytest.approx(fine.q_i2, rel=1e-8)
     assert coarse.q_i == pytest.approx(np.trapezoid(iv, ts), rel=1e-6)
     assert coarse.q_i2 == pytest.approx(np.trapezoid(np.square(iv), ts), rel=1e-5)
+
+
+def test_tick_integrals_match_scipy_van_loan():
+    """The current integrals over one tick (Van Loan's block exponential by
+    expm_balanced) against scipy's expm of the same blocks."""
+    from sim_models.variants import PlantSpec
+    lab = PlantSpec("lab").params()
+    fa = FastAxis(lab.axes[1], lab, 1, energy=True)
+    fa.set_pins(FWD)
+    s = fa._system()
+    r, g = fa._tick_integrals(s)
+    n, tau, mb, bal = len(s.mb), fa.tick, s.mb, s.bal
+    cb = np.zeros(n)
+    cb[ax.I_] = bal[ax.I_]
+    a = np.zeros((2 * n, 2 * n))
+    a[:n, :n], a[:n, n:] = mb, np.eye(n)
+    v = np.zeros((2 * n, 2 * n))
+    v[:n, :n], v[:n, n:], v[n:, n:] = -mb.T, np.outer(cb, cb), mb
+    e = expm(v * tau)
+    r_ref = (cb @ expm(a * tau)[:n, n:]) / bal
+    g_ref = (e[n:, n:].T @ e[:n, n:]) / bal[:, None] / bal[None, :]
+    assert np.abs(r - r_ref).max() <= 1e-12 * np.abs(r_ref).max()
+    assert np.abs(g - g_ref).max() <= 1e-12 * np.abs(g_ref).max()

@@ -17,7 +17,8 @@ the FPGA clock:
   again from the first period start after it is enabled.
 
 :class:`PwmChannel` is one axis; :func:`run_until` advances a plant through
-the pin changes of several channels.  (The plant's own tests drive it with
+the pin changes of several channels; :func:`pin_changes` lists one
+channel's changes over a stretch of time.  (The plant's own tests drive it with
 arbitrary waveforms instead: sim_models.waveforms.)
 """
 
@@ -58,6 +59,8 @@ class PwmChannel:
         self.next_start = first_start     # clock of the next period start
         self.off_at: int | None = None    # clock the on phase ends in this period
         self.pins: Pins = setting.safe
+        self._planned: PwmSetting | None = None
+        self._plan: tuple[int, int | None, Pins] = (0, None, setting.safe)
 
     def load(self, setting: PwmSetting) -> None:
         """Take ``setting`` at the next period start; a disabled setting acts
@@ -79,18 +82,26 @@ class PwmChannel:
             self.pins = self.off_phase
         if self.next_start <= now:
             s = self.active = self.pending
-            div = effective_div(s.div)
-            period = div * self.m
-            on = duty_ticks(s.cmd, s.pw0, s.pwmax) * div if s.enabled else 0
-            if not s.enabled:
-                self.pins = s.safe
-            elif on == 0 or s.cmd == 0:
-                self.pins = self.off_phase
-            else:
-                self.pins = on_pins(s.cmd)
-            self.off_at = now + on if s.enabled and 0 < on < period else None
+            if s is not self._planned:       # a setting's periods are all alike
+                self._planned, self._plan = s, self._period_of(s)
+            period, on, self.pins = self._plan
+            self.off_at = None if on is None else now + on
             self.next_start = now + period
         return self.pins
+
+    def _period_of(self, s: PwmSetting) -> tuple[int, int | None, Pins]:
+        """(period, clocks the on phase lasts or None if it fills the period
+        or is empty, the pins from the period start) of setting ``s``."""
+        div = effective_div(s.div)
+        period = div * self.m
+        on = duty_ticks(s.cmd, s.pw0, s.pwmax) * div if s.enabled else 0
+        if not s.enabled:
+            pins = s.safe
+        elif on == 0 or s.cmd == 0:
+            pins = self.off_phase
+        else:
+            pins = on_pins(s.cmd)
+        return period, on if s.enabled and 0 < on < period else None, pins
 
 
 class Plant(Protocol):
@@ -115,3 +126,17 @@ def run_until(plant: Plant, channels: Sequence[PwmChannel], now: int, end: int,
         if on_edges is not None and edges:
             on_edges(now, edges)
         now = nxt
+
+
+def pin_changes(channel: PwmChannel, now: int, end: int) -> list[tuple[int, Pins]]:
+    """The pins ``channel`` shows from clock ``now`` to ``end``, as
+    (clock, pins) at ``now`` and at each of its events before ``end`` (the
+    steps :func:`run_until` takes for this channel); events at ``end`` are
+    processed, as there."""
+    out: list[tuple[int, Pins]] = []
+    while True:
+        pins = channel.fire(now)
+        if now >= end:
+            return out
+        out.append((now, pins))
+        now = min(end, channel.next_event())

@@ -403,7 +403,7 @@ def run_paper_model(cfg: ExperimentConfig) -> ModelRun:
                     tuple(a.resistance_ohm for a in params.axes))
 
 
-def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
+def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = (), edges: bool = False) -> ModelRun:
     """The fast path: the board's settings (``cfg.board()``) and plant with
     the *firmware's* law in Python (torqueloop/oracles/servo.py, the oracle of
     firmware/servo/control.c: fixed point, anti-windup, deadband, dead-zone
@@ -415,8 +415,14 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
     first period start after the step's sample (an RTL run's
     ``carrier_start_clk``, for the implementation check); by default a
     period starts at the sample, before its command is loaded, so the step
-    drives one carrier period later (the latest the board can)."""
-    from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, run_until
+    drives one carrier period later (the latest the board can).
+
+    Each control period the plant takes every pin change of the period at
+    once (``TwoAxisPlant.run_pins``: its guards checked for many chunks in
+    one product, no encoder edges, docs/plant.md "The fast path");
+    ``edges=True`` steps it edge by edge as the co-simulation does
+    (``run_until``), the reference that stepping is checked against."""
+    from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, pin_changes, run_until
     from torqueloop.oracles.servo import Axis, AxisParams
     from torqueloop.spec.bridge import BRAKE, COAST
     params = cfg.plant_params()
@@ -441,8 +447,12 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
         axes.append(a)
     n = int(round(cfg.t_end_s * 1e6 / cfg.period_us)) + 1
     out = {k: np.zeros((n, 2)) for k in ("pos", "vel", "cmd", "err", "true", "q", "q2")}
+    ticks_per_clk = round(1.0 / (CLK_HZ * plant.axes[0].tick))
     w0 = time.monotonic()
     edge_clk, edge_gap = [0, 0], [0, 0]      # the decoder's last edge and the interval before it (VEL_MODE 1)
+    # the edge-timestamp speed (VEL_MODE 1, a tuned setting) needs the decoder's edge times, which only
+    # edge-by-edge stepping produces; the per-period stepping has no encoder edges
+    step_edges = edges or any(a.p.vel_mode for a in axes)
 
     def on_edges(start: int, edges: list) -> None:
         for e in edges:
@@ -451,7 +461,13 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
 
     for k in range(n):
         ts = k * period
-        run_until(plant, channels, (k - 1) * period if k else 0, ts, CLK_HZ, on_edges)
+        prev = (k - 1) * period if k else 0
+        if step_edges:
+            run_until(plant, channels, prev, ts, CLK_HZ, on_edges)
+        else:
+            plant.run_pins((ts - prev) * ticks_per_clk,
+                           [[((c - prev) * ticks_per_clk, p) for c, p in pin_changes(ch, prev, ts)]
+                            for ch in channels])
         for a in AXES:
             if k == 0:
                 axes[a].move(cfg.target_counts, False)
@@ -472,7 +488,8 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = ()) -> ModelRun:
     return ModelRun(traj, time.monotonic() - w0,
                     {"arm": "fast path", "plant": cfg.plant.label, "law": cfg.law, "board": list(board),
                      "carrier_start_clk": starts,
-                     "pwm_hz": list(cfg.pwm_hz_actual), "implementation": "torqueloop.oracles.servo (firmware law)"},
+                     "pwm_hz": list(cfg.pwm_hz_actual), "implementation": "torqueloop.oracles.servo (firmware law)",
+                     "plant_stepping": "edge by edge" if edges else "per control period"},
                     tuple(a.resistance_ohm for a in params.axes))
 
 
