@@ -37,6 +37,7 @@ from sim_models.variants import PlantSpec
 from torqueloop.sim import experiment, native, report
 from torqueloop.sim.experiment import ExperimentConfig, ModelRun, RtlRun
 from torqueloop.spec.repo import REPO_ROOT
+from torqueloop.study import stability
 from torqueloop.study.characterization import inputs_digest, run_study
 from torqueloop.study.engine import Engine
 
@@ -221,6 +222,11 @@ def run_experiment(plan: ExperimentPlan) -> int:
                  for k, v in cfgdoc["axes"].items()},
         "plots": [str(p) for p in sorted((plan.char_dir / "plots").glob("*.png"))],
     }
+    stab = stability.study(stability.QUICK if plan.quick else stability.FULL, plan.experiment_plant,
+                           plan.char_dir / ("stability_quick.json" if plan.quick else "stability.json"),
+                           inputs_digest(plan.experiment_plant, "model"), engine, say=_say)
+    st.characterization["stability"] = stability.summary_rows(stab)
+    st.characterization["stability_verdict"] = {"axes": stab["verdict"], "quick": stab["quick"]}
     st.meta = {"model_plant": plan.model_plant.label, "experiment_plant": plan.experiment_plant.label,
                "quick": plan.quick, "jobs": plan.jobs, "engine": engine.name, "wall_s_total": round(time.monotonic() - t0, 1)}
     plan.out.mkdir(parents=True, exist_ok=True)
