@@ -71,3 +71,16 @@ def test_bad_input_is_one_line(argv: list[str], says: str) -> None:
     r = subprocess.run([sys.executable, "-m", "torqueloop.study", *argv], capture_output=True, text=True, timeout=120)
     assert r.returncode != 0 and "Traceback" not in r.stderr, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and says in r.stderr, r.stderr
+
+
+def test_banners_go_to_the_log_and_progress_to_the_terminal(tmp_path, capfd) -> None:
+    import os
+
+    from torqueloop.study.experiment import _say, banners_to
+    with banners_to(tmp_path / "run.log"):
+        os.write(1, b"cocotb banner\n")
+        os.write(2, b"verilator warning\n")
+        _say("1/2 a run (3 s; about 3 s left)")
+    out = capfd.readouterr().out
+    assert "1/2 a run" in out and "banner" not in out
+    assert (tmp_path / "run.log").read_text() == "cocotb banner\nverilator warning\n"

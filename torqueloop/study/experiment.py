@@ -27,7 +27,9 @@ from __future__ import annotations
 import json
 import math
 import os
+import contextlib
 import pickle
+import sys
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -123,8 +125,40 @@ class RunFailed(str):
 Result = Union[RunFailed, ModelRun, tuple[RtlRun, ModelRun]]
 
 
+#: the terminal while the simulators' output goes to the run's log (:func:`banners_to`)
+_TERM = None
+
+
 def _say(msg: str) -> None:
-    print(f"[run] {msg}", flush=True)
+    print(f"[run] {msg}", file=_TERM or sys.stdout, flush=True)
+
+
+@contextlib.contextmanager
+def banners_to(log: Path):
+    """Send everything written to stdout and stderr - the simulators' and
+    make's banners, in this process and the pool's workers forked from it -
+    to ``log``; :func:`_say`'s progress lines still reach the terminal."""
+    global _TERM
+    log.parent.mkdir(parents=True, exist_ok=True)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    term = os.fdopen(os.dup(1), "w", buffering=1)
+    with open(log, "ab") as fh:
+        os.dup2(fh.fileno(), 1)
+        os.dup2(fh.fileno(), 2)
+    _TERM = term
+    try:
+        yield term
+    finally:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        os.close(saved[0])
+        os.close(saved[1])
+        _TERM = None
+        term.close()
 
 
 def characterization(plan: ExperimentPlan) -> Path:
@@ -206,8 +240,19 @@ def collect(st: report.Study, run: Run, result: Result) -> None:
 
 
 def run_experiment(plan: ExperimentPlan) -> int:
-    """The whole study (module docstring); 0 when the report was written."""
+    """The whole study (module docstring); 0 when the report was written.
+    The simulators' output goes to ``OUT/run.log``; the terminal gets one
+    progress line per run."""
     plan.check()
+    log = plan.out / "run.log"
+    log.parent.mkdir(parents=True, exist_ok=True)
+    log.write_text("")
+    _say(f"the simulators' output (cocotb, Verilator, make) goes to {log}")
+    with banners_to(log) as term:
+        return _run_experiment(plan, term)
+
+
+def _run_experiment(plan: ExperimentPlan, term) -> int:
     t0 = time.monotonic()
     char = characterization(plan)
     _say("building the board harness and the firmware ...")
@@ -265,6 +310,6 @@ def run_experiment(plan: ExperimentPlan) -> int:
                                          "Ts": plan.sweep_t_end_s, "nf": len(stability.QUICK.freqs_hz),
                                          "np": len(stability.QUICK.settles) * len(stability.QUICK.orders)}
     answer.finish(plan.out, quick, stab, json.loads((plan.out / "report.json").read_text())["sweep"], dz)
-    print((plan.out / "report.md").read_text())
+    print((plan.out / "report.md").read_text(), file=term)
     _say(f"report: {plan.out}/report.md, report.json, PNGs ({time.monotonic() - t0:.0f} s)")
     return 0
