@@ -16,7 +16,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from torqueloop.study import carrier_sweep, stability
+from torqueloop.study import carrier_sweep, stability, uncertainty
 
 QUICK_BANNER = ("> **QUICK RUN - a smoke test, not an answer.** T = {T:g} s, a {n}-carrier sweep of {laws} at {Ts:g} s "
                 "from one start, the stability table on {nf} carriers and {np} protocols. These numbers show that "
@@ -73,6 +73,15 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]]) -> tuple[str, 
                          f"bench protocol: the {v['n']} settle / sweep-order protocols chose {v['min_hz']:.4g}-"
                          f"{v['max_hz']:.4g} Hz, so the carrier is a property of the bench's timing as much as of "
                          f"the motor and this study names none.")
+    u = rep.get("uncertainty")
+    if u:
+        for a, v in u["axes"].items():
+            c = v["chosen_hz"]
+            if c.get("n"):
+                parts.append(f"Over {u['draws']} draws of the plant's unknown parameters within their stated ranges "
+                             f"(Monte Carlo seed {u['seed']}; a parameter-uncertainty interval, not instrument noise) "
+                             f"step 5 chooses {c['min']:.4g}-{c['max']:.4g} Hz for axis {a} (median {c['median']:.4g})"
+                             + (f"; {v['no_choice']} draws chose none." if v["no_choice"] else "."))
     for law in sorted({r["law"] for r in summary}):
         for a in carrier_sweep.AXES:
             q = _axis_answer(summary, law, a, "steady_state_error_counts")
@@ -99,11 +108,13 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]]) -> tuple[str, 
 
 
 def finish(out: Path, quick_info: dict[str, Any] | None, stab: dict[str, Any], sweep_rows: list[dict[str, Any]],
-           dz: dict[str, Any]) -> None:
+           dz: dict[str, Any], unc: dict[str, Any] | None = None) -> None:
     """Rewrite report.json and report.md with the opening, the tables and the figures."""
     rep = json.loads((out / "report.json").read_text())
     summary = carrier_sweep.summarise(sweep_rows)
     carrier_sweep.plot(summary, sweep_rows, out / "carrier_sweep.png")
+    if unc is not None:
+        rep["uncertainty"] = {k: v for k, v in unc.items() if k != "runs"}
     text, numbers = paragraph(rep, summary)
     rep["carrier_sweep"] = {"rows": summary, "dead_zones": dz["rows"],
                             "interval": "range over start positions and step sizes; not a confidence interval"}
@@ -116,6 +127,8 @@ def finish(out: Path, quick_info: dict[str, Any] | None, stab: dict[str, Any], s
         L += [QUICK_BANNER.format(**quick_info), ""]
     L += [text, ""]
     L += stability.markdown(stab["rows"], stab["verdict"])
+    if unc is not None:
+        L += uncertainty.markdown(unc)
     L += carrier_sweep.markdown(summary, rep["meta"].get("sweep_T_s"))
     L += rest
     L += ["## Figures", ""]

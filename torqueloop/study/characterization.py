@@ -41,7 +41,7 @@ from torqueloop.characterize.simbench import (LabBench, Waveforms, duty_settings
                                               record_frequency_sweep, simulate_lab)
 from torqueloop.spec.pwm import carrier_hz, divider_for
 from torqueloop.spec.repo import REPO_ROOT
-from torqueloop.study import stability
+from torqueloop.study import stability, uncertainty
 from torqueloop.study.engine import Engine
 
 #: extra duty sweeps of the study: the paper's range ends, its two optima, and the carriers above
@@ -120,7 +120,8 @@ def crossings(r: MotorResult) -> list[float]:
 def run_study(out: Path, plant: PlantSpec, seeds: int = 10, axes: Sequence[str] = ("x", "z"),
               source: str = "rtl", sim: str = "verilator", th: Thresholds = Thresholds(),
               ablation: bool = True, linearity_freqs: Sequence[float] = LINEARITY_FREQS_HZ,
-              stability_plan: "stability.StabilityPlan | None" = None, engine: Engine = Engine()) -> int:
+              stability_plan: "stability.StabilityPlan | None" = None,
+              uncertainty_plan: "uncertainty.UncertaintyPlan | None" = None, engine: Engine = Engine()) -> int:
     """The whole study (module docstring).  Returns the exit status of the
     lab's session (0: every axis passed and the configuration was written)."""
     t0 = time.monotonic()
@@ -143,6 +144,10 @@ def run_study(out: Path, plant: PlantSpec, seeds: int = 10, axes: Sequence[str] 
     if stability_plan is not None:
         stab = stability.study(stability_plan, plant, out / "stability.json", inputs_digest(plant, "model"),
                                engine, say=_say)
+    unc = None
+    if uncertainty_plan is not None:
+        unc = uncertainty.study(uncertainty_plan, plant, out / "uncertainty.json", inputs_digest(plant, "model"),
+                                engine, say=_say)
 
     # 2. repeatability over the instrument noise; the duty sweeps the seeds
     # will ask for are captured first, in one RTL run
@@ -185,6 +190,11 @@ def run_study(out: Path, plant: PlantSpec, seeds: int = 10, axes: Sequence[str] 
         doc["stability"] = stability.summary_rows(stab)
         doc["stability_verdict"] = stab["verdict"]
         md += "\n" + "\n".join(stability.markdown(stab["rows"], stab["verdict"]))
+    if unc is not None:
+        doc["uncertainty"] = {k: v for k, v in unc.items() if k != "runs"}
+        doc["uncertainty"]["instrument_noise"] = {a: {"chosen_hz": d["chosen_hz"], "pw0_pct": d["pw0_pct"]}
+                                                  for a, d in doc["axes"].items()}
+        md += "\n" + "\n".join(uncertainty.markdown(unc))
     (out / "results.json").write_text(json.dumps(doc, indent=2, sort_keys=True, default=float) + "\n")
     (out / "results.md").write_text(md)
     _plot_effects(out / "plots", studies)

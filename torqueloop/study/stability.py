@@ -87,10 +87,10 @@ class CarriedBench:
     """The plant's rope dynamometer for one axis, each reading starting from
     the winding temperature the previous one left (cooled over the pause)."""
 
-    def __init__(self, plant: PlantSpec, axis: str, protocol: Protocol) -> None:
+    def __init__(self, plant: PlantSpec, axis: str, protocol: Protocol, params: Any = None) -> None:
         from sim_models.dyno import RopeDynamometer
 
-        p = plant.params()
+        p = params if params is not None else plant.params()
         names = [a.name for a in p.axes]
         if axis not in names:
             raise ValueError(f"axis {axis!r}: the plant has {names}")
@@ -139,21 +139,32 @@ def run_job(job: Job) -> dict[str, Any]:
     """Step 2 (stall), the 50 % sweep in the protocol's order, step 5, and the
     paper's dead zone at the chosen board carrier."""
     t0 = time.process_time()
-    pr = job.protocol
-    b = CarriedBench(job.plant, job.axis, pr)
+    row = step5_on(CarriedBench(job.plant, job.axis, job.protocol), job.freqs_hz)
+    row.update(axis=job.axis, plant=job.plant.label)
+    if job.dead_zone and row["freq_hz"] is not None:
+        dz = motion_dead_zones(job.plant, [row["freq_hz"]], axes=(job.axis,))
+        row["dead_zone_pct"] = {("forward" if d.direction > 0 else "reverse"): d.pw0_pct for d in dz}
+    row["cpu_s"] = time.process_time() - t0
+    return row
+
+
+def step5_on(b: CarriedBench, freqs_hz: Sequence[float]) -> dict[str, Any]:
+    """Step 2 (stall), the 50 % sweep in the bench's protocol's order, step 5."""
+    pr = b.protocol
+    axis = b.axis.name
     m = full_scale(PWM_BITS)
     half = (m + 1) // 2
-    stall = b.reading(divider_for(job.freqs_hz[0], CLK_HZ, PWM_BITS), m)
-    rd = [b.reading(divider_for(f, CLK_HZ, PWM_BITS), half) for f in pr.sequence(job.freqs_hz)]
+    stall = b.reading(divider_for(freqs_hz[0], CLK_HZ, PWM_BITS), m)
+    rd = [b.reading(divider_for(f, CLK_HZ, PWM_BITS), half) for f in pr.sequence(freqs_hz)]
     by_f = sorted(rd, key=lambda r: r["freq_hz"])
     target = stall["torque_nm"] * half / m
-    sweep = Sweep("frequency", job.axis, BenchConstants(b.wheel_radius_m, b.theta_deg, b.supply_v),
+    sweep = Sweep("frequency", axis, BenchConstants(b.wheel_radius_m, b.theta_deg, b.supply_v),
                   x=np.array([r["freq_hz"] for r in by_f]), torque_nm=np.array([r["torque_nm"] for r in by_f]),
                   current_a=np.zeros(len(by_f)), duty_pct=100.0 * half / m,
                   stall_torque_nm=stall["torque_nm"], stall_current_a=0.0, force_given=True)
-    row: dict[str, Any] = {"axis": job.axis, "settle_s": pr.settle, "order": pr.order,
+    row: dict[str, Any] = {"axis": axis, "settle_s": pr.settle, "order": pr.order,
                            "seed": pr.seed if pr.order == "shuffled" else None, "pause_s": pr.pause_s,
-                           "plant": job.plant.label, "tau_max_nm": stall["torque_nm"],
+                           "tau_max_nm": stall["torque_nm"],
                            "readings": [{**r, "rel_to_target_pct": 100.0 * (r["torque_nm"] / target - 1.0)} for r in rd],
                            "freq_hz": None, "board_hz": None, "kind": None, "crossings_hz": [],
                            "dead_zone_pct": None, "message": ""}
@@ -165,10 +176,6 @@ def run_job(job: Job) -> dict[str, Any]:
                    board_hz=carrier_hz(divider_for(c.freq_hz, CLK_HZ, PWM_BITS), CLK_HZ, PWM_BITS))
     except MethodError as e:
         row["message"] = str(e).split(": ", 1)[-1]
-    if job.dead_zone and row["freq_hz"] is not None:
-        dz = motion_dead_zones(job.plant, [row["freq_hz"]], axes=(job.axis,))
-        row["dead_zone_pct"] = {("forward" if d.direction > 0 else "reverse"): d.pw0_pct for d in dz}
-    row["cpu_s"] = time.process_time() - t0
     return row
 
 
@@ -278,27 +285,16 @@ def study(plan: StabilityPlan, plant: PlantSpec, out_json: Path, digest: str, en
     """The table for ``plan``, reused from ``out_json`` while the inputs'
     digest (the plant, the bench, the method: characterization.inputs_digest)
     and the plan are unchanged."""
-    import hashlib
-    import json
+    from torqueloop.study.cache import cached
 
-    digest = hashlib.sha256((digest + Path(__file__).read_text()).encode()).hexdigest()  # and this study's code
-    key = plan.key(plant)
-    if out_json.exists():
-        try:
-            old = json.loads(out_json.read_text())
-        except ValueError:
-            old = {}
-        if old.get("digest") == digest and old.get("plan") == key:
-            say(f"stability: {out_json.name} is current (its inputs are unchanged); reused")
-            return old
-    t0 = time.monotonic()
-    rows = run(plant, settles=plan.settles, orders=plan.orders, freqs_hz=plan.freqs_hz, seed=plan.seed,
-               engine=engine, say=say)
-    doc = {"digest": digest, "plan": key, "quick": plan.quick, "rows": rows, "verdict": verdict(rows),
-           "cpu_s": sum(r["cpu_s"] for r in rows), "wall_s": time.monotonic() - t0}
-    out_json.parent.mkdir(parents=True, exist_ok=True)
-    out_json.write_text(json.dumps(doc, indent=1, default=float) + "\n")
-    return doc
+    def compute() -> dict[str, Any]:
+        t0 = time.monotonic()
+        rows = run(plant, settles=plan.settles, orders=plan.orders, freqs_hz=plan.freqs_hz, seed=plan.seed,
+                   engine=engine, say=say)
+        return {"quick": plan.quick, "rows": rows, "verdict": verdict(rows),
+                "cpu_s": sum(r["cpu_s"] for r in rows), "wall_s": time.monotonic() - t0}
+
+    return cached(out_json, digest, __file__, plan.key(plant), compute, say)
 
 
 def summary_rows(doc: dict[str, Any]) -> list[dict[str, Any]]:
