@@ -16,7 +16,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from torqueloop.study import carrier_sweep, stability, uncertainty
+from torqueloop.study import carrier_sweep, stability, table3, uncertainty
 
 QUICK_BANNER = ("> **QUICK RUN - a smoke test, not an answer.** T = {T:g} s, a {n}-carrier sweep of {laws} at {Ts:g} s "
                 "from one start, the stability table on {nf} carriers and {np} protocols. These numbers show that "
@@ -108,7 +108,7 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]]) -> tuple[str, 
 
 
 def finish(out: Path, quick_info: dict[str, Any] | None, stab: dict[str, Any], sweep_rows: list[dict[str, Any]],
-           dz: dict[str, Any], unc: dict[str, Any] | None = None) -> None:
+           dz: dict[str, Any], unc: dict[str, Any] | None = None, dec: dict[str, Any] | None = None) -> None:
     """Rewrite report.json and report.md with the opening, the tables and the figures."""
     rep = json.loads((out / "report.json").read_text())
     summary = carrier_sweep.summarise(sweep_rows)
@@ -119,6 +119,8 @@ def finish(out: Path, quick_info: dict[str, Any] | None, stab: dict[str, Any], s
     rep["carrier_sweep"] = {"rows": summary, "dead_zones": dz["rows"],
                             "interval": "range over start positions and step sizes; not a confidence interval"}
     rep["answer"] = {"text": text, "numbers": numbers, "quick": quick_info is not None}
+    if dec is not None:
+        rep["table3_decomposition"] = table3.add_whole(dec, rep.get("table3", {}))
     (out / "report.json").write_text(json.dumps(rep, indent=2, default=float) + "\n")
     body = (out / "report.md").read_text().split("\n")
     head, rest = body[:3], body[3:]
@@ -129,6 +131,8 @@ def finish(out: Path, quick_info: dict[str, Any] | None, stab: dict[str, Any], s
     L += stability.markdown(stab["rows"], stab["verdict"])
     if unc is not None:
         L += uncertainty.markdown(unc)
+    if dec is not None:
+        L += table3.markdown(rep["table3_decomposition"])
     L += carrier_sweep.markdown(summary, rep["meta"].get("sweep_T_s"))
     L += rest
     L += ["## Figures", ""]

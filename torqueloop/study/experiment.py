@@ -39,7 +39,7 @@ from sim_models.variants import PlantSpec
 from torqueloop.sim import experiment, native, report
 from torqueloop.sim.experiment import ExperimentConfig, ModelRun, RtlRun
 from torqueloop.spec.repo import REPO_ROOT
-from torqueloop.study import answer, carrier_sweep, stability, uncertainty
+from torqueloop.study import answer, carrier_sweep, stability, table3, uncertainty
 from torqueloop.study.characterization import inputs_digest, run_study
 from torqueloop.study.engine import Engine
 
@@ -299,6 +299,7 @@ def _run_experiment(plan: ExperimentPlan, term) -> int:
                            inputs_digest(plan.experiment_plant, "model"), engine, say=_say)
     st.characterization["stability"] = stability.summary_rows(stab)
     st.characterization["stability_verdict"] = {"axes": stab["verdict"], "quick": stab["quick"]}
+    dec = table3.run(plan.experiment_plant, plan.laws, plan.t_end_s, engine, say=_say)
     unc = uncertainty.study(uncertainty.QUICK if plan.quick else uncertainty.FULL, plan.experiment_plant,
                             plan.char_dir / ("uncertainty_quick.json" if plan.quick else "uncertainty.json"),
                             inputs_digest(plan.experiment_plant, "model"), engine, say=_say)
@@ -312,7 +313,7 @@ def _run_experiment(plan: ExperimentPlan, term) -> int:
     quick = None if not plan.quick else {"T": plan.t_end_s, "n": len(plan.sweep_hz), "laws": "/".join(plan.sweep_laws),
                                          "Ts": plan.sweep_t_end_s, "nf": len(stability.QUICK.freqs_hz),
                                          "np": len(stability.QUICK.settles) * len(stability.QUICK.orders)}
-    answer.finish(plan.out, quick, stab, json.loads((plan.out / "report.json").read_text())["sweep"], dz, unc)
+    answer.finish(plan.out, quick, stab, json.loads((plan.out / "report.json").read_text())["sweep"], dz, unc, dec)
     print((plan.out / "report.md").read_text(), file=term)
     _say(f"report: {plan.out}/report.md, report.json, PNGs ({time.monotonic() - t0:.0f} s)")
     return 0
