@@ -156,7 +156,7 @@ def markdown(doc: dict[str, Any]) -> list[str]:
 class UncertaintyPlan:
     draws: int = 10
     seed: int = 2026
-    freqs_hz: tuple[float, ...] = (235.0, 509.0, 1111.0, 2444.0, 5431.0)
+    freqs_hz: tuple[float, ...] = (109.0, 235.0, 509.0, 1111.0, 2444.0, 5431.0)
     settle: float | str = 0.3
     quick: bool = False
 
