@@ -28,9 +28,11 @@ def test_orders_cover_the_same_carriers() -> None:
 def test_verdict_names_a_carrier_only_where_every_protocol_agrees() -> None:
     rows = [{"axis": "x", "settle_s": s, "freq_hz": f} for s, f in ((0.3, 1000.0), (1.0, 1100.0), ("converged", 1200.0))]
     rows += [{"axis": "z", "settle_s": s, "freq_hz": f} for s, f in ((0.3, 200.0), (1.0, 600.0), ("converged", None))]
+    rows += [{"axis": "y", "settle_s": s, "freq_hz": 235.0, "kind": "nearest"} for s in (0.3, 1.0)]
     v = verdict(rows)
     assert v["x"]["stable"] and v["x"]["min_hz"] == 1000.0 and v["x"]["max_hz"] == 1200.0
     assert not v["z"]["stable"] and v["z"]["chosen"] == 2
+    assert not v["y"]["stable"], "the grid's edge where nothing crossed is no choice"
 
 
 def test_a_reading_starts_at_the_temperature_the_last_one_left() -> None:

@@ -213,12 +213,14 @@ def _hz(v: float | None) -> str:
 
 def verdict(rows: Sequence[dict[str, Any]], tol_frac: float = 0.25) -> dict[str, Any]:
     """Per axis: the chosen carriers' span over the protocols, and whether
-    the choice survives them (every protocol chose, all within ``tol_frac``
+    the choice survives them (every protocol found a crossing or an
+    on-target point - a "nearest" point is none - all within ``tol_frac``
     of their median, on a log scale: a factor 1.25 either way)."""
     out: dict[str, Any] = {}
     for a in sorted({r["axis"] for r in rows}):
         rr = [r for r in rows if r["axis"] == a]
-        f = [r["freq_hz"] for r in rr if r["freq_hz"] is not None]
+        # a "nearest" point is no crossing: the curve missed the target over the whole grid
+        f = [r["freq_hz"] for r in rr if r["freq_hz"] is not None and r.get("kind", "crossing") != "nearest"]
         if not f:
             out[a] = {"stable": False, "min_hz": None, "max_hz": None, "median_hz": None, "n": len(rr), "chosen": 0}
             continue
