@@ -122,7 +122,9 @@ def run(plant: PlantSpec, draws: int, seed: int, freqs_hz: Sequence[float], sett
     axes = sorted({a for r in res for a in r["axes"]})
     summary = {}
     for a in axes:
-        f = [r["axes"][a]["freq_hz"] for r in res if r["axes"][a]["freq_hz"] is not None]
+        # a "nearest" point is no crossing: the curve missed the target over the whole grid
+        f = [r["axes"][a]["freq_hz"] for r in res
+             if r["axes"][a]["freq_hz"] is not None and r["axes"][a]["kind"] != "nearest"]
         dz = [min(x for x in r["axes"][a]["dead_zone_pct"].values() if x is not None) for r in res
               if r["axes"][a]["dead_zone_pct"] and any(x is not None for x in r["axes"][a]["dead_zone_pct"].values())]
         summary[a] = {"chosen_hz": interval(f), "dead_zone_pct": interval(dz), "no_choice": draws - len(f)}
@@ -143,7 +145,7 @@ def markdown(doc: dict[str, Any]) -> list[str]:
     for k, r in doc["ranges"].items():
         L.append(f"| {k} | {r['low']:g} - {r['high']:g} | {r['applied_as']} ({r['why']}) |")
     L += ["", "| axis | chosen carrier: median [min, max] (Hz) | dead zone: median [min, max] (% duty) | draws with no "
-          "choice |", "|---|---|---|---|"]
+          "crossing on the grid |", "|---|---|---|---|"]
     for a, v in doc["axes"].items():
         c, d = v["chosen_hz"], v["dead_zone_pct"]
         cs = "-" if not c.get("n") else f"{c['median']:.4g} [{c['min']:.4g}, {c['max']:.4g}]"
