@@ -71,7 +71,7 @@ bench: $(STAMP) ## benchmarks that print numbers (QUICK=1: shortened)
 # make characterize PLANT=paper (default lab; lab-no-EFFECT switches one off)
 PLANT ?=
 characterize: $(STAMP) ## the characterisation method (steps 1-8) on the simulated lab bench, 10 seeds, each effect off: build/characterize/
-	$(PY) -m torqueloop.study characterize sim --out-dir build/characterize $(if $(PLANT),--plant $(PLANT),) $(if $(PLANT_FILE),--plant-file $(PLANT_FILE),)
+	$(PY) -m torqueloop.study characterize sim --out-dir build/characterize --stability full --uncertainty full $(if $(PLANT),--plant $(PLANT),) $(if $(PLANT_FILE),--plant-file $(PLANT_FILE),)
 
 firmware: $(STAMP) ## servo firmware: build/firmware/servo/{servo.elf,.bin,_ram.hex,_rom.hex}
 	$(PY) -m torqueloop.flow gen --check

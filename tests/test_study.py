@@ -21,7 +21,7 @@ def test_the_quick_plan_is_the_runs_make_run_quick_does() -> None:
     plan = ExperimentPlan.short(experiment_plant=plant_of("lab-no-brush_drop"))
     rs = runs(plan, Path("char.json"))
     kinds = [r.kind for r in rs]
-    # 3 laws x (RTL arm, model arm, each case) + 3 carriers x P x PW0 on/off
+    # 3 laws x (RTL arm, model arm, each case) + 3 carriers x P x PW0 on/off, one start and step
     assert kinds.count("rtl") == 3 and kinds.count("model") == 3
     assert kinds.count("fast") == 3 * len(CASES) + 3 * 2
     assert kinds[:3] == ["rtl"] * 3, "the long runs go first"
@@ -36,20 +36,28 @@ def test_the_quick_plan_is_the_runs_make_run_quick_does() -> None:
     assert all(r.config.t_end_s == plan.sweep_t_end_s for r in sweep)
 
 
-def test_a_full_plan_sweeps_every_law() -> None:
-    rs = runs(ExperimentPlan(), Path("char.json"))
-    assert sum(r.key[0] == "sweep" for r in rs) == 8 * 3 * 2
+def test_a_full_plan_sweeps_each_carrier_with_its_own_dead_zone_from_three_starts() -> None:
+    pw0 = {f: (int(f) % 97, int(f) % 89) for f in ExperimentPlan().sweep_hz}
+    rs = [r for r in runs(ExperimentPlan(), Path("char.json"), pw0) if r.key[0] == "sweep"]
+    assert len(rs) == 8 * 1 * 2 * 3
+    for r in rs:
+        f, on = r.key[1], r.key[2]
+        assert r.config.pw0_off != on and (not on or r.config.pw0_counts == pw0[f])
+    assert {r.config.start_counts for r in rs} == {(0, 0), (-4200, -4200), (4200, 4200)}
+    assert sum(r.key[0] == "sweep" for r in runs(ExperimentPlan.thorough(), Path("c"), pw0)) == 8 * 2 * 2 * 2 * 3
 
 
 def test_results_are_filed_where_the_report_reads_them() -> None:
     st = report.Study(t_end_s=1.0, target_rad=6.28, laws=["P"])
-    rs = {r.label(): r for r in runs(ExperimentPlan.short(laws=("P",)), Path("c.json"))}
+    plan = ExperimentPlan.short(laws=("P",))
+    rs = {r.label(): r for r in runs(plan, Path("c.json"), {f: (30, 8) for f in plan.sweep_hz})}
     collect(st, rs["model P"], "m")
     collect(st, rs["rtl P"], ("e", "f"))
     collect(st, rs["fast case pw0_off P"], "v")
-    collect(st, rs["fast sweep 50.0 True P"], "s")
+    collect(st, rs["fast sweep 50.0 True P 1.0 0"], "s")
     assert st.model_arm == {"P": "m"} and st.experiment_arm == {"P": "e"} and st.fast_check == {"P": "f"}
-    assert st.cases == {"pw0_off": {"P": "v"}} and st.sweep == [(50.0, True, "P", "s")]
+    assert st.cases == {"pw0_off": {"P": "v"}} and st.sweep[0][:4] == (50.0, True, "P", "s")
+    assert st.sweep[0][4]["x"] == {"pw0_counts": 30, "start_counts": 0, "step_counts": 8400}
     assert isinstance(RunFailed("x"), str)
 
 
@@ -63,3 +71,16 @@ def test_bad_input_is_one_line(argv: list[str], says: str) -> None:
     r = subprocess.run([sys.executable, "-m", "torqueloop.study", *argv], capture_output=True, text=True, timeout=120)
     assert r.returncode != 0 and "Traceback" not in r.stderr, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and says in r.stderr, r.stderr
+
+
+def test_banners_go_to_the_log_and_progress_to_the_terminal(tmp_path, capfd) -> None:
+    import os
+
+    from torqueloop.study.experiment import _say, banners_to
+    with banners_to(tmp_path / "run.log"):
+        os.write(1, b"cocotb banner\n")
+        os.write(2, b"verilator warning\n")
+        _say("1/2 a run (3 s; about 3 s left)")
+    out = capfd.readouterr().out
+    assert "1/2 a run" in out and "banner" not in out
+    assert (tmp_path / "run.log").read_text() == "cocotb banner\nverilator warning\n"

@@ -223,6 +223,13 @@ def main(argv: Sequence[str] | None = None, sim: SimRunner | None = None,
                    help="pins from the RTL in simulation (default) or from the cores' documented waveform")
     p.add_argument("--simulator", default="verilator", choices=("verilator", "icarus"))
     p.add_argument("--axes", nargs="+", default=["x", "z"])
+    p.add_argument("--stability", choices=("full", "quick", "off"), default="off",
+                   help="the chosen carrier under each bench protocol (settle, sweep order); make characterize: full [off]")
+    p.add_argument("--uncertainty", choices=("full", "quick", "off"), default="off",
+                   help="the chosen carrier under the plant's parameter uncertainty (Monte Carlo); "
+                        "make characterize: full [off]")
+    p.add_argument("--jobs", type=int, default=2, help="sweeps of the stability and uncertainty tables run in "
+                                                       "parallel [2]")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
     p.set_defaults(fn=lambda args: check_sim_args(args) or (sim or _no_sim)(args))
     p = sub.add_parser("step5", help="candidate frequencies from a frequency sweep")

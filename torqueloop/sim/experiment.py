@@ -87,6 +87,9 @@ class ExperimentConfig:
     char_config: str | None = None      # characterisation file, loaded as `torqueloop config load` does
     pwm_hz: tuple[float, ...] | None = None   # carriers set after the file (None: the file's, else the paper's)
     pw0_off: bool = False               # PW0 set to 0 after the file: no dead-zone compensation
+    pw0_counts: tuple[int, ...] | None = None   # PW0 per axis set after the file (a dead zone measured elsewhere)
+    start_counts: tuple[int, ...] = (0, 0)  # fast path: a move to here first (for start_s), then the step from it
+    start_s: float = 2.0
     record_s: float = 0.002             # grid of the plant trace (plots)
     heartbeat_s: float = 0.25           # HEARTBEAT, as the host tool keeps the link watchdog fed
     brake: bool = True                  # off-phase: brake (slow decay), as pwm_torque drives the IBT-2
@@ -120,6 +123,8 @@ class ExperimentConfig:
         for ax in AXES:
             if self.pwm_hz is not None:
                 out[ax]["FDIV"] = divider_for(self.pwm_hz[ax])
+            if self.pw0_counts is not None:
+                out[ax]["PW0"] = int(self.pw0_counts[ax])
             if self.pw0_off:
                 out[ax]["PW0"] = 0
             if self.tuned is not None:
@@ -446,8 +451,11 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = (), edges: bool =
         a.reset(0, 0)
         axes.append(a)
     n = int(round(cfg.t_end_s * 1e6 / cfg.period_us)) + 1
+    # a start away from 0: the same law moves there first, so the step begins where (and from the side) it arrived
+    n_pre = int(round(cfg.start_s * 1e6 / cfg.period_us)) if any(cfg.start_counts) else 0
     out = {k: np.zeros((n, 2)) for k in ("pos", "vel", "cmd", "err", "true", "q", "q2")}
     ticks_per_clk = round(1.0 / (CLK_HZ * plant.axes[0].tick))
+    q0, q20 = [0.0, 0.0], [0.0, 0.0]
     w0 = time.monotonic()
     edge_clk, edge_gap = [0, 0], [0, 0]      # the decoder's last edge and the interval before it (VEL_MODE 1)
     # the edge-timestamp speed (VEL_MODE 1, a tuned setting) needs the decoder's edge times, which only
@@ -459,9 +467,9 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = (), edges: bool =
             at = start + int(e.t * CLK_HZ)
             edge_gap[e.axis], edge_clk[e.axis] = at - edge_clk[e.axis], at
 
-    for k in range(n):
-        ts = k * period
-        prev = (k - 1) * period if k else 0
+    for kk in range(n_pre + n):
+        ts, k = kk * period, kk - n_pre
+        prev = (kk - 1) * period if kk else 0
         if step_edges:
             run_until(plant, channels, prev, ts, CLK_HZ, on_edges)
         else:
@@ -469,18 +477,23 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = (), edges: bool =
                            [[((c - prev) * ticks_per_clk, p) for c, p in pin_changes(ch, prev, ts)]
                             for ch in channels])
         for a in AXES:
+            if kk == 0 and n_pre:
+                axes[a].move(cfg.start_counts[a], False)
             if k == 0:
-                axes[a].move(cfg.target_counts, False)
+                axes[a].move(cfg.start_counts[a] + cfg.target_counts, False)
+                q0[a], q20[a] = plant.charge(a), plant.current_sq_integral(a)   # the step's own current
             pos = plant.count(a)
             cmd = axes[a].step(pos, edge_clk[a] & 0xFFFF_FFFF, ts & 0xFFFF_FFFF, interval=min(edge_gap[a], 0xFFFF_FFFF))
             channels[a].load(PwmSetting(cmd=cmd, **setting[a]))
-            out["pos"][k, a] = pos
+            if k < 0:
+                continue
+            out["pos"][k, a] = pos - cfg.start_counts[a]
             out["vel"][k, a] = axes[a].vel_q8 / 256
             out["cmd"][k, a] = cmd
-            out["err"][k, a] = cfg.target_counts - pos
-            out["true"][k, a] = plant.screw_angle(a)
-            out["q"][k, a] = plant.charge(a)
-            out["q2"][k, a] = plant.current_sq_integral(a)
+            out["err"][k, a] = cfg.start_counts[a] + cfg.target_counts - pos
+            out["true"][k, a] = plant.screw_angle(a) - cfg.start_counts[a] * 2 * math.pi / COUNTS_PER_REV
+            out["q"][k, a] = plant.charge(a) - q0[a]
+            out["q2"][k, a] = plant.current_sq_integral(a) - q20[a]
     rad = 2 * math.pi / COUNTS_PER_REV
     t = np.arange(n) * cfg.period_us * 1e-6
     traj = Trajectory(t, out["pos"] * rad, out["vel"] * rad, out["cmd"], out["err"] * rad, out["true"],

@@ -73,6 +73,9 @@ def axis_metrics(tr: Trajectory, target_rad: float, a: int, resistance_ohm: floa
         "steady_state_error_counts": m.steady_state_error / RAD_PER_COUNT,
         "tracking_rmse_rad": m.rmse,
     }
+    if tr.true_pos is not None:     # at the screw, beyond the gearbox's backlash the encoder cannot see
+        out["screw_steady_state_error_counts"] = (step_metrics(tr.t, tr.true_pos[:, a], target_rad).steady_state_error
+                                                  / RAD_PER_COUNT)
     if tr.i2 is not None and tr.charge is not None and resistance_ohm is not None:
         out["copper_loss_J"] = resistance_ohm * float(tr.i2[-1, a] - tr.i2[0, a])
         k = int(len(tr.t) * 0.75)
@@ -152,9 +155,10 @@ def build(st: Study) -> dict[str, Any]:
             if law in st.model_arm:
                 row["against_model_arm"] = compare(st.model_arm[law].traj, r.traj)
             rep["cases"][name][law] = row
-    for f, pw0, law, r in st.sweep:
-        for ax, mm in run_metrics(r, st.target_rad).items():
-            rep["sweep"].append({"freq_hz": f, "pw0": pw0, "law": law, "axis": ax, **mm})
+    for f, pw0, law, r, *extra in st.sweep:      # extra: per-axis keys of the point ({x: {...}, z: {...}})
+        ex = extra[0] if extra else {}
+        for ax, mm in run_metrics(r, ex.get("target_rad", st.target_rad)).items():
+            rep["sweep"].append({"freq_hz": f, "pw0": pw0, "law": law, "axis": ax, **ex.get(ax, {}), **mm})
     rep["meta"]["sweep_T_s"] = st.sweep_t_end_s
     return rep
 

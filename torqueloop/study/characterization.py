@@ -41,6 +41,8 @@ from torqueloop.characterize.simbench import (LabBench, Waveforms, duty_settings
                                               record_frequency_sweep, simulate_lab)
 from torqueloop.spec.pwm import carrier_hz, divider_for
 from torqueloop.spec.repo import REPO_ROOT
+from torqueloop.study import stability, uncertainty
+from torqueloop.study.engine import Engine
 
 #: extra duty sweeps of the study: the paper's range ends, its two optima, and the carriers above
 LINEARITY_FREQS_HZ = (50.0, 200.0, 450.0, 2000.0, 24_400.0)
@@ -117,7 +119,9 @@ def crossings(r: MotorResult) -> list[float]:
 
 def run_study(out: Path, plant: PlantSpec, seeds: int = 10, axes: Sequence[str] = ("x", "z"),
               source: str = "rtl", sim: str = "verilator", th: Thresholds = Thresholds(),
-              ablation: bool = True, linearity_freqs: Sequence[float] = LINEARITY_FREQS_HZ) -> int:
+              ablation: bool = True, linearity_freqs: Sequence[float] = LINEARITY_FREQS_HZ,
+              stability_plan: "stability.StabilityPlan | None" = None,
+              uncertainty_plan: "uncertainty.UncertaintyPlan | None" = None, engine: Engine = Engine()) -> int:
     """The whole study (module docstring).  Returns the exit status of the
     lab's session (0: every axis passed and the configuration was written)."""
     t0 = time.monotonic()
@@ -134,6 +138,16 @@ def run_study(out: Path, plant: PlantSpec, seeds: int = 10, axes: Sequence[str] 
     status = conclude(first, out / "data", out / "characterization.json", out / "plots", th)
     if status == 0:
         (out / "inputs.sha256").write_text(inputs_digest(plant, source) + "\n")
+
+    # 1b. the chosen carrier under each bench protocol (pins: the cores' documented waveform)
+    stab = None
+    if stability_plan is not None:
+        stab = stability.study(stability_plan, plant, out / "stability.json", inputs_digest(plant, "model"),
+                               engine, say=_say)
+    unc = None
+    if uncertainty_plan is not None:
+        unc = uncertainty.study(uncertainty_plan, plant, out / "uncertainty.json", inputs_digest(plant, "model"),
+                                engine, say=_say)
 
     # 2. repeatability over the instrument noise; the duty sweeps the seeds
     # will ask for are captured first, in one RTL run
@@ -171,8 +185,18 @@ def run_study(out: Path, plant: PlantSpec, seeds: int = 10, axes: Sequence[str] 
             _say(f"{eff} off: " + ", ".join(f"{a} {_brief(r)}" for a, r in rs.items()))
 
     doc = _results(plant, seeds, source, bench, studies, time.monotonic() - t0)
-    (out / "results.json").write_text(json.dumps(doc, indent=2, sort_keys=True) + "\n")
-    (out / "results.md").write_text(_markdown(doc))
+    md = _markdown(doc)
+    if stab is not None:
+        doc["stability"] = stability.summary_rows(stab)
+        doc["stability_verdict"] = stab["verdict"]
+        md += "\n" + "\n".join(stability.markdown(stab["rows"], stab["verdict"]))
+    if unc is not None:
+        doc["uncertainty"] = {k: v for k, v in unc.items() if k != "runs"}
+        doc["uncertainty"]["instrument_noise"] = {a: {"chosen_hz": d["chosen_hz"], "pw0_pct": d["pw0_pct"]}
+                                                  for a, d in doc["axes"].items()}
+        md += "\n" + "\n".join(uncertainty.markdown(unc))
+    (out / "results.json").write_text(json.dumps(doc, indent=2, sort_keys=True, default=float) + "\n")
+    (out / "results.md").write_text(md)
     _plot_effects(out / "plots", studies)
     _say(f"wrote {out / 'results.json'}, {out / 'results.md'} ({doc['wall_s']:.0f} s)")
     return status

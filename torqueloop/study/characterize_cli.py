@@ -13,14 +13,20 @@ from typing import Sequence
 
 from torqueloop.characterize import command
 from torqueloop.characterize.command import EXIT_ERROR, EXIT_FAIL, EXIT_NEED_SWEEP, EXIT_OK  # noqa: F401
+from torqueloop.study import stability, uncertainty
 from torqueloop.study.characterization import LINEARITY_FREQS_HZ, run_study
+from torqueloop.study.engine import Engine
 
 
 def run_sim(args: argparse.Namespace) -> int:
     """``characterize sim`` (arguments checked by the command)."""
     return run_study(Path(args.out_dir), args.plant, seeds=args.seeds, axes=args.axes,
                      source=args.source, sim=args.simulator, th=args.thresholds, ablation=args.ablation,
-                     linearity_freqs=LINEARITY_FREQS_HZ if args.linearity else ())
+                     linearity_freqs=LINEARITY_FREQS_HZ if args.linearity else (),
+                     stability_plan={"full": stability.FULL, "quick": stability.QUICK, "off": None}[args.stability],
+                     uncertainty_plan={"full": uncertainty.FULL, "quick": uncertainty.QUICK,
+                                       "off": None}[args.uncertainty],
+                     engine=Engine(max(1, args.jobs)))
 
 
 def main(argv: Sequence[str] | None = None) -> int:

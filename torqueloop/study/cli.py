@@ -34,6 +34,9 @@ def experiment(argv: Sequence[str]) -> int:
     ap = argparse.ArgumentParser(prog="torqueloop-study experiment", description=experiment_study.__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="a short version for a first look (make run QUICK=1)")
+    ap.add_argument("--thorough", action="store_true",
+                    help="the carrier sweep as the question needs it: PD and PID at T = 40 s, two step sizes, "
+                         "three start positions (hours on 2 cores)")
     ap.add_argument("--t-end", type=float, default=None, help="T of eq. (26), s [40; quick 2]")
     ap.add_argument("--sweep-t-end", type=float, default=None, help="T of each sweep run, s [10; quick 1]")
     ap.add_argument("--laws", nargs="+", default=list(LAWS), choices=LAWS)
@@ -58,7 +61,9 @@ def experiment(argv: Sequence[str]) -> int:
         kw["t_end_s"] = a.t_end
     if a.sweep_t_end is not None:
         kw["sweep_t_end_s"] = a.sweep_t_end
-    plan = ExperimentPlan.short(**kw) if a.quick else ExperimentPlan(**kw)
+    if a.quick and a.thorough:
+        return _refuse("experiment: --quick and --thorough exclude each other")
+    plan = ExperimentPlan.short(**kw) if a.quick else ExperimentPlan.thorough(**kw) if a.thorough else ExperimentPlan(**kw)
     try:
         plan.check()
     except ValueError as e:

@@ -27,7 +27,9 @@ from __future__ import annotations
 import json
 import math
 import os
+import contextlib
 import pickle
+import sys
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -37,6 +39,7 @@ from sim_models.variants import PlantSpec
 from torqueloop.sim import experiment, native, report
 from torqueloop.sim.experiment import ExperimentConfig, ModelRun, RtlRun
 from torqueloop.spec.repo import REPO_ROOT
+from torqueloop.study import answer, carrier_sweep, stability, table3, uncertainty
 from torqueloop.study.characterization import inputs_digest, run_study
 from torqueloop.study.engine import Engine
 
@@ -59,7 +62,11 @@ class ExperimentPlan:
     sweep_t_end_s: float = 10.0           # T of each sweep run
     laws: tuple[str, ...] = LAWS
     sweep_hz: tuple[float, ...] = SWEEP_HZ
-    sweep_laws: tuple[str, ...] = LAWS
+    sweep_laws: tuple[str, ...] = ("PD",)
+    #: each sweep point's step sizes and start positions, in screw turns (a start away from 0 is reached by a
+    #: move under the same law first, so the step begins from where, and the side from which, it arrived)
+    sweep_steps_turns: tuple[float, ...] = (1.0,)
+    sweep_starts_turns: tuple[float, ...] = (0.0, -0.5, 0.5)
     model_plant: PlantSpec = PlantSpec("paper")
     experiment_plant: PlantSpec = PlantSpec("lab")
     char_dir: Path = REPO_ROOT / "build" / "characterize"
@@ -74,9 +81,16 @@ class ExperimentPlan:
 
     @classmethod
     def short(cls, **kw) -> "ExperimentPlan":
-        """A first look in a few minutes: T = 2 s, a 3-carrier sweep of P at 1 s."""
+        """A first look in a few minutes: T = 2 s, a 3-carrier sweep of P at 1 s from one start."""
         return cls(**{"t_end_s": 2.0, "sweep_t_end_s": 1.0, "sweep_hz": QUICK_SWEEP_HZ, "sweep_laws": ("P",),
-                      "quick": True, **kw})
+                      "sweep_starts_turns": (0.0,), "quick": True, **kw})
+
+    @classmethod
+    def thorough(cls, **kw) -> "ExperimentPlan":
+        """The sweep as the question needs it (``--thorough``, hours on 2 cores): PD and PID at T = 40 s, two
+        step sizes, three start positions."""
+        return cls(**{"sweep_t_end_s": 40.0, "sweep_laws": ("PD", "PID"), "sweep_steps_turns": (0.25, 1.0),
+                      "sweep_starts_turns": (0.0, -0.5, 0.5), **kw})
 
     def check(self) -> None:
         if self.t_end_s <= 0 or self.sweep_t_end_s <= 0:
@@ -111,8 +125,40 @@ class RunFailed(str):
 Result = Union[RunFailed, ModelRun, tuple[RtlRun, ModelRun]]
 
 
+#: the terminal while the simulators' output goes to the run's log (:func:`banners_to`)
+_TERM = None
+
+
 def _say(msg: str) -> None:
-    print(f"[run] {msg}", flush=True)
+    print(f"[run] {msg}", file=_TERM or sys.stdout, flush=True)
+
+
+@contextlib.contextmanager
+def banners_to(log: Path):
+    """Send everything written to stdout and stderr - the simulators' and
+    make's banners, in this process and the pool's workers forked from it -
+    to ``log``; :func:`_say`'s progress lines still reach the terminal."""
+    global _TERM
+    log.parent.mkdir(parents=True, exist_ok=True)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    term = os.fdopen(os.dup(1), "w", buffering=1)
+    with open(log, "ab") as fh:
+        os.dup2(fh.fileno(), 1)
+        os.dup2(fh.fileno(), 2)
+    _TERM = term
+    try:
+        yield term
+    finally:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        os.close(saved[0])
+        os.close(saved[1])
+        _TERM = None
+        term.close()
 
 
 def characterization(plan: ExperimentPlan) -> Path:
@@ -133,8 +179,9 @@ def characterization(plan: ExperimentPlan) -> Path:
     return cfg
 
 
-def runs(plan: ExperimentPlan, char: Path) -> list[Run]:
-    """Every run of the plan, the long ones (RTL) first."""
+def runs(plan: ExperimentPlan, char: Path, pw0_at: dict[float, tuple[int, int]] | None = None) -> list[Run]:
+    """Every run of the plan, the long ones (RTL) first; ``pw0_at``: the
+    sweep's PW0 per carrier (None: the characterisation file's at every carrier)."""
     base = ExperimentConfig(t_end_s=plan.t_end_s, progress=True)
     exp = replace(base, plant=plan.experiment_plant, char_config=str(char))
     out = [Run("rtl", (law,), replace(exp, law=law)) for law in plan.laws]
@@ -145,9 +192,14 @@ def runs(plan: ExperimentPlan, char: Path) -> list[Run]:
     for f in plan.sweep_hz:
         for law in plan.sweep_laws:
             for pw0 in (True, False):
-                out.append(Run("fast", ("sweep", f, pw0, law),
-                               replace(exp, law=law, t_end_s=plan.sweep_t_end_s, pwm_hz=(f, f), pw0_off=not pw0,
-                                       progress=False)))
+                for step in plan.sweep_steps_turns:
+                    for start in plan.sweep_starts_turns:
+                        s0 = round(start * experiment.COUNTS_PER_REV)
+                        out.append(Run("fast", ("sweep", f, pw0, law, step, s0),
+                                       replace(exp, law=law, t_end_s=plan.sweep_t_end_s, pwm_hz=(f, f),
+                                               pw0_off=not pw0, pw0_counts=None if pw0_at is None else pw0_at[f],
+                                               step_rad=step * 2 * math.pi, start_counts=(s0, s0),
+                                               progress=False)))
     return out
 
 
@@ -178,41 +230,62 @@ def collect(st: report.Study, run: Run, result: Result) -> None:
     elif run.key[0] == "case":
         st.cases.setdefault(run.key[1], {})[run.key[2]] = result              # type: ignore[assignment]
     else:
-        st.sweep.append((run.key[1], run.key[2], run.key[3], result))         # type: ignore[arg-type]
+        cfg = run.config
+        extra = {"target_rad": cfg.target_counts * 2 * math.pi / experiment.COUNTS_PER_REV}
+        for i, ax in enumerate(("x", "z")):
+            pw0 = 0 if cfg.pw0_off else cfg.pw0_counts[i] if cfg.pw0_counts is not None else cfg.board()[i]["PW0"]
+            extra[ax] = {"pw0_counts": pw0, "start_counts": cfg.start_counts[i],
+                         "step_counts": cfg.target_counts}
+        st.sweep.append((run.key[1], run.key[2], run.key[3], result, extra))  # type: ignore[arg-type]
 
 
 def run_experiment(plan: ExperimentPlan) -> int:
-    """The whole study (module docstring); 0 when the report was written."""
+    """The whole study (module docstring); 0 when the report was written.
+    The simulators' output goes to ``OUT/run.log``; the terminal gets one
+    progress line per run."""
     plan.check()
+    log = plan.out / "run.log"
+    log.parent.mkdir(parents=True, exist_ok=True)
+    log.write_text("")
+    _say(f"the simulators' output (cocotb, Verilator, make) goes to {log}")
+    with banners_to(log) as term:
+        return _run_experiment(plan, term)
+
+
+def _run_experiment(plan: ExperimentPlan, term) -> int:
     t0 = time.monotonic()
     char = characterization(plan)
     _say("building the board harness and the firmware ...")
     native.build()
     experiment.firmware_image()
 
-    jobs = runs(plan, char)
     engine = plan.engine
+    dz = carrier_sweep.dead_zones(plan.experiment_plant, plan.sweep_hz, plan.char_dir / "dead_zones.json",
+                                  inputs_digest(plan.experiment_plant, "model"), engine, say=_say)
+    jobs = runs(plan, char, dz["pw0"])
     _say(f"{len(jobs)} runs on the {engine.name}: {len(plan.laws)} x experiment arm (RTL, T = {plan.t_end_s:g} s, "
          f"then its implementation check), model arm and {len(CASES)} cases per law, "
          f"{sum(j.key[0] == 'sweep' for j in jobs if j.kind == 'fast')} sweep runs (T = {plan.sweep_t_end_s:g} s)")
     st = report.Study(t_end_s=plan.t_end_s, target_rad=jobs[0].config.target_counts * 2 * math.pi / experiment.COUNTS_PER_REV,
                       laws=list(plan.laws), sweep_t_end_s=plan.sweep_t_end_s,
                       case_labels={k: v[0] for k, v in CASES.items()})
-    done, failed = 0, []
+    done, failed, t_pool = 0, [], time.monotonic()
     for _, (run, result, dt) in engine.map_unordered(execute, jobs):
         done += 1
         if isinstance(result, RunFailed):
             failed.append(f"{run.label()}: {result}")
             _say(f"{done}/{len(jobs)} {run.label()} FAILED after {dt:.0f} s: {result}")
             continue
-        _say(f"{done}/{len(jobs)} {run.label()} ({dt:.0f} s; {time.monotonic() - t0:.0f} s so far)")
+        el = time.monotonic() - t_pool
+        _say(f"{done}/{len(jobs)} {run.label()} ({dt:.0f} s; {time.monotonic() - t0:.0f} s so far, "
+             f"about {el / done * (len(jobs) - done):.0f} s left)")
         collect(st, run, result)
     if failed:
         for f in failed:
             _say(f)
         _say(f"{len(failed)} of {len(jobs)} runs failed; no report written")
         return 1
-    st.sweep.sort(key=lambda r: (r[0], not r[1], r[2]))
+    st.sweep.sort(key=lambda r: (r[0], not r[1], r[2], r[4]["x"]["step_counts"], r[4]["x"]["start_counts"]))
     cfgdoc = json.loads(char.read_text())
     st.characterization = {
         "config": str(char.relative_to(REPO_ROOT) if char.is_relative_to(REPO_ROOT) else char),
@@ -221,6 +294,15 @@ def run_experiment(plan: ExperimentPlan) -> int:
                  for k, v in cfgdoc["axes"].items()},
         "plots": [str(p) for p in sorted((plan.char_dir / "plots").glob("*.png"))],
     }
+    stab = stability.study(stability.QUICK if plan.quick else stability.FULL, plan.experiment_plant,
+                           plan.char_dir / ("stability_quick.json" if plan.quick else "stability.json"),
+                           inputs_digest(plan.experiment_plant, "model"), engine, say=_say)
+    st.characterization["stability"] = stability.summary_rows(stab)
+    st.characterization["stability_verdict"] = {"axes": stab["verdict"], "quick": stab["quick"]}
+    dec = table3.run(plan.experiment_plant, plan.laws, plan.t_end_s, engine, say=_say)
+    unc = uncertainty.study(uncertainty.QUICK if plan.quick else uncertainty.FULL, plan.experiment_plant,
+                            plan.char_dir / ("uncertainty_quick.json" if plan.quick else "uncertainty.json"),
+                            inputs_digest(plan.experiment_plant, "model"), engine, say=_say)
     st.meta = {"model_plant": plan.model_plant.label, "experiment_plant": plan.experiment_plant.label,
                "quick": plan.quick, "jobs": plan.jobs, "engine": engine.name, "wall_s_total": round(time.monotonic() - t0, 1)}
     plan.out.mkdir(parents=True, exist_ok=True)
@@ -228,6 +310,10 @@ def run_experiment(plan: ExperimentPlan) -> int:
     with open(plan.out / "data" / "runs.pkl", "wb") as fh:      # for re-scoring without re-simulating
         pickle.dump(st, fh)
     report.write(st, plan.out)
-    print((plan.out / "report.md").read_text())
+    quick = None if not plan.quick else {"T": plan.t_end_s, "n": len(plan.sweep_hz), "laws": "/".join(plan.sweep_laws),
+                                         "Ts": plan.sweep_t_end_s, "nf": len(stability.QUICK.freqs_hz),
+                                         "np": len(stability.QUICK.settles) * len(stability.QUICK.orders)}
+    answer.finish(plan.out, quick, stab, json.loads((plan.out / "report.json").read_text())["sweep"], dz, unc, dec)
+    print((plan.out / "report.md").read_text(), file=term)
     _say(f"report: {plan.out}/report.md, report.json, PNGs ({time.monotonic() - t0:.0f} s)")
     return 0

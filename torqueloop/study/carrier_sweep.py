@@ -1,0 +1,182 @@
+# SPDX-License-Identifier: MIT
+"""The title question's sweep without the confound: at each carrier the
+dead zone measured at that carrier, not the one measured at the chosen
+carrier carried across.
+
+* :func:`dead_zones` - the paper's dead zone (raise the pulse until the
+  stage moves, lower it until it stops:
+  :func:`torqueloop.characterize.simbench.motion_dead_zones`) per axis and
+  carrier, as PW0 counts.  One PW0 per axis drives both directions; it is the
+  lower of the two directions' stop duties (a PW0 above either would push
+  that direction past its dead zone), rounded up to whole counts as step 8
+  rounds the intercept.
+* :func:`summarise` - the sweep's points grouped by (carrier, PW0, law, axis):
+  the median and the range over the points' start positions and step sizes.
+  That range is the spread across start positions and step sizes of one
+  deterministic plant, not a confidence interval: nothing is sampled.
+* :func:`markdown`, :func:`plot` - the report's table (audible carriers
+  marked) and figure (every point drawn, the median joined; the y range
+  shared between the axes where a trend is read).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import statistics
+import time
+from pathlib import Path
+from typing import Any, Sequence
+
+from sim_models.variants import PlantSpec
+from torqueloop.characterize.config import CLK_HZ, PWM_BITS
+from torqueloop.characterize.simbench import motion_dead_zones
+from torqueloop.spec.pwm import carrier_hz, divider_for, full_scale
+from torqueloop.study.engine import Engine
+
+#: carriers below this are in the audible band (20 Hz - 20 kHz)
+AUDIBLE_HZ = 20_000.0
+AXES = ("x", "z")
+
+
+def pw0_counts(stop_pcts: Sequence[float]) -> int:
+    """One PW0 for both directions: the lower stop duty, rounded up to counts."""
+    return int(math.ceil(min(stop_pcts) / 100.0 * full_scale(PWM_BITS) - 1e-9))
+
+
+def _dz_job(job: tuple[PlantSpec, str, float]) -> dict[str, Any]:
+    plant, axis, f = job
+    t0 = time.process_time()
+    dz = motion_dead_zones(plant, [f], axes=(axis,))
+    return {"axis": axis, "freq_hz": f, "board_hz": carrier_hz(divider_for(f, CLK_HZ, PWM_BITS), CLK_HZ, PWM_BITS),
+            "stop_pct": {("forward" if d.direction > 0 else "reverse"): d.stop_pct for d in dz},
+            "start_pct": {("forward" if d.direction > 0 else "reverse"): d.start_pct for d in dz},
+            "pw0_counts": pw0_counts([d.stop_pct for d in dz]), "cpu_s": time.process_time() - t0}
+
+
+def dead_zones(plant: PlantSpec, freqs_hz: Sequence[float], cache: Path, digest: str, engine: Engine = Engine(),
+               say=print) -> dict[str, Any]:
+    """``{"rows": [...], "pw0": {freq: (x counts, z counts)}}``, reused from
+    ``cache`` while the inputs' digest and the carriers are unchanged."""
+    digest = hashlib.sha256((digest + Path(__file__).read_text()).encode()).hexdigest()
+    key = repr((plant.label, tuple(freqs_hz)))
+    if cache.exists():
+        try:
+            old = json.loads(cache.read_text())
+        except ValueError:
+            old = {}
+        if old.get("digest") == digest and old.get("key") == key:
+            say(f"dead zones per carrier: {cache.name} is current; reused")
+            return old | {"pw0": {float(k): tuple(v) for k, v in old["pw0"].items()}}
+    jobs = [(plant, a, float(f)) for f in freqs_hz for a in AXES]
+    say(f"dead zones per carrier: {len(jobs)} motion ramps (raise until the stage moves, lower until it stops) "
+        f"on the {engine.name}")
+    rows, t0 = [], time.monotonic()
+    for k, (_, r) in enumerate(engine.map_unordered(_dz_job, jobs), 1):
+        rows.append(r)
+        el = time.monotonic() - t0
+        say(f"dead zone {k}/{len(jobs)}: axis {r['axis']} at {r['board_hz']:.4g} Hz: PW0 {r['pw0_counts']} counts "
+            f"({el:.0f} s so far, about {el / k * (len(jobs) - k):.0f} s left)")
+    rows.sort(key=lambda r: (r["freq_hz"], r["axis"]))
+    pw0 = {float(f): tuple(next(r["pw0_counts"] for r in rows if r["freq_hz"] == f and r["axis"] == a) for a in AXES)
+           for f in freqs_hz}
+    doc = {"digest": digest, "key": key, "rows": rows, "pw0": {str(k): list(v) for k, v in pw0.items()},
+           "cpu_s": sum(r["cpu_s"] for r in rows)}
+    cache.parent.mkdir(parents=True, exist_ok=True)
+    cache.write_text(json.dumps(doc, indent=1) + "\n")
+    return doc | {"pw0": pw0}
+
+
+METRICS = ("steady_state_error_counts", "screw_steady_state_error_counts", "overshoot_pct", "settling_time_s",
+           "copper_loss_J", "current_ripple_A_rms")
+
+
+def summarise(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Group the sweep's rows by (carrier, PW0 on/off, law, axis): per metric
+    the median and [min, max] over start positions and step sizes (|error|
+    for the errors)."""
+    groups: dict[tuple, list[dict[str, Any]]] = {}
+    for r in rows:
+        groups.setdefault((r["freq_hz"], r["pw0"], r["law"], r["axis"]), []).append(r)
+    out = []
+    for (f, pw0, law, axis), rr in sorted(groups.items(), key=lambda kv: (kv[0][2], kv[0][3], not kv[0][1], kv[0][0])):
+        row: dict[str, Any] = {"freq_hz": f, "pw0": pw0, "law": law, "axis": axis, "points": len(rr),
+                               "pw0_counts": rr[0].get("pw0_counts"), "audible": f < AUDIBLE_HZ,
+                               "interval": "range over start positions and step sizes (not a confidence interval)"}
+        for m in METRICS:
+            v = [abs(x[m]) if "error" in m else x[m] for x in rr if x.get(m) is not None]
+            row[m] = None if not v else {"median": statistics.median(v), "min": min(v), "max": max(v)}
+        out.append(row)
+    return out
+
+
+def _cell(d: dict[str, Any] | None, spec: str) -> str:
+    if d is None:
+        return "-"
+    if len({round(d["min"], 9), round(d["max"], 9)}) == 1:
+        return format(d["median"], spec)
+    return f"{format(d['median'], spec)} [{format(d['min'], spec)}, {format(d['max'], spec)}]"
+
+
+def markdown(summary: Sequence[dict[str, Any]], t_end_s: float | None) -> list[str]:
+    if not summary:
+        return []
+    n = max(r["points"] for r in summary)
+    L = [f"## The title question: the PWM carrier and the closed loop, each carrier with its own dead zone", "",
+         f"Fast path, experiment plant, T = {t_end_s:g} s. At each carrier PW0 is the paper's dead zone measured at "
+         f"that carrier (the duty below which the stage stops), or off. Each cell: the median and, in brackets, the "
+         f"range over the {n} start positions and step sizes of the point - the spread of one deterministic plant "
+         f"over its set-up, not a confidence interval. Errors are |steady-state error| in encoder counts, at the "
+         f"encoder and at the screw (beyond the gearbox's backlash). Carriers marked * are audible (below 20 kHz).",
+         "", "| law | axis | carrier (Hz) | PW0 (counts) | error at the encoder | error at the screw | overshoot (%) | "
+         "copper loss (J) | current ripple (A rms) |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in summary:
+        L.append(f"| {r['law']} | {r['axis']} | {r['freq_hz']:.4g}{' *' if r['audible'] else ''} | "
+                 f"{r['pw0_counts'] if r['pw0'] else 'off'} | {_cell(r['steady_state_error_counts'], '.1f')} | "
+                 f"{_cell(r['screw_steady_state_error_counts'], '.1f')} | {_cell(r['overshoot_pct'], '.1f')} | "
+                 f"{_cell(r['copper_loss_J'], '.2f')} | {_cell(r['current_ripple_A_rms'], '.3f')} |")
+    return L + [""]
+
+
+def plot(summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]], path: Path) -> None:
+    """Every point's |error| at the encoder and copper loss against the
+    carrier, PW0 at the carrier and off, one colour per law; the medians
+    joined; the audible band shaded; y shared between the axes."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    keys = (("steady_state_error_counts", "|steady-state error| at the encoder (counts)"),
+            ("screw_steady_state_error_counts", "|steady-state error| at the screw (counts)"),
+            ("copper_loss_J", "copper loss (J)"))
+    laws = sorted({r["law"] for r in rows})
+    fig, axs = plt.subplots(len(keys), 2, figsize=(12, 11), sharex=True, sharey="row")
+    for i, axis in enumerate(AXES):
+        for j, (k, label) in enumerate(keys):
+            p = axs[j, i]
+            p.axvspan(20.0, AUDIBLE_HZ, color="0.93", lw=0)
+            for c, law in enumerate(laws):
+                for pw0, mk in ((True, "o"), (False, "x")):
+                    pts = [r for r in rows if r["axis"] == axis and r["law"] == law and r["pw0"] == pw0
+                           and r.get(k) is not None]
+                    if not pts:
+                        continue
+                    p.scatter([r["freq_hz"] for r in pts], [abs(r[k]) for r in pts], marker=mk, s=18,
+                              color=f"C{c}", alpha=0.7)
+                    med = [s for s in summary if s["axis"] == axis and s["law"] == law and s["pw0"] == pw0 and s[k]]
+                    p.plot([s["freq_hz"] for s in med], [s[k]["median"] for s in med], "-" if pw0 else ":",
+                           color=f"C{c}", label=f"{law}, PW0 {'at the carrier' if pw0 else 'off'}")
+            p.set_xscale("log")
+            if i == 0:
+                p.set_ylabel(label)
+            if j == 0:
+                p.set_title(f"axis {axis} (grey: audible band)")
+                if p.get_legend_handles_labels()[0]:
+                    p.legend(fontsize=7)
+    for p in axs[-1]:
+        p.set_xlabel("PWM carrier (Hz)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
