@@ -24,6 +24,7 @@ from pathlib import Path
 
 import pytest
 
+from simproc import run_cli as tl
 from simproc import sim_board
 from torqueloop import cli
 from torqueloop.host import serve as hserve
@@ -60,20 +61,6 @@ def user_env(env, monkeypatch):
         monkeypatch.setenv(k, env[k])
     monkeypatch.delenv(hserve.SERVER_ENV, raising=False)
     return env
-
-
-def tl(url: str, capsys, *args: str, rc: int = 0) -> tuple[dict | None, str]:
-    """One command as the user types it (with --json), in this process."""
-    capsys.readouterr()
-    try:
-        got = cli.main(["-u", url, "--json", *args])
-    except SystemExit as e:
-        got = e.code
-    out, err = capsys.readouterr()
-    assert got == rc, f"torqueloop {' '.join(args)} -> {got}\n{out}\n{err}"
-    if rc:
-        assert "Traceback" not in err
-    return (json.loads(out.strip().splitlines()[-1]) if out.strip() else None), err
 
 
 def test_bring_up_as_a_user_would(url, user_env, capsys) -> None:
