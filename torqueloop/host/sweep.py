@@ -54,7 +54,7 @@ def _moved(c: Client, axis: int, steps: int, hold_s: float) -> tuple[int, int]:
     """Drive at ``steps`` for ``hold_s`` (a HEARTBEAT at least every 0.1 s); the counts moved in
     the second half of the hold (the first lets the speed settle at the new duty) and new faults."""
     faults0 = c.status(axis)["faults"]
-    c.transact("DRIVE", axis=axis, duty=steps)
+    c.drive(axis, steps)
     _hold(c, hold_s / 2)
     p1 = c.status(axis)["position"]
     _hold(c, hold_s / 2)
@@ -185,7 +185,7 @@ def hold_and_read(c: Client, axis: int, clk_hz: int, settings: list[tuple[str, f
             st = check_ready(c, axis, steps_for(duty))
             c.enable(1 << axis, True)
             try:
-                c.transact("DRIVE", axis=axis, duty=steps_for(duty))
+                c.drive(axis, steps_for(duty))
                 _hold(c, settle_s)
                 now = c.status(axis)
                 fault = now["faults"] & ~st["faults"]
