@@ -35,9 +35,10 @@ def sim_board(*args: str, env: dict[str, str] | None = None) -> Iterator[str]:
 def run_cli(url: str, capsys, *args: str, rc: int = 0, json_out: bool = True) -> tuple[object, str]:
     """One ``torqueloop -u URL [--json] ARGS`` command in this process, as a
     user types it (``capsys``: pytest's fixture).  Asserts the exit status
-    ``rc`` and, for a refusal, one line on stderr and no traceback.  Returns
-    the last output line as JSON (or, with ``json_out=False``, the whole
-    output; None after a refusal or when nothing was printed) and stderr."""
+    ``rc``, no traceback, and for a refusal (a failure that prints no result)
+    one line on stderr.  Returns the last output line as JSON (or, with
+    ``json_out=False``, the whole output; None after a refusal or when
+    nothing was printed) and stderr."""
     capsys.readouterr()
     try:
         got = cli.main(["-u", url, *(["--json"] if json_out else []), *args])
@@ -46,8 +47,10 @@ def run_cli(url: str, capsys, *args: str, rc: int = 0, json_out: bool = True) ->
     out, err = capsys.readouterr()
     assert got == rc, f"torqueloop {' '.join(args)} -> {got}\n{out}\n{err}"
     if rc:
-        assert "Traceback" not in err and len(err.strip().splitlines()) == 1, f"not one line: {err!r}"
-        return None, err
+        assert "Traceback" not in err, err
+        if not out.strip():          # a refusal: one line says why
+            assert len(err.strip().splitlines()) == 1, f"not one line: {err!r}"
+            return None, err
     if not json_out:
         return out, err
     return (json.loads(out.strip().splitlines()[-1]) if out.strip() else None), err

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import pytest
 
+from simproc import run_cli as tl
 from simproc import sim_board
 from torqueloop import cli
 from torqueloop.host import serve as hserve
@@ -60,20 +61,6 @@ def user_env(env, monkeypatch):
         monkeypatch.setenv(k, env[k])
     monkeypatch.delenv(hserve.SERVER_ENV, raising=False)
     return env
-
-
-def tl(url: str, capsys, *args: str, rc: int = 0) -> tuple[dict | None, str]:
-    """One command as the user types it (with --json), in this process."""
-    capsys.readouterr()
-    try:
-        got = cli.main(["-u", url, "--json", *args])
-    except SystemExit as e:
-        got = e.code
-    out, err = capsys.readouterr()
-    assert got == rc, f"torqueloop {' '.join(args)} -> {got}\n{out}\n{err}"
-    if rc:
-        assert "Traceback" not in err
-    return (json.loads(out.strip().splitlines()[-1]) if out.strip() else None), err
 
 
 def test_bring_up_as_a_user_would(url, user_env, capsys) -> None:
@@ -191,7 +178,7 @@ def test_server_protocol_errors_are_answers_not_disconnects(url, user_env) -> No
         srv.wait(10)
 
 
-def test_monitor_and_move_side_by_side_through_serve(url, user_env) -> None:
+def test_monitor_move_and_drive_side_by_side_through_serve(url, user_env) -> None:
     srv = _start(["-u", url, "serve", "--port", "0", "--quiet"], user_env)
     try:
         line = srv.stdout.readline()
@@ -206,6 +193,12 @@ def test_monitor_and_move_side_by_side_through_serve(url, user_env) -> None:
         assert r.returncode == 0, r.stderr
         moved = json.loads(r.stdout.strip().splitlines()[-1])
         assert moved["settled"] is True
+        # open-loop drive from another process through the same server (its DRIVE goes over the server's session)
+        d = subprocess.run([sys.executable, "-m", "torqueloop.cli", "-u", url, "--json", "drive", "5%", "--for", "1"],
+                           env=user_env, capture_output=True, text=True, timeout=60)
+        assert d.returncode == 0 and "Traceback" not in d.stderr, d.stderr
+        drove = json.loads(d.stdout.strip().splitlines()[-1])
+        assert drove["sign_matches"] and drove["moved_counts"] > 50 and not drove["faults"], drove
         out, err = mon.communicate(timeout=60)
         assert mon.returncode == 0, err
         recs = [json.loads(x) for x in [first, *out.splitlines()] if x.strip()]

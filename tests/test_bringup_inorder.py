@@ -21,7 +21,6 @@ outcome checked the way the user reads it:
 
 from __future__ import annotations
 
-import json
 import os
 import subprocess
 import sys
@@ -29,8 +28,7 @@ import time
 
 import pytest
 
-from simproc import sim_board
-from torqueloop import cli
+from simproc import run_cli, sim_board
 from torqueloop.host import serve as hserve
 
 SWITCHES = 20_000              # counts from the start position to each switch
@@ -54,15 +52,7 @@ def user(tmp_path, monkeypatch) -> dict[str, str]:
 
 def tl(url: str, capsys, *args: str, rc: int = 0) -> dict:
     """One command as the user types it (with --json); its last JSON line."""
-    capsys.readouterr()
-    try:
-        got = cli.main(["-u", url, "--json", *args])
-    except SystemExit as e:
-        got = e.code
-    out, err = capsys.readouterr()
-    assert got == rc, f"torqueloop {' '.join(args)} -> {got}\n{out}\n{err}"
-    assert "Traceback" not in err
-    return json.loads(out.strip().splitlines()[-1])
+    return run_cli(url, capsys, *args, rc=rc)[0]
 
 
 def board(env: dict[str, str], flash) -> object:

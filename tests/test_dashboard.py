@@ -31,6 +31,7 @@ from simproc import sim_board
 from torqueloop.host import serve as hserve
 from torqueloop.host.dash.access import Access
 from torqueloop.host.dash.hub import ROW, Hub, Page
+from torqueloop.host.dash.listen import listen
 from torqueloop.spec import auth
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -139,26 +140,8 @@ def _get(url: str, headers: dict[str, str] | None = None) -> tuple[int, bytes]:
 async def _ws_session(ws_url: str, requests: list[dict], seconds: float) -> tuple[list[str], str | None]:
     """The messages a WebSocket client gets in ``seconds`` after sending ``requests``
     (or the reason the handshake was refused)."""
-    from tornado.httpclient import HTTPClientError
-    from tornado.websocket import websocket_connect
-    try:
-        ws = await websocket_connect(ws_url)
-    except (HTTPClientError, OSError) as e:
-        return [], str(e)
-    for r in requests:
-        await ws.write_message(json.dumps(r))
-    got: list[str] = []
-    end = time.monotonic() + seconds
-    while (left := end - time.monotonic()) > 0:
-        try:
-            m = await asyncio.wait_for(ws.read_message(), left)
-        except asyncio.TimeoutError:
-            break
-        if m is None:
-            break
-        got.append(m)
-    ws.close()
-    return got, None
+    got, err = await listen(ws_url, seconds, requests)
+    return [m for _, m in got], err
 
 
 def _key_forms(env: dict[str, str]) -> list[bytes]:

@@ -12,21 +12,20 @@ within 10 %, friction voltage and Coulomb friction per direction within
 specified to 0.2 % of duty and held here to 0.25 (it comes out 0.19 low).  Then the plant file it writes is read back and reproduces
 its estimates."""
 
-import dataclasses
 import json
 
 import pytest
 
 from sim_models.identifiable import identifiable_plant
-from sim_models.plantfile import export_text, identified, load_plant_file
-from sim_models.variants import PlantSpec, load_variant
+from sim_models.plantfile import identified, load_plant_file
+from sim_models.variants import PlantSpec
+from scaled_plant import scaled_lab_2025
 from torqueloop import cli
 from torqueloop.host.client import Client
 from torqueloop.sim.simboard import SimBoard, SimBoardTransport
 from torqueloop.spec import auth
 from torqueloop.spec.system import SYSTEM
 
-SCALE_FRICTION, SCALE_INERTIA = 1.25, 0.8
 REL = {"speed_gain_rad_per_s_per_v": 0.10, "time_constant_s": 0.10, "back_emf_v_s_per_rad": 0.10,
        "friction_v_pos": 0.20, "friction_v_neg": 0.20, "coulomb_pos_n_m": 0.20, "coulomb_neg_n_m": 0.20,
        "inertia_at_motor_kg_m2": 0.20}
@@ -34,13 +33,7 @@ REL = {"speed_gain_rad_per_s_per_v": 0.10, "time_constant_s": 0.10, "back_emf_v_
 
 @pytest.fixture(scope="module")
 def scaled(tmp_path_factory):
-    p = load_variant("lab-2025")
-    axes = tuple(a.replace(motor_coulomb_N_m=a.motor_coulomb_N_m * SCALE_FRICTION,
-                           motor_static_N_m=a.motor_static_N_m * SCALE_FRICTION,
-                           rotor_inertia_kg_m2=a.rotor_inertia_kg_m2 * SCALE_INERTIA) for a in p.axes)
-    p = dataclasses.replace(p, axes=axes)
-    f = tmp_path_factory.mktemp("plant") / "scaled.toml"
-    f.write_text(export_text(p, "lab-2025 scaled by the test"))
+    p, f = scaled_lab_2025(tmp_path_factory.mktemp("plant"))
     return p, PlantSpec.from_file(f)
 
 

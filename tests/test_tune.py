@@ -11,30 +11,22 @@ model is stated to (docs/identification.md, "Tuning"): overshoot within 1
 point, the 2 % settling time within 15 %, the steady-state error (the mean
 of the record's last 10 %, the same record in both) within 3 counts.  ``--apply`` is run against the simulated board (the firmware's C)."""
 
-import dataclasses
 import json
 
 import pytest
 
-from sim_models.plantfile import export_text
-from sim_models.variants import PlantSpec, load_variant
+from sim_models.variants import PlantSpec
+from scaled_plant import scaled_lab_2025
 from torqueloop import cli
 from torqueloop.host.client import Client
 from torqueloop.sim.simboard import SimBoard, SimBoardTransport
 from torqueloop.spec import auth
 
-SCALE_FRICTION, SCALE_INERTIA = 1.25, 0.8
 
 
 @pytest.fixture(scope="module")
 def plant_file(tmp_path_factory):
-    p = load_variant("lab-2025")
-    axes = tuple(a.replace(motor_coulomb_N_m=a.motor_coulomb_N_m * SCALE_FRICTION,
-                           motor_static_N_m=a.motor_static_N_m * SCALE_FRICTION,
-                           rotor_inertia_kg_m2=a.rotor_inertia_kg_m2 * SCALE_INERTIA) for a in p.axes)
-    f = tmp_path_factory.mktemp("plant") / "scaled.toml"
-    f.write_text(export_text(dataclasses.replace(p, axes=axes), "lab-2025 scaled by the test"))
-    return f
+    return scaled_lab_2025(tmp_path_factory.mktemp("plant"))[1]
 
 
 def _run(capsys, args, client=None):

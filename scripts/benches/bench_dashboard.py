@@ -105,25 +105,13 @@ def _socket_latency(page: str, seconds: float) -> dict:
     """The same latency to a WebSocket client in Python (no drawing): the server's share."""
     import asyncio
 
-    from tornado.websocket import websocket_connect
+    from torqueloop.host.dash.listen import listen
 
-    async def run() -> list[float]:
-        ws = await websocket_connect(page.replace("http", "ws").rstrip("/") + "/ws")
-        lat: list[float] = []
-        end = time.monotonic() + seconds
-        while (left := end - time.monotonic()) > 0:
-            try:
-                m = await asyncio.wait_for(ws.read_message(), left)
-            except asyncio.TimeoutError:
-                break
-            now = time.time() * 1000.0
-            o = json.loads(m)
-            if o.get("t") == "rows":
-                lat += [now - r[1] for r in o["rows"]]
-        ws.close()
-        return lat
-
-    a = np.array(asyncio.run(run()))
+    got, err = asyncio.run(listen(page.replace("http", "ws").rstrip("/") + "/ws", seconds))
+    if err:
+        raise RuntimeError(f"the dashboard refused the WebSocket: {err}")
+    lat = [now - r[1] for now, m in got if (o := json.loads(m)).get("t") == "rows" for r in o["rows"]]
+    a = np.array(lat)
     return {"pages": 0, "client": "python websocket", "seconds": seconds, "samples": int(a.size),
             "latency_ms_median": round(float(np.median(a)), 1), "latency_ms_p99": round(float(np.percentile(a, 99)), 1),
             "latency_ms_max": round(float(a.max()), 1)}

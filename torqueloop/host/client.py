@@ -487,6 +487,10 @@ class Client:
         mode = (P.MOVE_TRAPEZOID if trapezoid else 0) | (P.MOVE_UNHOMED if unhomed else 0)
         self.transact("MOVE", axis=axis, mode=mode, target=target_counts)
 
+    def drive(self, axis: int, duty: int) -> None:
+        """DRIVE: open-loop command ``duty`` (signed PWM steps) on an enabled axis."""
+        self.transact("DRIVE", axis=axis, duty=duty)
+
     def home(self, axis: int, mode: str, index: bool = False) -> None:
         self.transact("HOME", axis=axis, mode=P.HOME_MODES[mode], index=int(index))
 

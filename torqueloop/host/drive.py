@@ -105,7 +105,7 @@ def drive(c: Client, axis: int, steps: int, seconds: float,
     res = DriveResult(axis, steps, start, start, 0.0)
     t0 = time.monotonic()
     try:
-        c.transact("DRIVE", axis=axis, duty=steps)
+        c.drive(axis, steps)
         while True:
             time.sleep(SAMPLE_S)
             s = c.status(axis)

@@ -109,7 +109,7 @@ class _Axis:
         steps = int(math.copysign(min(FULL, round(abs(duty) * FULL)), duty))
         if not self.c.status(self.a)["enabled"]:
             self.c.enable(1 << self.a, True)
-        self.c.transact("DRIVE", axis=self.a, duty=steps)
+        self.c.drive(self.a, steps)
 
     def release(self) -> None:
         """Disable: the bridge coasts (BRAKE is 0 while identifying)."""

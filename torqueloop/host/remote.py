@@ -128,6 +128,9 @@ class RemoteClient:
     def move(self, axis: int, target_counts: int, trapezoid: bool = False, unhomed: bool = False) -> None:
         self._call("move", axis=axis, target=target_counts, trapezoid=trapezoid, unhomed=unhomed)
 
+    def drive(self, axis: int, duty: int) -> None:
+        self._call("drive", axis=axis, duty=duty)
+
     def home(self, axis: int, mode: str, index: bool = False) -> None:
         self._call("home", axis=axis, mode=mode, index=index)
 

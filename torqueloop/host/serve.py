@@ -370,7 +370,7 @@ class SessionServer:
 
     def m_drive(self, conn: _Conn, axis: int, duty: int) -> None:
         """DRIVE: open-loop command ``duty`` (signed PWM steps) on an enabled axis; this client holds it."""
-        self._run(lambda: self.client.transact("DRIVE", axis=int(axis), duty=int(duty)))
+        self._run(lambda: self.client.drive(int(axis), int(duty)))
         self._hold(conn, 1 << axis)
 
     def m_stats(self, conn: _Conn) -> dict:

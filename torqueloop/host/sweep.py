@@ -31,6 +31,7 @@ STALL_MS after the setting starts: the reading must come before that.
 from __future__ import annotations
 
 import time
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from typing import Callable
 
@@ -53,7 +54,7 @@ def _moved(c: Client, axis: int, steps: int, hold_s: float) -> tuple[int, int]:
     """Drive at ``steps`` for ``hold_s`` (a HEARTBEAT at least every 0.1 s); the counts moved in
     the second half of the hold (the first lets the speed settle at the new duty) and new faults."""
     faults0 = c.status(axis)["faults"]
-    c.transact("DRIVE", axis=axis, duty=steps)
+    c.drive(axis, steps)
     _hold(c, hold_s / 2)
     p1 = c.status(axis)["position"]
     _hold(c, hold_s / 2)
@@ -103,27 +104,46 @@ def ramp(c: Client, axis: int, direction: int, carrier_hz: float, *, start: floa
         c.enable(1 << axis, False)
 
 
-def sweep(c: Client, axis: int, carriers_hz: list[float], clk_hz: int, log=None, **kw) -> list[Ramp]:
-    """A ramp per carrier and direction; the axis's FDIV is restored afterwards."""
+@contextmanager
+def _carrier_control(c: Client, axis: int, clk_hz: int):
+    """Yields ``set_carrier(hz) -> the carrier the board makes`` (eq. 4's
+    divider, refused above PWM_MAX_HZ); the axis's FDIV is restored at the end,
+    whatever happens."""
     fdiv0 = c.get_param("FDIV", axis)
     pwm_max = c.get_param("PWM_MAX_HZ")
-    out: list[Ramp] = []
-    try:
-        for f in carriers_hz:
-            div = pwm.divider_for(f, clk_hz)
-            actual = pwm.carrier_hz(div, clk_hz)
-            if actual > pwm_max:
-                raise ProtocolError(f"a {f:g} Hz carrier is above PWM_MAX_HZ = {pwm_max} Hz")
+
+    def set_carrier(f: float) -> float:
+        div = pwm.divider_for(f, clk_hz)
+        actual = round(pwm.carrier_hz(div, clk_hz), 3)
+        if actual > pwm_max:
+            raise ProtocolError(f"a {f:g} Hz carrier is above PWM_MAX_HZ = {pwm_max} Hz")
+        if c.get_param("FDIV", axis) != div:
             c.set_param("FDIV", div, axis)
-            for direction in (1, -1):
-                r = ramp(c, axis, direction, round(actual, 3), **kw)
-                out.append(r)
-                if log:
-                    log(r)
-                if r.fault:
-                    return out
+        return actual
+
+    try:
+        yield set_carrier
     finally:
         c.set_param("FDIV", fdiv0, axis)
+
+
+def _kept(out: list, point, log) -> bool:
+    """Add a point to the list and the log; True when its fault ends the session."""
+    out.append(point)
+    if log:
+        log(point)
+    return bool(point.fault)
+
+
+def sweep(c: Client, axis: int, carriers_hz: list[float], clk_hz: int, log=None, **kw) -> list[Ramp]:
+    """A ramp per carrier and direction; the axis's FDIV is restored afterwards."""
+    out: list[Ramp] = []
+    with _carrier_control(c, axis, clk_hz) as set_carrier:
+        for f in carriers_hz:
+            actual = set_carrier(f)
+            for direction in (1, -1):
+                if _kept(out, ramp(c, axis, direction, actual, **kw), log):
+                    return out
     return out
 
 
@@ -157,22 +177,15 @@ def hold_and_read(c: Client, axis: int, clk_hz: int, settings: list[tuple[str, f
     ask ``read`` for the gauge and the ammeter while it keeps holding.  The axis is
     disabled after each setting and its FDIV restored at the end, whatever happens;
     a fault ends the list (its point says which)."""
-    fdiv0 = c.get_param("FDIV", axis)
-    pwm_max = c.get_param("PWM_MAX_HZ")
     out: list[GaugePoint] = []
     check_ready(c, axis, max((steps_for(d) for _, _, d in settings), key=abs, default=0))
-    try:
+    with _carrier_control(c, axis, clk_hz) as set_carrier:
         for kind, f, duty in settings:
-            div = pwm.divider_for(f, clk_hz)
-            actual = round(pwm.carrier_hz(div, clk_hz), 3)
-            if actual > pwm_max:
-                raise ProtocolError(f"a {f:g} Hz carrier is above PWM_MAX_HZ = {pwm_max} Hz")
-            if c.get_param("FDIV", axis) != div:
-                c.set_param("FDIV", div, axis)
+            actual = set_carrier(f)
             st = check_ready(c, axis, steps_for(duty))
             c.enable(1 << axis, True)
             try:
-                c.transact("DRIVE", axis=axis, duty=steps_for(duty))
+                c.drive(axis, steps_for(duty))
                 _hold(c, settle_s)
                 now = c.status(axis)
                 fault = now["faults"] & ~st["faults"]
@@ -186,11 +199,6 @@ def hold_and_read(c: Client, axis: int, clk_hz: int, settings: list[tuple[str, f
                     p.fault = describe_faults(fault) if fault else ""
             finally:
                 c.enable(1 << axis, False)
-            out.append(p)
-            if log:
-                log(p)
-            if p.fault:
+            if _kept(out, p, log):
                 return out
-    finally:
-        c.set_param("FDIV", fdiv0, axis)
     return out

@@ -289,6 +289,17 @@ def _arm_table(rep: dict[str, Any]) -> list[str]:
     return L + [""]
 
 
+def save_figure(fig, axs, xlabel: str, path: Path) -> None:
+    """A report figure's last touches: the bottom row's x label, the layout, the PNG."""
+    import matplotlib.pyplot as plt
+
+    for p in axs[-1]:
+        p.set_xlabel(xlabel)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
 def _plot_step(law: str, st: Study, path: Path) -> None:
     import matplotlib
     matplotlib.use("Agg")
@@ -310,11 +321,7 @@ def _plot_step(law: str, st: Study, path: Path) -> None:
                 p.axhline(st.target_rad, color="0.6", lw=0.6)
                 p.set_title(f"{law}: axis {ax}")
                 p.legend(fontsize=8)
-    for p in axs[-1]:
-        p.set_xlabel("time (s)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save_figure(fig, axs, "time (s)", path)
 
 
 def _plot_sweep(rep: dict[str, Any], path: Path) -> None:
@@ -344,8 +351,4 @@ def _plot_sweep(rep: dict[str, Any], path: Path) -> None:
             if row == 0:
                 p.set_title(f"axis {ax}: closed loop against the PWM carrier (lab plant)")
                 p.legend(fontsize=7, ncol=2)
-    for p in axs[-1]:
-        p.set_xlabel("PWM carrier (Hz)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save_figure(fig, axs, "PWM carrier (Hz)", path)

@@ -21,8 +21,6 @@ carrier carried across.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 import statistics
 import time
@@ -33,6 +31,8 @@ from sim_models.variants import PlantSpec
 from torqueloop.characterize.config import CLK_HZ, PWM_BITS
 from torqueloop.characterize.simbench import motion_dead_zones
 from torqueloop.spec.pwm import carrier_hz, divider_for, full_scale
+from torqueloop.sim.report import save_figure
+from torqueloop.study.cache import cached
 from torqueloop.study.engine import Engine
 
 #: carriers below this are in the audible band (20 Hz - 20 kHz)
@@ -59,33 +59,25 @@ def dead_zones(plant: PlantSpec, freqs_hz: Sequence[float], cache: Path, digest:
                say=print) -> dict[str, Any]:
     """``{"rows": [...], "pw0": {freq: (x counts, z counts)}}``, reused from
     ``cache`` while the inputs' digest and the carriers are unchanged."""
-    digest = hashlib.sha256((digest + Path(__file__).read_text()).encode()).hexdigest()
-    key = repr((plant.label, tuple(freqs_hz)))
-    if cache.exists():
-        try:
-            old = json.loads(cache.read_text())
-        except ValueError:
-            old = {}
-        if old.get("digest") == digest and old.get("key") == key:
-            say(f"dead zones per carrier: {cache.name} is current; reused")
-            return old | {"pw0": {float(k): tuple(v) for k, v in old["pw0"].items()}}
     jobs = [(plant, a, float(f)) for f in freqs_hz for a in AXES]
-    say(f"dead zones per carrier: {len(jobs)} motion ramps (raise until the stage moves, lower until it stops) "
-        f"on the {engine.name}")
-    rows, t0 = [], time.monotonic()
-    for k, (_, r) in enumerate(engine.map_unordered(_dz_job, jobs), 1):
-        rows.append(r)
-        el = time.monotonic() - t0
-        say(f"dead zone {k}/{len(jobs)}: axis {r['axis']} at {r['board_hz']:.4g} Hz: PW0 {r['pw0_counts']} counts "
-            f"({el:.0f} s so far, about {el / k * (len(jobs) - k):.0f} s left)")
-    rows.sort(key=lambda r: (r["freq_hz"], r["axis"]))
-    pw0 = {float(f): tuple(next(r["pw0_counts"] for r in rows if r["freq_hz"] == f and r["axis"] == a) for a in AXES)
-           for f in freqs_hz}
-    doc = {"digest": digest, "key": key, "rows": rows, "pw0": {str(k): list(v) for k, v in pw0.items()},
-           "cpu_s": sum(r["cpu_s"] for r in rows)}
-    cache.parent.mkdir(parents=True, exist_ok=True)
-    cache.write_text(json.dumps(doc, indent=1) + "\n")
-    return doc | {"pw0": pw0}
+
+    def compute() -> dict[str, Any]:
+        say(f"dead zones per carrier: {len(jobs)} motion ramps (raise until the stage moves, lower until it stops) "
+            f"on the {engine.name}")
+        rows, t0 = [], time.monotonic()
+        for k, (_, r) in enumerate(engine.map_unordered(_dz_job, jobs), 1):
+            rows.append(r)
+            el = time.monotonic() - t0
+            say(f"dead zone {k}/{len(jobs)}: axis {r['axis']} at {r['board_hz']:.4g} Hz: PW0 {r['pw0_counts']} "
+                f"counts ({el:.0f} s so far, about {el / k * (len(jobs) - k):.0f} s left)")
+        rows.sort(key=lambda r: (r["freq_hz"], r["axis"]))
+        pw0 = {str(float(f)): [next(r["pw0_counts"] for r in rows if r["freq_hz"] == f and r["axis"] == a)
+                               for a in AXES] for f in freqs_hz}
+        return {"rows": rows, "pw0": pw0, "cpu_s": sum(r["cpu_s"] for r in rows)}
+
+    doc = cached(cache, digest, __file__, repr((plant.label, tuple(freqs_hz))), compute,
+                 say=lambda m: say(f"dead zones per carrier: {m}"))
+    return doc | {"pw0": {float(k): tuple(v) for k, v in doc["pw0"].items()}}
 
 
 METRICS = ("steady_state_error_counts", "screw_steady_state_error_counts", "overshoot_pct", "settling_time_s",
@@ -175,8 +167,4 @@ def plot(summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]], path
                 p.set_title(f"axis {axis} (grey: audible band)")
                 if p.get_legend_handles_labels()[0]:
                     p.legend(fontsize=7)
-    for p in axs[-1]:
-        p.set_xlabel("PWM carrier (Hz)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save_figure(fig, axs, "PWM carrier (Hz)", path)

@@ -9,8 +9,9 @@ controls of both axes over the session server (docs/host.md, "Dashboard").
   through the session server's one authenticated session with the board;
 - :mod:`.plots`: the Bokeh figures (BokehJS, shipped in the bokeh wheel,
   draws them in the page);
-- :mod:`.web`: the Tornado application (HTTP and the WebSocket).
+- :mod:`.web`: the Tornado application (HTTP and the WebSocket);
+- :mod:`.listen`: a WebSocket client without a browser (scripts, the bench).
 
-Only :mod:`.plots` and :mod:`.web` need the ``dash`` extra (bokeh, tornado);
+Only :mod:`.plots`, :mod:`.web` and :mod:`.listen` need the ``dash`` extra (bokeh, tornado);
 ``static/`` holds the page and its glue script.
 """
