@@ -29,7 +29,6 @@ import time
 
 import numpy as np
 
-from bench import QUICK
 from sim_models.identifiable import identifiable_plant
 from sim_models.plantfile import export_text
 from sim_models.variants import PlantSpec, load_variant
@@ -91,6 +90,8 @@ def main() -> int:
 
 
 def rtl_check() -> int:
+    from bench import QUICK
+
     seconds = 1.0 if QUICK else 2.0
     p, t = tuned(seconds)
     spec = plant_spec(p, "nominal")
@@ -120,6 +121,8 @@ def rtl_check() -> int:
 
 
 def robustness() -> int:
+    from bench import QUICK
+
     p, t = tuned(3.0)
     grid = list(itertools.product(*SPREAD.values()))
     grid = [(1.0, 1.0, 1.0, 0.0)] + (grid if not QUICK else [grid[0], grid[-1]])
