@@ -264,3 +264,14 @@ def test_an_open_loopback_page_answers_only_to_its_own_name() -> None:
     assert closed.role(None) is None and closed.role("x" * 24) is None
     assert closed.role("w" * 24) == "watch" and closed.role("c" * 24) == "command"
     assert Access.may("watch", "stop") and not Access.may("watch", "move") and Access.may("command", "move")
+
+
+@pytest.mark.parametrize("spec, says", [("notanaddress", "not an address"), ("127.0.0.1:99999", "outside 0..65535"),
+                                        ("1.2.3:x", "give ADDR:PORT")])
+def test_a_bad_dashboard_address_is_refused_before_the_board_is_touched(spec: str, says: str, capsys) -> None:
+    from torqueloop import cli
+
+    # port 9 on loopback: nothing listens there, so reaching the board would fail with another message
+    rc = cli.main(["-u", "socket://127.0.0.1:9", "serve", "--port", "0", "--http", spec])
+    err = capsys.readouterr().err
+    assert rc == 2 and says in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err

@@ -917,6 +917,9 @@ def cmd_serve(ctx: Ctx) -> int:
     other = a.server or os.environ.get(hserve.SERVER_ENV) or hserve.find_server(a.url)
     if other:
         raise ProtocolError(f"a torqueloop server already holds {a.url}: {other}")
+    if a.http is not None:
+        from torqueloop.host.dash.launch import check_http
+        check_http(a.http)                # a mistyped dashboard address is refused before the board is touched
     key, src, err = ctx.key()
     if err and src:
         raise auth.KeyFileError(err)      # a key file named but unusable: say so, do not serve keyless

@@ -39,6 +39,17 @@ def parse_http(spec: str) -> tuple[str, int]:
     return host, p
 
 
+def check_http(spec: str) -> tuple[str, int]:
+    """``parse_http``, and the address must name this machine's kind of host
+    (resolvable): a mistyped one is refused before the board is touched."""
+    host, port = parse_http(spec)
+    try:
+        socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except (socket.gaierror, UnicodeError) as e:
+        raise BadValue(f"--http {spec!r}: {host!r} is not an address this machine can listen on ({e})") from None
+    return host, port
+
+
 def start(srv: SessionServer, spec: str, token_file: str | None, say: Callable[[str], None]) -> Callable[[], None]:
     """Start the dashboard for ``srv``; prints its address (and tokens) with
     ``say``; returns the function that stops it."""
