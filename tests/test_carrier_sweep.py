@@ -10,6 +10,8 @@ import json
 import math
 from dataclasses import replace
 
+import pytest
+
 from sim_models.variants import PlantSpec
 from torqueloop.sim.experiment import COUNTS_PER_REV, ExperimentConfig, run_fast
 from torqueloop.study import answer
@@ -46,6 +48,21 @@ def test_the_opening_says_when_the_carrier_cannot_be_ranked_and_when_the_choice_
     assert "does not survive" in text and "names none" in text
     assert "cannot rank the carriers" in text and not numbers["sweep"][0]["carrier_decides"]
     json.dumps(numbers)
+
+
+@pytest.mark.parametrize("chosen_hz, survives", [(1050.0, True), (1286.0, False)])
+def test_the_choice_survives_only_if_the_protocols_agree_with_it(chosen_hz: float, survives: bool) -> None:
+    """Protocols that agree among themselves (850-1073 Hz) back the characterisation's
+    choice only when it lies within their tolerance too (the QUICK run's 1286 Hz does not)."""
+    rows = [_row(50.0, True, 0, 2.0), _row(24_400.0, True, 0, 1.0)]
+    rep = {"meta": {"experiment_plant": "lab", "sweep_T_s": 1.0},
+           "characterization": {"axes": {"x": {"achieved_hz": chosen_hz}},
+                                "stability_verdict": {"axes": {"x": {"stable": True, "n": 4, "min_hz": 850.1,
+                                                                     "max_hz": 1073.0, "median_hz": 995.5,
+                                                                     "tolerance_factor": 1.25}}}}}
+    text, _ = answer.paragraph(rep, summarise(rows))
+    assert ("survives the bench protocols" in text) == survives, text
+    assert ("depends on the bench protocol" in text) == (not survives), text
 
 
 def test_a_start_away_from_zero_is_reached_first_and_the_step_is_measured_from_it() -> None:

@@ -13,6 +13,7 @@ quotes) and ``carrier_sweep`` (:func:`torqueloop.study.carrier_sweep.summarise`)
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -64,10 +65,16 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]]) -> tuple[str, 
         v = st.get(a)
         if v is None or v.get("median_hz") is None:
             parts.append(f"The characterisation chose {hz:.4g} Hz for axis {a}; no stability table backs it.")
-        elif v["stable"]:
+        elif v["stable"] and abs(math.log(hz / v["median_hz"])) <= math.log(v["tolerance_factor"]):
             parts.append(f"The characterisation chose {hz:.4g} Hz for axis {a}, and the choice survives the bench "
                          f"protocols tried ({v['n']} settle / sweep-order protocols: {v['min_hz']:.4g}-"
                          f"{v['max_hz']:.4g} Hz).")
+        elif v["stable"]:
+            # the protocols agree among themselves, but not with the characterisation's own (cold) readings
+            parts.append(f"The characterisation chose {hz:.4g} Hz for axis {a}; the {v['n']} settle / sweep-order "
+                         f"protocols agree among themselves ({v['min_hz']:.4g}-{v['max_hz']:.4g} Hz) but not with "
+                         f"it (beyond a factor {v['tolerance_factor']:g} of their median, "
+                         f"{v['median_hz']:.4g} Hz), so the choice depends on the bench protocol.")
         else:
             parts.append(f"The characterisation chose {hz:.4g} Hz for axis {a}, but that choice does not survive the "
                          f"bench protocol: the {v['n']} settle / sweep-order protocols chose {v['min_hz']:.4g}-"
