@@ -1117,9 +1117,15 @@ def cmd_tune(ctx: Ctx) -> int:
                   f"  kp {dz.kp:.4g} steps/count   kd {dz.kd:.4g} steps/(count/s)   ki {dz.ki:.4g} steps/(count s)",
                   f"  PW0 {dz.pw0} ticks ({100 * dz.pw0 / P.SYSTEM.pwm_full:.2f} %)   wn {dz.wn:.1f} rad/s   "
                   f"zeta {dz.zeta:.2f}",
-                  f"  margins: gain {dz.gain_margin_db:.1f} dB, phase {dz.phase_margin_deg:.0f} deg",
+                  f"  margins: gain {dz.gain_margin_db:.1f} dB, phase {dz.phase_margin_deg:.0f} deg"
+                  + (f"   integral pole {dz.alpha:g} wn" if dz.law == "pid" else ""),
+                  f"  friction compensation: FC_POS {dz.fc[0]} FC_NEG {dz.fc[1]} steps (smallest duty "
+                  + " / ".join(f"{100 * (dz.pw0 + f * (P.SYSTEM.pwm_full - dz.pw0) / P.SYSTEM.pwm_full) / P.SYSTEM.pwm_full:.2f}"
+                               for f in dz.fc)
+                  + f" % +/-), hunting guard {dz.izone_counts:g} counts, velocity feed-forward 0 (step moves)",
                   f"  predicted one-turn step ({t.step_counts} counts): overshoot {p.overshoot_pct:.2f} %, "
-                  f"settling {analysis.fmt_s(p.settling_time_s)}, error {p.steady_state_error:.1f} counts",
+                  f"settling {analysis.fmt_s(p.settling_time_s)} (+-2 counts: {analysis.fmt_s(t.predicted_tight_s)}), "
+                  f"error {p.steady_state_error:.1f} counts",
                   "  board: " + " ".join(f"{k}={v}" for k, v in t.settings().items())]
         lines += [f"  note: {n}" for n in dz.notes]
         missed = p.overshoot_pct > a.overshoot or p.settling_time_s is None or p.settling_time_s > settling
@@ -1140,8 +1146,8 @@ def cmd_tune(ctx: Ctx) -> int:
                   f"with {verify_spec.label}, {a.verify_s:g} s ...", file=sys.stderr, flush=True)
         v = tuneverify.verify(tunes, verify_spec, a.verify, a.verify_s, a.table1_s,
                               log=lambda *m, **k: print(*m, file=sys.stderr, flush=True))
-        out["verify"] = v.tuned | {"path": v.path, "plant": v.plant, "seconds": v.seconds, "faults": v.faults,
-                                   "wall_s": v.wall_s}
+        out["verify"] = {k: m | ({"table1": v.table1[k]} if k in v.table1 else {}) for k, m in v.tuned.items()} | {
+            "path": v.path, "plant": v.plant, "seconds": v.seconds, "faults": v.faults, "wall_s": v.wall_s}
         out["table1"] = v.table1
         lines.append(f"{'':24}{'predicted':>11}{'measured':>11}{'Table 1' if v.table1 else '':>11}   "
                      f"({v.path}, {v.plant})")
@@ -1151,7 +1157,8 @@ def cmd_tune(ctx: Ctx) -> int:
             for label, pv, mv, rv, f in (
                     ("overshoot (%)", p.overshoot_pct, m["overshoot_pct"], r["overshoot_pct"], ".2f"),
                     ("settling 2 % (s)", p.settling_time_s, m["settling_time_s"], r["settling_time_s"], ".3f"),
-                    ("settling 2 counts (s)", None, m["settling_time_2_counts_s"], r["settling_time_2_counts_s"],
+                    ("settling 2 counts (s)", t.predicted_tight_s, m["settling_time_2_counts_s"],
+                     r["settling_time_2_counts_s"],
                      ".3f"),
                     ("error (counts)", p.steady_state_error, m["steady_state_error_counts"],
                      r["steady_state_error_counts"], ".1f")):

@@ -20,16 +20,17 @@ from dataclasses import dataclass
 from typing import Any
 
 from torqueloop.host.client import Client, ProtocolError
-from torqueloop.host.tunedesign import AxisModel, Design, Wish, design, predict
+from torqueloop.host.tunedesign import TIGHT_BAND_COUNTS, AxisModel, Design, Wish, design, predict
 from torqueloop.spec import protocol as P
-from torqueloop.spec.metrics import StepMetrics
+from torqueloop.spec.metrics import StepMetrics, step_metrics
 from torqueloop.spec.pwm import carrier_hz, full_scale
 from torqueloop.spec.system import SYSTEM
 
 LAW_CODE = {"pd": 2, "pid": 3}
-#: the PID's real pole at this fraction of wn (tunedesign's alpha): a slow integral, Ki a quarter of
-#: alpha = 1's, which keeps the overshoot of a saturated one-turn step near the wish's
-PID_ALPHA = 0.25
+#: the PID's real pole at alpha wn (tunedesign's alpha), the candidates from fast to slow: a fast integral
+#: returns the overshoot its windup causes sooner, a slow one winds up less; tune_axis keeps the one whose
+#: predicted one-turn step settles into the tolerance first within the overshoot limit and the board's gains
+PID_ALPHAS = (1.0, 0.7, 0.5, 0.35, 0.25)
 #: the keys of the identified axis the design reads (plant file, [identifiable.<axis>])
 NEEDED = ("speed_gain_rad_per_s_per_v", "time_constant_s", "friction_v_pos", "friction_v_neg",
           "dead_zone_pos_pct", "dead_zone_neg_pct")
@@ -48,6 +49,7 @@ class AxisTune:
     fdiv: int
     predicted: StepMetrics
     step_counts: int
+    predicted_tight_s: float | None = None    # the design model's settling into +-TIGHT_BAND_COUNTS
 
     @property
     def carrier_hz(self) -> float:
@@ -56,7 +58,7 @@ class AxisTune:
     def settings(self) -> dict[str, int]:
         """The axis's raw parameters (protocol.toml names), in the order they are written."""
         return {"FDIV": self.fdiv, "PW0": self.design.pw0, "LAW": LAW_CODE[self.design.law],
-                **self.design.q16(), "VEL_MODE": 1}
+                **self.design.q16(), "VEL_MODE": 1, **self.design.compensation(), "KVFF_Q16": 0}
 
     def as_dict(self) -> dict[str, Any]:
         d = self.design
@@ -66,8 +68,11 @@ class AxisTune:
                 "kp_steps_per_count": d.kp, "kd_steps_per_count_per_s": d.kd, "ki_steps_per_count_s": d.ki,
                 "wn_rad_s": d.wn, "zeta": d.zeta, "gain_margin_db": d.gain_margin_db,
                 "phase_margin_deg": d.phase_margin_deg, "stick_band_counts": d.stick_band_counts,
+                "pid_pole_alpha": d.alpha, "fc_steps": {"pos": d.fc[0], "neg": d.fc[1]},
+                "hunting_guard_counts": d.izone_counts,
                 "notes": list(d.notes), "step_counts": self.step_counts,
                 "predicted": {"overshoot_pct": p.overshoot_pct, "settling_time_s": p.settling_time_s,
+                              "settling_time_2_counts_s": self.predicted_tight_s,
                               "steady_state_error_counts": p.steady_state_error}}
 
 
@@ -91,17 +96,37 @@ def axis_model(ident: dict[str, float], where: str, supply_v: float) -> AxisMode
     return AxisModel.from_identified(ident, supply_v)
 
 
+def _tight(times, xs, target: float, band: float) -> float | None:
+    return step_metrics(times, xs, target, band_frac=0.0, band_min=band).settling_time_s
+
+
 def tune_axis(axis: int, ident: dict[str, float], wish: Wish, pwm_hz: float, where: str, supply_v: float = 12.0,
               step_counts: int = SYSTEM.counts_per_turn, predict_s: float = 3.0) -> AxisTune:
+    """The axis's design for ``wish``; a PID's integral pole is chosen from
+    PID_ALPHAS on the design model's one-turn step (within the overshoot
+    limit, then the earliest settling into the wish's tolerance), among the
+    designs whose gains the board holds."""
     m = axis_model(ident, where, supply_v)
-    d = design(m, wish, alpha=PID_ALPHA)
     top = P.gain_raw_from_phys(P.PARAMS["KP_UNM_RAD"].max, SYSTEM.axes[axis].tau_max_mnm, SYSTEM.counts_per_turn)
-    for k, v in d.q16().items():
-        if v > top:
-            raise TuneError(f"axis {axis}: {k} = {v} is beyond what the board holds ({top}: "
-                            f"{P.PARAMS['KP_UNM_RAD'].max / 1e6:g} N m/rad at its tau_max): ask for a slower settling")
-    _, _, met = predict(m, d, step_counts, predict_s, wish.cmd_limit)
-    return AxisTune(axis, SYSTEM.axes[axis].name, m, d, divider_at_least(pwm_hz), met, step_counts)
+    best, refused = None, None
+    for alpha in PID_ALPHAS if wish.law == "pid" else (1.0,):
+        d = design(m, wish, alpha=alpha)
+        over = [(k, v) for k, v in d.q16().items() if v > top]
+        if over:
+            refused = refused or over[0]
+            continue
+        ts, xs, met = predict(m, d, step_counts, predict_s, wish.cmd_limit)
+        tol = _tight(ts, xs, step_counts, wish.tolerance_counts)
+        rank = (met.overshoot_pct > wish.overshoot_pct, met.overshoot_pct if met.overshoot_pct > wish.overshoot_pct
+                else 0.0, math.inf if tol is None else tol)
+        if best is None or rank < best[0]:
+            best = (rank, d, met, _tight(ts, xs, step_counts, TIGHT_BAND_COUNTS))
+    if best is None:
+        k, v = refused  # type: ignore[misc]
+        raise TuneError(f"axis {axis}: {k} = {v} is beyond what the board holds ({top}: "
+                        f"{P.PARAMS['KP_UNM_RAD'].max / 1e6:g} N m/rad at its tau_max): ask for a slower settling")
+    _, d, met, tight = best
+    return AxisTune(axis, SYSTEM.axes[axis].name, m, d, divider_at_least(pwm_hz), met, step_counts, tight)
 
 
 def check_margins(t: AxisTune, min_gm_db: float, min_pm_deg: float) -> str | None:

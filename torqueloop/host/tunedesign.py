@@ -9,8 +9,8 @@ the firmware's law (docs/firmware.md, "Control"),
     counts  theta' = c w,  c = counts per motor radian
     bridge  V = V_s duty / M,  duty = PW0 + |u| (M - PW0) / M   (eq. 1, u the command in PWM steps)
 
-With PW0 at the friction voltage the friction cancels while the rotor
-slides, and the loop sees the linear plant  P(s) = Kc / (s (tau s + 1)),
+With PW0 at the friction voltage (the smaller direction's) the friction
+cancels while the rotor slides, and the loop sees the linear plant  P(s) = Kc / (s (tau s + 1)),
 Kc = c K V_s (M - PW0) / M^2  (counts/s per PWM step).  The law is
 u = Kp e - Kd v + I, I_k = I_{k-1} + Ki T e_k (derivative on the measured
 speed, so no zero from it).  Poles are placed in continuous time (a pair
@@ -19,14 +19,18 @@ then checked where it runs: the exact zero-order-hold discretisation at the
 control period T, its closed-loop poles and its gain and phase margins with
 the loop broken at the plant input.
 
-What the linear design cannot see, stiction, is sized separately: a rotor
-at rest breaks away only above the breakaway duty, so a PD holds anywhere
-within e_db = (breakaway - PW0 in steps) / Kp of the target; the design
+What the linear design cannot see, stiction, is compensated and sized
+separately: the firmware adds FC_POS / FC_NEG steps to a command that way,
+which lifts its smallest duty from PW0 to the direction's dead zone (the
+breakaway at the carrier, as identified); what remains (the rounding to a
+step) is the stick band: a PD holds anywhere within e_db = (breakaway -
+PW0 - FC, in steps) / Kp of the target; the design
 raises wn until e_db is within the wish's tolerance, or says it cannot at
 this control period (then PID, whose integral walks the command to the
 breakaway).  :func:`predict` runs the nonlinear design model (saturation,
-the eq. 1 map, Coulomb and breakaway friction per direction, the
-integrator held while saturated as control.c holds it) to give the step
+the eq. 1 map, FC per direction, Coulomb and breakaway friction per
+direction, the integrator held while saturated as control.c holds it and
+within the hunting guard's zone) to give the step
 metrics the design expects; ``tune --verify`` measures them on the board
 image in the loop, which is the check that can disagree.
 """
@@ -44,6 +48,11 @@ from torqueloop.spec.system import SYSTEM
 
 #: ratio of the control rate to the loop's natural frequency the design keeps (wn T <= this)
 MAX_WN_T = 0.15
+#: the hunting guard of a PID: the integral frozen within one count of the target, the encoder's
+#: resolution (no smaller error can be seen, and a rotor stuck one count off winds no command up)
+IZONE_COUNTS = 1.0
+#: settled means within this many counts of the target (beside the 2 % band of report.json's arms)
+TIGHT_BAND_COUNTS = 2.0
 
 
 @dataclass(frozen=True)
@@ -65,19 +74,28 @@ class AxisModel:
                    (d["dead_zone_pos_pct"], d["dead_zone_neg_pct"]), supply_v)
 
     def pw0(self) -> int:
-        """Dead-zone compensation in ticks: the sliding friction voltage, the
-        mean of both directions (one PW0 per axis in the firmware)."""
-        vf = max(0.0, (self.friction_v[0] + self.friction_v[1]) / 2)
+        """Dead-zone compensation in ticks common to both directions: the
+        sliding friction voltage of the direction that needs less (one PW0 per
+        axis in the firmware; the rest of each direction's is :meth:`fc`'s)."""
+        vf = max(0.0, min(self.friction_v))
         return min(self.full - 1, round(vf / self.supply_v * self.full))
+
+    def fc(self, pw0: int) -> tuple[int, int]:
+        """FC_POS, FC_NEG: per direction, the PWM steps beyond ``pw0`` that bring
+        the smallest command's duty to that direction's dead zone (the breakaway
+        at the carrier), PW0+- = PW0 + FC (M - PW0) / M (protocol.toml)."""
+        span = self.full - pw0
+        return tuple(max(0, min(self.full, math.ceil((dz / 100 * self.full - pw0) * self.full / span)))
+                     if span > 0 else 0 for dz in self.breakaway_pct)   # type: ignore[return-value]
 
     def kc(self, pw0: int) -> float:
         """Counts/s per PWM step of the compensated, sliding plant."""
         return self.counts_per_motor_rad * self.speed_gain * self.supply_v * (self.full - pw0) / self.full**2
 
-    def breakaway_steps(self, pw0: int) -> float:
-        """Command (steps) beyond PW0 that breaks the rotor away, the larger direction."""
-        dz = max(self.breakaway_pct) / 100 * self.full
-        return max(0.0, (dz - pw0) * self.full / (self.full - pw0))
+    def breakaway_steps(self, pw0: int, fc: tuple[int, int] = (0, 0)) -> float:
+        """Command (steps) beyond PW0 and the direction's FC that breaks the rotor away, the larger direction."""
+        span = (self.full - pw0) / self.full
+        return max(0.0, *((dz / 100 * self.full - pw0) / span - f for dz, f in zip(self.breakaway_pct, fc)))
 
 
 @dataclass(frozen=True)
@@ -105,10 +123,17 @@ class Design:
     poles_z: tuple[complex, ...]
     stick_band_counts: float   # e_db of a PD (0 for PID: the integral breaks away)
     notes: tuple[str, ...]
+    fc: tuple[int, int] = (0, 0)   # FC_POS, FC_NEG: PWM steps, the dead zone beyond PW0 per direction
+    izone_counts: float = 0.0      # the hunting guard: the integral frozen while |e| is within it
+    alpha: float = 0.0             # PID: the real pole at alpha wn
 
     def q16(self) -> dict[str, int]:
         """The firmware's raw gains (KP_Q16, KD_Q16, KI_Q16)."""
         return {"KP_Q16": round(self.kp * 65536), "KD_Q16": round(self.kd * 65536), "KI_Q16": round(self.ki * 65536)}
+
+    def compensation(self) -> dict[str, int]:
+        """The firmware's friction compensation beyond PW0 (FC_POS, FC_NEG, IZONE_Q16)."""
+        return {"FC_POS": self.fc[0], "FC_NEG": self.fc[1], "IZONE_Q16": round(self.izone_counts * 65536)}
 
 
 def zeta_for_overshoot(pct: float) -> float:
@@ -189,13 +214,14 @@ def design(m: AxisModel, w: Wish, alpha: float = 1.0) -> Design:
         raise ValueError(f"law {w.law!r}: tune designs pd or pid")
     zeta = zeta_for_overshoot(w.overshoot_pct) if w.law == "pd" else max(0.9, zeta_for_overshoot(w.overshoot_pct))
     pw0 = m.pw0()
+    fc = m.fc(pw0)
     kc = m.kc(pw0)
     wn = 4.6 / (zeta * w.settling_s)
     notes = []
     wn_cap = MAX_WN_T / w.period_s
     stick = 0.0
     if w.law == "pd":
-        need = m.breakaway_steps(pw0) / w.tolerance_counts      # Kp that breaks away within the tolerance
+        need = m.breakaway_steps(pw0, fc) / w.tolerance_counts      # Kp that breaks away within the tolerance
         wn_stick = math.sqrt(need * kc / m.tau)
         if wn_stick > wn:
             notes.append(f"wn raised from {wn:.1f} to {wn_stick:.1f} rad/s so that the breakaway is reached "
@@ -207,13 +233,15 @@ def design(m: AxisModel, w: Wish, alpha: float = 1.0) -> Design:
         wn = wn_cap
     kp, kd, ki = _gains(w.law, kc, m.tau, wn, zeta, alpha)
     if w.law == "pd":
-        stick = m.breakaway_steps(pw0) / kp
+        stick = m.breakaway_steps(pw0, fc) / kp
     ad, bd = discrete_plant(kc, m.tau, w.period_s)
     poles = tuple(complex(p) for p in np.linalg.eigvals(closed_loop(ad, bd, kp, kd, ki, w.period_s)))
     if max(abs(p) for p in poles) >= 1:
         notes.append("UNSTABLE at this control period: a closed-loop pole lies outside the unit circle")
     gm, pm = margins(ad, bd, kp, kd, ki, w.period_s)
-    return Design(w.law, kp, kd, ki, pw0, wn, zeta, w.period_s, gm, pm, poles, stick, tuple(notes))
+    izone = IZONE_COUNTS if w.law == "pid" and w.tolerance_counts >= IZONE_COUNTS else 0.0
+    return Design(w.law, kp, kd, ki, pw0, wn, zeta, w.period_s, gm, pm, poles, stick, tuple(notes), fc, izone,
+                  alpha if w.law == "pid" else 0.0)
 
 
 def predict(m: AxisModel, d: Design, step_counts: float, t_end_s: float, cmd_limit: int = SYSTEM.pwm_full,
@@ -237,8 +265,11 @@ def predict(m: AxisModel, d: Design, step_counts: float, t_end_s: float, cmd_lim
         u = u_lin + cand
         if abs(u) > cmd_limit and math.copysign(1, e) == math.copysign(1, u):
             u = u_lin + integ                   # held while saturated toward the error
+        elif abs(e) <= d.izone_counts:
+            u = u_lin + integ                   # the hunting guard
         else:
             integ = cand
+        u += d.fc[0] if u > 0 else -d.fc[1] if u < 0 else 0
         u = max(-cmd_limit, min(cmd_limit, round(u)))
         duty = 0 if u == 0 else d.pw0 + abs(u) * (m.full - d.pw0) / m.full
         volts = math.copysign(duty / m.full * m.supply_v, u) if u else 0.0

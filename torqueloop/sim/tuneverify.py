@@ -28,6 +28,7 @@ from typing import Any
 
 from sim_models.variants import PlantSpec
 from torqueloop.host.tune import AxisTune
+from torqueloop.host.tunedesign import TIGHT_BAND_COUNTS
 from torqueloop.sim import experiment
 from torqueloop.sim.report import axis_metrics
 from torqueloop.spec.metrics import step_metrics
@@ -35,8 +36,6 @@ from torqueloop.spec.metrics import step_metrics
 RAD_PER_COUNT = 2 * math.pi / experiment.COUNTS_PER_REV
 #: a faster link than the RN-XV's 115 200 baud, so that a frame per control period fits at 1 ms (BAUD_DIV)
 FAST_BAUD_DIV = 53
-#: settled means within this many counts of the target (beside the 2 % band of report.json's arms)
-TIGHT_BAND_COUNTS = 2.0
 
 
 @dataclass(frozen=True)
