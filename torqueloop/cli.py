@@ -1112,7 +1112,7 @@ def cmd_tune(ctx: Ctx) -> int:
                            "axes": {t.name: t.as_dict() for t in tunes}}
     lines = []
     for t in tunes:
-        dz, p = t.design, t.predicted
+        dz, p, dz_pct = t.design, t.predicted, t.model.breakaway_pct
         lines += [f"axis {t.axis} ({t.name}): {dz.law.upper()} at {a.period_us} us, carrier {t.carrier_hz:.0f} Hz",
                   f"  kp {dz.kp:.4g} steps/count   kd {dz.kd:.4g} steps/(count/s)   ki {dz.ki:.4g} steps/(count s)",
                   f"  PW0 {dz.pw0} ticks ({100 * dz.pw0 / P.SYSTEM.pwm_full:.2f} %)   wn {dz.wn:.1f} rad/s   "
@@ -1122,7 +1122,7 @@ def cmd_tune(ctx: Ctx) -> int:
                   f"  friction compensation: FC_POS {dz.fc[0]} FC_NEG {dz.fc[1]} steps (smallest duty "
                   + " / ".join(f"{100 * (dz.pw0 + f * (P.SYSTEM.pwm_full - dz.pw0) / P.SYSTEM.pwm_full) / P.SYSTEM.pwm_full:.2f}"
                                for f in dz.fc)
-                  + f" % +/-), hunting guard {dz.izone_counts:g} counts, velocity feed-forward 0 (step moves)",
+                  + f" % +/-, dead zone {dz_pct[0]:.2f} / {dz_pct[1]:.2f} %), hunting guard {dz.izone_counts:g} counts, velocity feed-forward 0 (step moves)",
                   f"  predicted one-turn step ({t.step_counts} counts): overshoot {p.overshoot_pct:.2f} %, "
                   f"settling {analysis.fmt_s(p.settling_time_s)} (+-2 counts: {analysis.fmt_s(t.predicted_tight_s)}), "
                   f"error {p.steady_state_error:.1f} counts",

@@ -6,15 +6,16 @@ The design is torqueloop/host/tunedesign.py's (poles, margins, stiction,
 the predicted step); this module turns a :class:`~.tunedesign.Design` into
 the firmware's raw parameters (protocol.toml: LAW, KP_Q16, KD_Q16, KI_Q16
 in PWM steps per count, per count/s and per count s, q16; PW0 in PWM ticks;
-FDIV for the carrier; VEL_MODE 1, the edge-timestamp speed the derivative
-of the design is taken on; PERIOD_US, the control period the design was
-discretised at) and writes them through the normal client, refusing while
+FDIV for the carrier; VEL_MODE, the speed the derivative is taken on;
+FC_POS, FC_NEG, IZONE_Q16, KVFF_Q16, the friction compensation; PERIOD_US,
+the control period the design was discretised at) and writes them through the normal client, refusing while
 the axis moves.  The verification on the fast model and on the RTL board
 image is torqueloop/sim/tuneverify.py's (it needs the simulation stack).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -27,10 +28,19 @@ from torqueloop.spec.pwm import carrier_hz, full_scale
 from torqueloop.spec.system import SYSTEM
 
 LAW_CODE = {"pd": 2, "pid": 3}
+#: the speed the derivative is taken on: 0, the Euler difference averaged over two periods (a period's
+#: lag, a few degrees at these loops' crossover).  Not 1, the edge-timestamp speed: at rest near the
+#: target it is one count over the last edge's interval, and with z's Kd (1.2 steps per count/s on the
+#: scaled lab plant) every single edge put 100-200 steps on the command, which kicked the rotor and kept
+#: it hunting between -1 and -2 counts (settled into +-2 counts at 4.0 s, against 2.4 s with 0)
+VEL_MODE = 0
 #: the PID's real pole at alpha wn (tunedesign's alpha), the candidates from fast to slow: a fast integral
 #: returns the overshoot its windup causes sooner, a slow one winds up less; tune_axis keeps the one whose
 #: predicted one-turn step settles into the tolerance first within the overshoot limit and the board's gains
 PID_ALPHAS = (1.0, 0.7, 0.5, 0.35, 0.25)
+#: the PID's damping candidates beyond the overshoot limit's (None): a saturated one-turn step overshoots
+#: by how late the loop starts braking, and more damping (more Kd against Kp) brakes earlier
+PID_ZETAS = (None, 1.3, 1.6, 2.0)
 #: the keys of the identified axis the design reads (plant file, [identifiable.<axis>])
 NEEDED = ("speed_gain_rad_per_s_per_v", "time_constant_s", "friction_v_pos", "friction_v_neg",
           "dead_zone_pos_pct", "dead_zone_neg_pct")
@@ -58,7 +68,7 @@ class AxisTune:
     def settings(self) -> dict[str, int]:
         """The axis's raw parameters (protocol.toml names), in the order they are written."""
         return {"FDIV": self.fdiv, "PW0": self.design.pw0, "LAW": LAW_CODE[self.design.law],
-                **self.design.q16(), "VEL_MODE": 1, **self.design.compensation(), "KVFF_Q16": 0}
+                **self.design.q16(), "VEL_MODE": VEL_MODE, **self.design.compensation(), "KVFF_Q16": 0}
 
     def as_dict(self) -> dict[str, Any]:
         d = self.design
@@ -102,15 +112,16 @@ def _tight(times, xs, target: float, band: float) -> float | None:
 
 def tune_axis(axis: int, ident: dict[str, float], wish: Wish, pwm_hz: float, where: str, supply_v: float = 12.0,
               step_counts: int = SYSTEM.counts_per_turn, predict_s: float = 3.0) -> AxisTune:
-    """The axis's design for ``wish``; a PID's integral pole is chosen from
-    PID_ALPHAS on the design model's one-turn step (within the overshoot
-    limit, then the earliest settling into the wish's tolerance), among the
-    designs whose gains the board holds."""
+    """The axis's design for ``wish``; a PID's damping and integral pole are
+    chosen from PID_ZETAS x PID_ALPHAS on the design model's one-turn step
+    (within the overshoot limit, then the earliest settling into the wish's
+    tolerance), among the designs whose gains the board holds."""
     m = axis_model(ident, where, supply_v)
     top = P.gain_raw_from_phys(P.PARAMS["KP_UNM_RAD"].max, SYSTEM.axes[axis].tau_max_mnm, SYSTEM.counts_per_turn)
     best, refused = None, None
-    for alpha in PID_ALPHAS if wish.law == "pid" else (1.0,):
-        d = design(m, wish, alpha=alpha)
+    pid = wish.law == "pid"
+    for zeta, alpha in itertools.product(PID_ZETAS if pid else (None,), PID_ALPHAS if pid else (1.0,)):
+        d = design(m, wish, alpha=alpha, zeta=zeta)
         over = [(k, v) for k, v in d.q16().items() if v > top]
         if over:
             refused = refused or over[0]

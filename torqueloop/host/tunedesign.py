@@ -9,8 +9,8 @@ the firmware's law (docs/firmware.md, "Control"),
     counts  theta' = c w,  c = counts per motor radian
     bridge  V = V_s duty / M,  duty = PW0 + |u| (M - PW0) / M   (eq. 1, u the command in PWM steps)
 
-With PW0 at the friction voltage (the smaller direction's) the friction
-cancels while the rotor slides, and the loop sees the linear plant  P(s) = Kc / (s (tau s + 1)),
+With PW0 at the friction voltage (:meth:`AxisModel.pw0`, :meth:`AxisModel.fc`)
+the friction cancels while the rotor slides, and the loop sees the linear plant  P(s) = Kc / (s (tau s + 1)),
 Kc = c K V_s (M - PW0) / M^2  (counts/s per PWM step).  The law is
 u = Kp e - Kd v + I, I_k = I_{k-1} + Ki T e_k (derivative on the measured
 speed, so no zero from it).  Poles are placed in continuous time (a pair
@@ -20,11 +20,12 @@ control period T, its closed-loop poles and its gain and phase margins with
 the loop broken at the plant input.
 
 What the linear design cannot see, stiction, is compensated and sized
-separately: the firmware adds FC_POS / FC_NEG steps to a command that way,
-which lifts its smallest duty from PW0 to the direction's dead zone (the
-breakaway at the carrier, as identified); what remains (the rounding to a
-step) is the stick band: a PD holds anywhere within e_db = (breakaway -
-PW0 - FC, in steps) / Kp of the target; the design
+separately: for a PD the firmware adds FC_POS / FC_NEG steps to a command
+that way, which lifts its smallest duty from PW0 to the direction's own
+sliding friction voltage (a PID's integral holds the difference between the
+directions, :meth:`AxisModel.fc`); what remains is the breakaway beyond it
+(the dead zone, as identified at the carrier): a PD holds anywhere within
+e_db = (breakaway - PW0 - FC, in steps) / Kp of the target; the design
 raises wn until e_db is within the wish's tolerance, or says it cannot at
 this control period (then PID, whose integral walks the command to the
 breakaway).  :func:`predict` runs the nonlinear design model (saturation,
@@ -74,19 +75,33 @@ class AxisModel:
                    (d["dead_zone_pos_pct"], d["dead_zone_neg_pct"]), supply_v)
 
     def pw0(self) -> int:
-        """Dead-zone compensation in ticks common to both directions: the
-        sliding friction voltage of the direction that needs less (one PW0 per
-        axis in the firmware; the rest of each direction's is :meth:`fc`'s)."""
+        """Dead-zone compensation in ticks (one PW0 per axis in the firmware):
+        the smaller direction's sliding friction voltage, rounded down, so that
+        it over-drives neither direction (an over-compensated rotor creeps past
+        the target and hunts there: on the scaled lab plant's z axis PW0 at the
+        mean of the directions, one tick more, kept the tuned PID between -3
+        and +3 counts at 4 s, the smaller settled it into +-2 counts at 2.6 s)."""
         vf = max(0.0, min(self.friction_v))
-        return min(self.full - 1, round(vf / self.supply_v * self.full))
+        return min(self.full - 1, math.floor(vf / self.supply_v * self.full))
 
-    def fc(self, pw0: int) -> tuple[int, int]:
+    def fc(self, pw0: int, law: str = "pid") -> tuple[int, int]:
         """FC_POS, FC_NEG: per direction, the PWM steps beyond ``pw0`` that bring
-        the smallest command's duty to that direction's dead zone (the breakaway
-        at the carrier), PW0+- = PW0 + FC (M - PW0) / M (protocol.toml)."""
+        the smallest command's duty to that direction's sliding friction voltage,
+        PW0+- = PW0 + FC (M - PW0) / M (protocol.toml): eq. (1) with a PW0 per
+        direction.  For a PD only, which has nothing else to meet a difference
+        between the directions.  An encoder cannot tell a direction-dependent
+        friction from a constant load (z's gravity), and a load stays at rest,
+        where the relay FC is would flip with the command's sign: a PID's
+        integral holds it instead (on the scaled lab plant's z axis FC_POS 2
+        kept the tuned PID hunting between -2 and -3 counts for seconds; 0
+        settled it into +-2 counts at 2.6 s).  Never up to the dead zone (the
+        breakaway) either: that over-drives a rotor once it slides, and near
+        the target every kick moves it several counts."""
         span = self.full - pw0
-        return tuple(max(0, min(self.full, math.ceil((dz / 100 * self.full - pw0) * self.full / span)))
-                     if span > 0 else 0 for dz in self.breakaway_pct)   # type: ignore[return-value]
+        if law == "pid" or span <= 0:
+            return (0, 0)
+        return tuple(max(0, min(self.full, round((v / self.supply_v * self.full - pw0) * self.full / span)))
+                     for v in self.friction_v)   # type: ignore[return-value]
 
     def kc(self, pw0: int) -> float:
         """Counts/s per PWM step of the compensated, sliding plant."""
@@ -209,12 +224,15 @@ def _gains(law: str, kc: float, tau: float, wn: float, zeta: float, alpha: float
     return kp, kd, ki
 
 
-def design(m: AxisModel, w: Wish, alpha: float = 1.0) -> Design:
+def design(m: AxisModel, w: Wish, alpha: float = 1.0, zeta: float | None = None) -> Design:
+    """The design for the wish; ``zeta`` (at least the wish's) overrides the
+    damping the overshoot limit gives (wn follows: 4.6 / (zeta settling))."""
     if w.law not in ("pd", "pid"):
         raise ValueError(f"law {w.law!r}: tune designs pd or pid")
-    zeta = zeta_for_overshoot(w.overshoot_pct) if w.law == "pd" else max(0.9, zeta_for_overshoot(w.overshoot_pct))
+    least = zeta_for_overshoot(w.overshoot_pct) if w.law == "pd" else max(0.9, zeta_for_overshoot(w.overshoot_pct))
+    zeta = least if zeta is None else max(least, zeta)
     pw0 = m.pw0()
-    fc = m.fc(pw0)
+    fc = m.fc(pw0, w.law)
     kc = m.kc(pw0)
     wn = 4.6 / (zeta * w.settling_s)
     notes = []
