@@ -8,9 +8,10 @@ with a meter would); what it identifies is held against the closed forms of
 sim_models/identifiable.py for the scaled plant, with the tolerances the
 identification is specified to: speed gain, time constant and back-EMF
 within 10 %, friction voltage and Coulomb friction per direction within
-20 %, inertia at the motor within 20 %; the dead zone per direction is
-specified to 0.2 % of duty and held here to 0.25 (it comes out 0.19 low).  Then the plant file it writes is read back and reproduces
-its estimates."""
+20 %, inertia at the motor within 20 %, the dead zone per direction within
+0.2 % of duty (it comes out 0.19 low: little margin, but the run is
+deterministic; the board's seed drives only encoder glitches, off here).
+Then the plant file it writes is read back and reproduces its estimates."""
 
 import json
 
@@ -29,6 +30,7 @@ from torqueloop.spec.system import SYSTEM
 REL = {"speed_gain_rad_per_s_per_v": 0.10, "time_constant_s": 0.10, "back_emf_v_s_per_rad": 0.10,
        "friction_v_pos": 0.20, "friction_v_neg": 0.20, "coulomb_pos_n_m": 0.20, "coulomb_neg_n_m": 0.20,
        "inertia_at_motor_kg_m2": 0.20}
+DEAD_ZONE_PTS = 0.2      # % of duty
 
 
 @pytest.fixture(scope="module")
@@ -67,9 +69,9 @@ def test_identify_recovers_a_plant_it_was_not_told(scaled, tmp_path, monkeypatch
     for k, tol in REL.items():
         assert est[k] == pytest.approx(truth[k], rel=tol), k
     for k in ("dead_zone_pos_pct", "dead_zone_neg_pct"):
-        # specified: 0.2 points; measured 0.19 below (each probe starts with the springs still wound by the
-        # previous one, which helps the rotor away). The margin is asserted, not hidden: 0.25 points.
-        assert abs(est[k] - truth[k]) <= 0.25, k
+        # measured 0.19 below (each probe starts with the springs still wound by the previous one, which
+        # helps the rotor away)
+        assert abs(est[k] - truth[k]) <= DEAD_ZONE_PTS, k
     # the board is left as it was: disabled, no fault, its settings back
     st = c.status(0)
     assert not st["enabled"] and st["faults"] == 0
