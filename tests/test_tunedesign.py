@@ -68,3 +68,24 @@ def test_a_period_too_long_for_the_wish_is_said_not_hidden():
     d = design(_lab("x"), Wish(law="pd", period_s=25e-3, settling_s=0.2))
     assert any("capped" in n for n in d.notes)
     assert d.wn * 25e-3 <= 0.15 + 1e-12
+
+
+def test_the_compensation_over_drives_neither_direction():
+    """PW0 at the smaller direction's sliding friction, rounded down; a PD's FC
+    lifts each direction to its own (within a step); a PID's integral holds the
+    difference (FC 0) and its hunting guard is the encoder's one count."""
+    m = AxisModel(speed_gain=100.0, tau=0.1, friction_v=(1.0, 0.83), breakaway_pct=(9.0, 7.5))
+    volts_per_tick = m.supply_v / m.full
+    pw0 = m.pw0()
+    assert pw0 * volts_per_tick <= 0.83 < (pw0 + 1) * volts_per_tick    # rounded down: 70, not 71
+    fc = m.fc(pw0, "pd")
+    step_v = volts_per_tick * (m.full - pw0) / m.full
+    for f, vf in zip(fc, m.friction_v):
+        assert abs((pw0 + f * (m.full - pw0) / m.full) * volts_per_tick - vf) <= step_v / 2 + 1e-12
+    assert fc[0] > fc[1]
+    assert m.fc(pw0, "pid") == (0, 0)
+    pid = design(m, Wish(law="pid"))
+    assert pid.fc == (0, 0) and pid.compensation()["IZONE_Q16"] == 65536
+    assert design(m, Wish(law="pid", tolerance_counts=0.5)).izone_counts == 0
+    pd = design(m, Wish(law="pd"))
+    assert pd.fc == fc and pd.compensation()["IZONE_Q16"] == 0
