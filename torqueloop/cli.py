@@ -1442,8 +1442,9 @@ def parser() -> argparse.ArgumentParser:
                     help="run the tuned one-turn step in the closed loop: on the fast model or the RTL board image")
     sp.add_argument("--verify-plant", default=None, metavar="FILE",
                     help="the plant file to verify on [the --plant-file]")
-    sp.add_argument("--verify-s", type=_bounded(float, 0.1, 60, "--verify-s"), default=2.0, metavar="S",
-                    help="simulated seconds of the verification [2]")
+    sp.add_argument("--verify-s", type=_bounded(float, 0.1, 60, "--verify-s"), default=3.0, metavar="S",
+                    help="simulated seconds of the verification (z of the scaled lab plant settles into +-2 counts "
+                         "at 2.4 s) [3]")
     sp.add_argument("--table1-s", type=_bounded(float, 0, 60, "--table1-s"), default=0.0, metavar="S",
                     help="with --verify: also run the Table 1 gains of the same law on the same plant for S "
                          "simulated seconds (fast path, the paper's period and carriers; slow) [0: no]")
