@@ -13,11 +13,12 @@ prediction and the fast model, and the tuned gains over a grid of plant spreads.
    than 2 counts off.
 2. The robustness grid, per axis: the gains tuned on that plant's identifiable keys,
    run on the fast model on plants whose rotor friction is scaled by 0.7 /
-   1.3, rotor inertia by 0.8 / 1.2, k_t (= k_e) by 0.9 / 1.1 and breakaway
+   1.3, rotor inertia by 0.7 / 1.3 (the issue's +-30 %), k_t (= k_e) by 0.9 / 1.1 and breakaway
    moved by -1 / +1 point of duty (the rotor's static friction changed by
    one percent of its stall torque), every corner and the centre (17 runs;
-   --quick: the centre and the two extreme corners), 3 s each; the worst
-   overshoot, settling, final error and the largest swing in the last
+   --quick: the centre and the two extreme corners, 1.5 s), each for 2 s
+   past the design's predicted settling into +-2 counts (at least 3 s); the
+   worst overshoot, settling, final error and the largest swing in the last
    second (a limit cycle, or a slow return) named.  The table goes into
    docs/identification.md.
 """
@@ -42,7 +43,10 @@ from torqueloop.spec.system import SYSTEM
 SCALE_FRICTION, SCALE_INERTIA = 1.25, 0.8
 WISH = Wish(settling_s=0.35, law="pid", period_s=1e-3)
 MAX_OVERSHOOT_PCT, MAX_ERROR_COUNTS = 2.0, 2.0
-SPREAD = {"friction": (0.7, 1.3), "inertia": (0.8, 1.2), "kt": (0.9, 1.1), "dead_zone_pts": (-1.0, 1.0)}
+SPREAD = {"friction": (0.7, 1.3), "inertia": (0.7, 1.3), "kt": (0.9, 1.1), "dead_zone_pts": (-1.0, 1.0)}
+#: the record runs this long past the design's predicted settling into +-2 counts, so that its last second
+#: (the limit-cycle column) is past the approach
+SETTLED_S = 2.0
 BUILD = experiment.REPO_ROOT / "build" / "bench_tune"
 
 
@@ -135,12 +139,12 @@ def rtl_check() -> int:
 def robustness() -> int:
     from bench import QUICK
 
-    p, ts = tuned(3.0)
+    p, ts = tuned(6.0)
     grid = list(itertools.product(*SPREAD.values()))
     grid = [(1.0, 1.0, 1.0, 0.0)] + (grid if not QUICK else [grid[0], grid[-1]])
-    grid_s = 1.5 if QUICK else 3.0
     for t in ts:
         a = t.axis
+        grid_s = 1.5 if QUICK else round(max(3.0, (t.predicted_tight_s or 4.0) + SETTLED_S), 1)
         print(f"\nrobustness of axis {t.name} on the fast model ({len(grid)} plants, {grid_s:g} s one-turn step, "
               "the gains above)")
         print("| friction | inertia | k_t | dead zone (pts) | breakaway (% duty) | overshoot (%) | settling 2 % (s) | "
