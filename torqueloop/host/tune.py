@@ -41,6 +41,9 @@ PID_ALPHAS = (1.0, 0.7, 0.5, 0.35, 0.25)
 #: the PID's damping candidates beyond the overshoot limit's (None): a saturated one-turn step overshoots
 #: by how late the loop starts braking, and more damping (more Kd against Kp) brakes earlier
 PID_ZETAS = (None, 1.3, 1.6, 2.0)
+#: the design model's record the candidates are compared on (s): long enough for the slowest to settle,
+#: whatever record the prediction is then reported over
+CHOOSE_S = 6.0
 #: the keys of the identified axis the design reads (plant file, [identifiable.<axis>])
 NEEDED = ("speed_gain_rad_per_s_per_v", "time_constant_s", "friction_v_pos", "friction_v_neg",
           "dead_zone_pos_pct", "dead_zone_neg_pct")
@@ -126,17 +129,19 @@ def tune_axis(axis: int, ident: dict[str, float], wish: Wish, pwm_hz: float, whe
         if over:
             refused = refused or over[0]
             continue
-        ts, xs, met = predict(m, d, step_counts, predict_s, wish.cmd_limit)
+        ts, xs, met = predict(m, d, step_counts, max(predict_s, CHOOSE_S), wish.cmd_limit)
         tol = _tight(ts, xs, step_counts, wish.tolerance_counts)
         rank = (met.overshoot_pct > wish.overshoot_pct, met.overshoot_pct if met.overshoot_pct > wish.overshoot_pct
                 else 0.0, math.inf if tol is None else tol)
         if best is None or rank < best[0]:
-            best = (rank, d, met, _tight(ts, xs, step_counts, TIGHT_BAND_COUNTS))
+            best = (rank, d)
     if best is None:
         k, v = refused  # type: ignore[misc]
         raise TuneError(f"axis {axis}: {k} = {v} is beyond what the board holds ({top}: "
                         f"{P.PARAMS['KP_UNM_RAD'].max / 1e6:g} N m/rad at its tau_max): ask for a slower settling")
-    _, d, met, tight = best
+    d = best[1]
+    ts, xs, met = predict(m, d, step_counts, predict_s, wish.cmd_limit)     # over the record asked for
+    tight = _tight(ts, xs, step_counts, TIGHT_BAND_COUNTS)
     return AxisTune(axis, SYSTEM.axes[axis].name, m, d, divider_at_least(pwm_hz), met, step_counts, tight)
 
 
