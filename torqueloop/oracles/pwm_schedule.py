@@ -108,6 +108,15 @@ class Plant(Protocol):
     def advance(self, dt: float, pins: Sequence[Pins]) -> list: ...
 
 
+class PeriodPlant(Protocol):
+    """A plant that takes a stretch's pin changes at once, in ticks of its
+    axes' ``tick`` seconds (sim_models.stepper.TwoAxisPlant.run_pins)."""
+
+    axes: Sequence
+
+    def run_pins(self, ticks: int, changes: Sequence[Sequence[tuple[int, Pins]]]) -> None: ...
+
+
 def run_until(plant: Plant, channels: Sequence[PwmChannel], now: int, end: int,
               clk_hz: int = SYSTEM.clk_hz, on_edges: Callable[[int, list], None] | None = None) -> int:
     """Advance ``plant`` from clock ``now`` to ``end`` through every pin change
@@ -126,6 +135,17 @@ def run_until(plant: Plant, channels: Sequence[PwmChannel], now: int, end: int,
         if on_edges is not None and edges:
             on_edges(now, edges)
         now = nxt
+
+
+def run_pins_until(plant: PeriodPlant, channels: Sequence[PwmChannel], now: int, end: int,
+                   clk_hz: int = SYSTEM.clk_hz) -> None:
+    """As :func:`run_until`, but the plant takes every pin change from clock
+    ``now`` to ``end`` at once (``plant.run_pins``): no encoder edges, for a
+    caller that reads the plant only at ``end`` (docs/plant.md, "The fast
+    path")."""
+    per_clk = round(1.0 / (clk_hz * plant.axes[0].tick))
+    plant.run_pins((end - now) * per_clk,
+                   [[((c - now) * per_clk, p) for c, p in pin_changes(ch, now, end)] for ch in channels])
 
 
 def pin_changes(channel: PwmChannel, now: int, end: int) -> list[tuple[int, Pins]]:

@@ -427,7 +427,7 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = (), edges: bool =
     one product, no encoder edges, docs/plant.md "The fast path");
     ``edges=True`` steps it edge by edge as the co-simulation does
     (``run_until``), the reference that stepping is checked against."""
-    from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, pin_changes, run_until
+    from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, run_pins_until, run_until
     from torqueloop.oracles.servo import Axis, AxisParams
     from torqueloop.spec.bridge import BRAKE, COAST
     params = cfg.plant_params()
@@ -454,7 +454,6 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = (), edges: bool =
     # a start away from 0: the same law moves there first, so the step begins where (and from the side) it arrived
     n_pre = int(round(cfg.start_s * 1e6 / cfg.period_us)) if any(cfg.start_counts) else 0
     out = {k: np.zeros((n, 2)) for k in ("pos", "vel", "cmd", "err", "true", "q", "q2")}
-    ticks_per_clk = round(1.0 / (CLK_HZ * plant.axes[0].tick))
     q0, q20 = [0.0, 0.0], [0.0, 0.0]
     w0 = time.monotonic()
     edge_clk, edge_gap = [0, 0], [0, 0]      # the decoder's last edge and the interval before it (VEL_MODE 1)
@@ -473,9 +472,7 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = (), edges: bool =
         if step_edges:
             run_until(plant, channels, prev, ts, CLK_HZ, on_edges)
         else:
-            plant.run_pins((ts - prev) * ticks_per_clk,
-                           [[((c - prev) * ticks_per_clk, p) for c, p in pin_changes(ch, prev, ts)]
-                            for ch in channels])
+            run_pins_until(plant, channels, prev, ts, CLK_HZ)
         for a in AXES:
             if kk == 0 and n_pre:
                 axes[a].move(cfg.start_counts[a], False)

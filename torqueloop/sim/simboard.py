@@ -21,7 +21,15 @@ the level their reference models define:
 - the configuration flash the firmware stores its parameters in
   (``torqueloop.sim.epcs``, the EPCS command set byte by byte; with a file,
   it survives this process: a power cycle is a new process on the same file);
-- the plant: ``sim_models.stepper.TwoAxisPlant`` (paper eq. 5-17).
+- the plant: ``sim_models.stepper.TwoAxisPlant`` (paper eq. 5-17), stepped
+  a stretch at once (``TwoAxisPlant.run_pins``, docs/plant.md "The fast
+  path") where nothing reads encoder edges; edge by edge (its ``advance`` at
+  every pin change) while an index latch is armed and in the boot ROM's
+  window; and, while the firmware takes the speed from the decoder's edge
+  timestamps (VEL_MODE 1, the default), at once with the stretch's last
+  edges stepped again edge by edge (``_run_last_edges``).  ``edges=True``
+  steps every edge always: the reference the others are checked against
+  (tests/test_simboard_stepping.py).  Each control period is one stretch.
 
 UART bytes reach the firmware when they arrive and its replies leave at
 once (115200 baud adds under 7 ms to a 70-byte frame; the host's timeouts
@@ -35,6 +43,7 @@ TCP port, so the RTL co-simulation can take this one's place.
 
 from __future__ import annotations
 
+import copy
 import ctypes
 import hashlib
 import os
@@ -43,7 +52,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
 from torqueloop.flow.firmware import AUTH_SOURCES, SERVO_CORE
-from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, run_until
+from torqueloop.oracles.pwm_schedule import PwmChannel, PwmSetting, run_pins_until, run_until
 from torqueloop.sim.epcs import Epcs
 from torqueloop.spec import auth
 from torqueloop.spec.bridge import BRAKE, COAST
@@ -65,6 +74,12 @@ DEFAULT_BUILD_ID = 0x51B0_0001
 #: end's above the second (about +-190 mm of a 4 mm lead).
 LIMIT_COUNTS = (-400_000, 400_000)
 LIM_NEG, LIM_POS = 0x01, 0x02
+#: a stretch stepped at once while the firmware reads edge timestamps runs in this many pieces,
+#: the last halved toward its end TAIL_HALVINGS times (SimBoard._run_last_edges)
+TAIL_PIECES, TAIL_HALVINGS = 8, 3
+#: ... if it is at least this long (5 ms); a shorter one (PERIOD_US 1000 while identifying) is stepped
+#: edge by edge: its few pin changes leave the pieces nothing to batch
+TAIL_MIN_CLOCKS = 250_000
 #: an undercounting encoder passes one count of this many (set_encoder_fault)
 UNDERCOUNT = 50
 #: the simulated flash's write times: a sector erase takes up to 3 s on an EPCS64, which the
@@ -111,10 +126,13 @@ class SimBoard:
     """Firmware + PWM + decoder + plant.  One instance per process (the
     firmware's state is the library's statics).  ``key``: the link key in
     its boot ROM's key slot (None: a board built without a key, which
-    refuses motion, parameter changes and uploads; docs/security.md)."""
+    refuses motion, parameter changes and uploads; docs/security.md).
+    ``edges``: step the plant edge by edge even where nothing reads the
+    encoder's edges (slower; the reference for the stepping a stretch at
+    once)."""
 
     def __init__(self, build_id: int = DEFAULT_BUILD_ID, seed: int = 0, plant: "str | PlantSpec" = "paper",
-                 key: bytes | None = None, flash: Epcs | None = None) -> None:
+                 key: bytes | None = None, flash: Epcs | None = None, edges: bool = False) -> None:
         from sim_models.stepper import TwoAxisPlant
         from sim_models.variants import plant_of
 
@@ -124,6 +142,8 @@ class SimBoard:
         self._lib.sb_baud_div.restype = ctypes.c_uint32
         self._lib.sb_bootloader_requested.restype = ctypes.c_int32
         self._lib.sb_index_armed.restype = ctypes.c_int32
+        self._lib.sb_vel_mode.restype = ctypes.c_int32
+        self.edges = edges
         self.plant = TwoAxisPlant(plant_of(plant).params(), seed=seed)
         self.tick = 0                    # 50 MHz clocks since power-up
         self._edge_tick = [0, 0]
@@ -295,10 +315,76 @@ class SimBoard:
             if e.z and self._lib.sb_index_armed(ctypes.c_uint32(e.axis)) and self.encoder_fault[e.axis] is None:
                 self._lib.sb_index_latch(ctypes.c_uint32(e.axis), ctypes.c_int32(self._count[e.axis]))
 
+    def _needs_edges(self) -> bool:
+        """Whether every encoder edge of the stretch ahead matters: an armed
+        index latch, the boot ROM's window (its jump restarts the firmware),
+        or ``edges=True``."""
+        return (self.edges or self.boot is not None
+                or any(self._lib.sb_index_armed(ctypes.c_uint32(a)) for a in range(2)))
+
+    def _needs_last_edges(self) -> bool:
+        """Whether the firmware reads the decoder's last edge time and the
+        interval before it (VEL_MODE 1 on an axis)."""
+        return any(self._lib.sb_vel_mode(ctypes.c_uint32(a)) for a in range(2))
+
     def _run_pwm_until(self, end: int) -> None:
-        if end > self.tick:
+        if end <= self.tick:
+            return
+        if self._needs_edges():
             run_until(self.plant, self._pwm, self.tick, end, CLK_HZ, self._edges)
-            self.tick = end
+        elif self._needs_last_edges():
+            if end - self.tick < TAIL_MIN_CLOCKS:
+                run_until(self.plant, self._pwm, self.tick, end, CLK_HZ, self._edges)
+            else:
+                self._run_last_edges(end)
+        else:
+            self._run_pins(self.tick, end)
+        self.tick = end
+
+    def _run_pins(self, start: int, end: int) -> None:
+        """The stretch at once, no edges: the decoder's count is the plant's at
+        the end (where the edges would have left it); its last edge time and
+        the interval before it keep their values."""
+        run_pins_until(self.plant, self._pwm, start, end, CLK_HZ)
+        for a in range(2):
+            self._count[a], self._gray[a] = self.plant.count(a), self._gray_index(a)
+
+    def _run_last_edges(self, end: int) -> None:
+        """What the decoder's last edge time and the interval before it are at
+        ``end``, for less than stepping every edge: the stretch runs at once
+        in TAIL_PIECES pieces, the last of them halved toward the end
+        TAIL_HALVINGS times, the plant's state kept at each boundary.  From
+        the latest boundary after which every axis that counted since the
+        stretch began counts at least two more (or, if it had not counted
+        before, counts at all) to the first after which no axis counts, the
+        plant is stepped again edge by edge: its edges there are the last
+        ones; then it runs at once to the end.  A count that leaves and comes
+        back within a piece run at once is not seen: the interval of the next
+        edge is then measured from the edge before it."""
+        start = self.tick
+        span = end - start
+        last = start + span * (TAIL_PIECES - 1) // TAIL_PIECES
+        bounds = sorted({start + span * k // TAIL_PIECES for k in range(TAIL_PIECES)}
+                        | {end - ((end - last) >> j) for j in range(TAIL_HALVINGS + 1)} | {end})
+        saved, counts = [], [[self.plant.count(a) for a in range(2)]]
+        for lo, hi in zip(bounds, bounds[1:]):
+            saved.append((self.plant.snapshot(), [copy.copy(ch) for ch in self._pwm]))
+            self._run_pins(lo, hi)
+            counts.append([self.plant.count(a) for a in range(2)])
+        c0, c1 = counts[0], counts[-1]
+        n = len(bounds) - 1
+        i = next(i for i in range(n, -1, -1)
+                 if all(counts[i][a] == c0[a] or abs(c1[a] - counts[i][a]) >= 2 for a in range(2)))
+        if i == n:
+            return                       # no axis counted (as far as the pieces' ends show)
+        j = next(j for j in range(i + 1, n + 1) if counts[j] == c1)
+        plant, self._pwm = saved[i]
+        self.plant.restore(plant)
+        for a in range(2):
+            self._count[a], self._gray[a] = counts[i][a], counts[i][a] & 3
+        run_until(self.plant, self._pwm, bounds[i], bounds[j], CLK_HZ, self._edges)
+        if j < n:
+            self._run_pins(bounds[j], end)
 
 
 _GRAY_INDEX = {(0, 0): 0, (1, 0): 1, (1, 1): 2, (0, 1): 3}   # sim_models.encoder's A/B Gray code

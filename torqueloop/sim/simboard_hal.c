@@ -195,6 +195,10 @@ void sb_index_latch(uint32_t axis, int32_t pos)
     index_seen[axis] = 1;
 }
 
+/* Whether the firmware takes its speed from the decoder's edge timestamps
+ * (VEL_MODE 1): simboard.py then steps the plant's last edges of a period. */
+int32_t sb_vel_mode(uint32_t axis) { return (int32_t)servo.ax[axis].ctl.vel_mode; }
+
 /* drive[0..6] = cmd, on, brake, fdiv, pw0, pwmax, limit block */
 void sb_get_drive(uint32_t axis, int32_t *drive)
 {
