@@ -92,7 +92,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
 static inline __attribute__((always_inline)) int32_t edge_speed(const tl_ctl_t *c, uint32_t ad, uint32_t dt)
 {
     uint32_t m, k;
-    if (ad < TL_CTL_SPEED_TAB) {
+    if (TL_LIKELY(ad < TL_CTL_SPEED_TAB)) {
         m = tl_ctl_speed_m[ad];
         k = tl_ctl_speed_k[ad];
     } else {
@@ -107,7 +107,7 @@ static inline __attribute__((always_inline)) int32_t edge_speed(const tl_ctl_t *
 static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos,
                                                             uint32_t edge_time, uint32_t now, uint32_t interval)
 {
-    if (p->vel_mode == 0u) {
+    if (TL_UNLIKELY(p->vel_mode == 0u)) {
         /* The paper: Euler difference over T_s, low-pass weight 1/2 (torqueloop/sim/model_loop.py),
          * with 2^8 1e6 / T_s rounded once per configuration (exact for T_s dividing 2^14 5^6 us). */
         int64_t euler = (int64_t)count_diff(pos, c->pos_prev) * c->d.euler_k;
@@ -119,11 +119,11 @@ static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl
          * so take one count over the decoder's last edge interval instead. */
         int32_t d = count_diff(pos, c->pos_ref);
         uint32_t dt = edge_time - c->t_ref;
-        if (!c->moved_last) {
+        if (TL_UNLIKELY(!c->moved_last)) {
             d = d > 0 ? 1 : -1;
             dt = interval;
         }
-        if (dt == 0u)
+        if (TL_UNLIKELY(dt == 0u))
             dt = 1u;
         int32_t v = edge_speed(c, d < 0 ? 0u - (uint32_t)d : (uint32_t)d, dt);
         c->vel_q8 = d < 0 ? -v : v;
@@ -135,7 +135,7 @@ static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl
         /* No count this sample: the speed cannot exceed one count over the time since the
          * last edge, so the estimate decays as 1/t to zero when the axis stops. */
         uint32_t dt = now - c->t_ref;
-        if (dt > 0x7FFFFFFFu)
+        if (TL_UNLIKELY(dt > 0x7FFFFFFFu))
             c->t_ref = now - 0x7FFFFFFFu;   /* keep the reference inside the 32-bit window */
         int32_t v = c->vel_q8;
         uint32_t av = v < 0 ? 0u - (uint32_t)v : (uint32_t)v;
@@ -208,13 +208,13 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     int64_t e_q16 = c->sp_q16 - (int64_t)pos * 65536;
     int32_t e = (int32_t)e_q16;
     bool fits = (int32_t)(e_q16 >> 32) == (e >> 31) && e != INT32_MIN;
-    if (fits) {
+    if (TL_LIKELY(fits)) {
         c->err_counts = (e >> 16) + ((e >> 15) & 1);   /* (e + 2^15) >> 16 without overflow */
     } else {
         c->err_counts = sat31((e_q16 + 32768) >> 16);
         e = e_q16 < 0 ? -0x7FFFFFFF : 0x7FFFFFFF;
     }
-    if (!run_law || p->law == TL_LAW_OFF) {
+    if (TL_UNLIKELY(!run_law || p->law == TL_LAW_OFF)) {
         c->integ_q32 = 0;
         c->cmd = 0;
         return 0;
@@ -232,7 +232,7 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
         bool frozen = c->sat_sign != 0 && e_sign == c->sat_sign;
         if (c->d.friction && p->izone_q16 != 0 && (e < 0 ? -e : e) <= p->izone_q16)
             frozen = true;   /* the hunting guard */
-        if (!frozen) {
+        if (TL_LIKELY(!frozen)) {
             int32_t ek = e > c->d.ki_e_max ? c->d.ki_e_max : (e < -c->d.ki_e_max ? -c->d.ki_e_max : e);
             int64_t i = c->integ_q32 + (mul64u32s(c->d.ki_dt_q32, ek) >> 16);
             /* clamp to +-cmd_limit q32, whose low word is zero: compare high words */
@@ -248,7 +248,7 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     } else {
         c->integ_q32 = 0;
     }
-    if (c->d.friction)
+    if (TL_UNLIKELY(c->d.friction))
         friction_terms(c, p, &pd_q16, i_q16);
     /* round to the nearest PWM step and saturate (eq. 19/25): u = (pd + i + 2^15) >> 16.  The
      * bounds are within +-2^26 (CMD_LIMIT <= 1023) and |i| < 2^27: with |pd| < 2^30 the sum

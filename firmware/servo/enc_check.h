@@ -56,7 +56,7 @@ static inline __attribute__((always_inline)) uint16_t enc_check(tl_axis_t *a, in
 {
     int32_t cmd = a->cmd;
     int8_t dir = cmd > cmd0 ? 1 : (cmd < -cmd0 ? -1 : 0);
-    if (dir == 0 || dir != a->enc_dir) {
+    if (TL_UNLIKELY(dir == 0 || dir != a->enc_dir)) {
         a->enc_dir = dir;
         a->enc_ref = a->pos;
         a->enc_exp_q24 = 0;
@@ -74,7 +74,7 @@ static inline __attribute__((always_inline)) uint16_t enc_check(tl_axis_t *a, in
         vlo = (int32_t)((uint32_t)vlo + (uint32_t)(((uint64_t)gap * (uint32_t)a->enc.alpha_q16) >> 16));
     }
     a->enc_vlo_q8 = vlo;
-    if (vlo <= 0) {
+    if (TL_UNLIKELY(vlo <= 0)) {
         /* still braking from the other direction: the speed estimate lags the
          * reversal, so nothing is asked of the encoder until the lower bound
          * says the axis must move the command's way */
