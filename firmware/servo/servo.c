@@ -77,7 +77,7 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
             tl_axis_disable(s, i);
     }
     /* An old direction-blocking fault lets the axis be driven out; any other stops it. */
-    if (TL_UNLIKELY(a->enabled && (a->faults & (uint16_t)~TLP_FAULT_DIRECTIONAL)))
+    if (TL_UNLIKELY((a->faults & (uint16_t)~TLP_FAULT_DIRECTIONAL) && a->enabled))
         tl_axis_disable(s, i);
     bool homing = a->home == TLP_HOME_STATE_HOMING;
     if (__builtin_expect(homing, 0))   /* homing.c, a call: keep the path of an axis under control straight */
