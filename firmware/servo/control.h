@@ -63,6 +63,8 @@
 #define TL_CTL_SPEED_TAB 64u
 extern uint32_t tl_ctl_speed_m[TL_CTL_SPEED_TAB];
 extern uint8_t tl_ctl_speed_k[TL_CTL_SPEED_TAB];
+/* floor((2^32 - 1) / k) for 1 <= k < TL_CTL_SPEED_TAB (control_step.h div_small), filled with the speed table. */
+extern uint32_t tl_ctl_recip[TL_CTL_SPEED_TAB];
 
 typedef struct {
     uint32_t law;

@@ -42,13 +42,24 @@ static inline uint64_t stop_distance(uint32_t v, uint32_t m, uint32_t a)
     return ((uint64_t)(m + 1u) * (uint64_t)(2u * v - a * m)) >> 1;   /* 2v - a m = v + (v mod a) < 2^31 */
 }
 
+/* floor(x / k), k >= 1: below TL_CTL_SPEED_TAB through the reciprocal table (a multiply,
+ * a check and at most one correction: floor(x R / 2^32) with R = floor((2^32 - 1) / k) is
+ * the quotient or one less), the hardware divide (35 cycles) beyond. */
+static inline uint32_t div_small(uint32_t x, uint32_t k)
+{
+    if (k >= TL_CTL_SPEED_TAB)
+        return x / k;
+    uint32_t q = (uint32_t)(((uint64_t)x * tl_ctl_recip[k]) >> 32);
+    return x - q * k >= k ? q + 1u : q;
+}
+
 static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
 {
     int64_t d = c->target_q16 - c->sp_q16;
-    int32_t dir = d >= 0 ? 1 : -1;
+    int32_t s = (int32_t)(d >> 63);                  /* toward the target: 0 up, -1 down */
     uint64_t ad = (uint64_t)abs64(d);
     uint32_t a = (uint32_t)c->d.amax_q16;
-    int32_t v = c->prof_v_q16 * dir;                 /* speed toward the target, accelerated: */
+    int32_t v = (c->prof_v_q16 ^ s) - s;             /* speed toward the target (|v| < 2^31), accelerated: */
     int32_t vs = v + (int32_t)a;
     uint32_t m = v >= 0 ? c->prof_m + 1u : (c->prof_m ? c->prof_m - 1u : 0u);
     if (vs > c->d.vmax_q16) {
@@ -69,7 +80,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
                 tn -= a * (n + 1u);   /* a (n + 1) <= v + a < 2^31: a 32-bit product */
             }
             uint64_t x = ad + tn - (uint64_t)(n + 1u) * lo;   /* >= 0: v_allow >= lo */
-            vs = (int32_t)(lo + ((x >> 32) ? tl_div64_32(x, n + 1u) : (uint32_t)x / (n + 1u)));
+            vs = (int32_t)(lo + ((x >> 32) ? tl_div64_32(x, n + 1u) : div_small((uint32_t)x, n + 1u)));
             m = n;
         }
     }
@@ -80,7 +91,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
         c->moving = false;
         return;
     }
-    c->prof_v_q16 = vs * dir;
+    c->prof_v_q16 = (vs ^ s) - s;
     c->prof_m = m;
     c->sp_q16 += c->prof_v_q16;
 }
