@@ -153,9 +153,10 @@ static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl
         /* |v| > bound = floor(m / dt) 2^k (m, k: one count)  <=>  ceil(|v| / 2^k) dt > m,
          * a multiply: the bound's divide only when it clamps (|v| < 2^31, k <= 30: no overflow) */
         uint32_t k = c->d.bound_k;
-        if (dt && (uint64_t)((av + (1u << k) - 1u) >> k) * dt > c->d.bound_m) {
-            int32_t bound = edge_speed(c, 1u, dt);
-            c->vel_q8 = v < 0 ? -bound : bound;
+        uint64_t need = (uint64_t)((av + (1u << k) - 1u) >> k) * dt;   /* one branch: high word or low word over */
+        if ((uint32_t)(need >> 32) | ((uint32_t)need > c->d.bound_m)) {
+            int32_t bound = edge_speed(c, 1u, dt), sv = v >> 31;
+            c->vel_q8 = (bound ^ sv) - sv;
         }
     }
     c->pos_prev = pos;
@@ -239,18 +240,22 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
         pd_q16 -= mul32(p->kd_q16, c->vel_q8) >> 8;
     int32_t i_q16 = 0;
     if (p->law == TL_LAW_PID) {
-        int32_t e_sign = e > 0 ? 1 : (e < 0 ? -1 : 0);
-        bool frozen = c->sat_sign != 0 && e_sign == c->sat_sign;
-        if (c->d.friction && p->izone_q16 != 0 && (e < 0 ? -e : e) <= p->izone_q16)
+        int32_t e_sign = (e > 0) - (e < 0);
+        bool frozen = (c->sat_sign != 0) & (e_sign == c->sat_sign);   /* & not &&: no branch */
+        if (TL_UNLIKELY(c->d.friction) && p->izone_q16 != 0 && (e < 0 ? -e : e) <= p->izone_q16)
             frozen = true;   /* the hunting guard */
         if (TL_LIKELY(!frozen)) {
-            int32_t ek = e > c->d.ki_e_max ? c->d.ki_e_max : (e < -c->d.ki_e_max ? -c->d.ki_e_max : e);
+            int32_t ek = e;
+            if (TL_UNLIKELY(e > c->d.ki_e_max))
+                ek = c->d.ki_e_max;
+            else if (TL_UNLIKELY(e < -c->d.ki_e_max))
+                ek = -c->d.ki_e_max;
             int64_t i = c->integ_q32 + (mul64u32s(c->d.ki_dt_q32, ek) >> 16);
             /* clamp to +-cmd_limit q32, whose low word is zero: compare high words */
             int32_t ih = (int32_t)(i >> 32);
-            if (ih >= limit && (ih > limit || (uint32_t)i != 0u))
+            if (TL_UNLIKELY(ih >= limit && (ih > limit || (uint32_t)i != 0u)))
                 i = c->d.lim_q32;
-            else if (ih < -limit)
+            else if (TL_UNLIKELY(ih < -limit))
                 i = -c->d.lim_q32;
             c->integ_q32 = i;
         }
@@ -266,7 +271,7 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
      * fits 32 bits, and beyond, pd's sign alone decides the saturation. */
     int32_t pd = (int32_t)pd_q16;
     int32_t cmd;
-    if ((int32_t)(pd_q16 >> 32) == (pd >> 31) && (uint32_t)pd + 0x40000000u < 0x80000000u) {
+    if (TL_LIKELY((int32_t)(pd_q16 >> 32) == (pd >> 31) && (uint32_t)pd + 0x40000000u < 0x80000000u)) {
         int32_t t = pd + i_q16 + 32768;
         if (t >= (int32_t)c->d.sat_hi_q16) {
             cmd = limit;
