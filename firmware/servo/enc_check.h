@@ -37,9 +37,6 @@ static inline void enc_check_derive(tl_enc_cfg_t *e, int32_t cps, int32_t tau_ms
     e->k_q8 = (int32_t)(((uint64_t)(uint32_t)cps * 256u) / (2u * TL_PWM_FULL));
     uint64_t alpha = ((uint64_t)period_us << 16) / ((uint64_t)(uint32_t)tau_ms * 1000u);
     e->alpha_q16 = alpha > 65536u ? 65536 : (int32_t)alpha;
-    /* gap alpha_q16 / 2^16 = the high word of gap alpha_q32, or the whole gap at alpha 1 */
-    e->alpha_q32 = e->alpha_q16 < 65536 ? (uint32_t)e->alpha_q16 << 16 : 0u;
-    e->alpha_one = e->alpha_q16 < 65536 ? 0u : 0xFFFFFFFFu;
     e->dt_q16 = (int32_t)(((uint64_t)period_us << 16) / 1000000u);
 }
 
@@ -74,8 +71,7 @@ static inline __attribute__((always_inline)) uint16_t enc_check(tl_axis_t *a, in
         /* v_ss - vlo in (0, 2^32): exact as an unsigned difference; times alpha over 2^16 it
          * is at most the difference, so vlo stays between its old value and v_ss */
         uint32_t gap = (uint32_t)v_ss - (uint32_t)vlo;
-        uint32_t step = (uint32_t)(((uint64_t)gap * a->enc.alpha_q32) >> 32) + (gap & a->enc.alpha_one);
-        vlo = (int32_t)((uint32_t)vlo + step);
+        vlo = (int32_t)((uint32_t)vlo + (uint32_t)(((uint64_t)gap * (uint32_t)a->enc.alpha_q16) >> 16));
     }
     a->enc_vlo_q8 = vlo;
     if (TL_UNLIKELY(vlo <= 0)) {
@@ -95,8 +91,7 @@ static inline __attribute__((always_inline)) uint16_t enc_check(tl_axis_t *a, in
     /* what the encoder is behind the lower bound; ahead of it counts for nothing later */
     int64_t behind = exp - (int64_t)((uint64_t)(int64_t)moved << 24);
     a->enc_exp_q24 = behind > 0 ? behind : 0;
-    /* behind > slack 2^24: the sign of the difference, no branch */
-    return (uint16_t)((uint32_t)((uint64_t)(((int64_t)slack << 24) - behind) >> 63) * TLP_FAULT_RUNAWAY);
+    return behind > ((int64_t)slack << 24) ? TLP_FAULT_RUNAWAY : 0u;
 }
 
 #endif

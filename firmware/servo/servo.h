@@ -21,8 +21,6 @@
 typedef struct {
     int32_t k_q8;                 /* half the model's speed per command step above ENC_CMD0, counts/s q8 */
     int32_t alpha_q16;            /* period / ENC_TAU_MS, q16, at most 1 */
-    uint32_t alpha_q32;           /* the same below 1 as q32 (alpha_q16 << 16), 0 at 1 */
-    uint32_t alpha_one;           /* all ones when alpha is 1, else 0 */
     int32_t dt_q16;               /* the period, s q16 */
 } tl_enc_cfg_t;
 
