@@ -125,7 +125,8 @@ def test_encoder_check_matches_the_reference_model(host_tests: Path) -> None:
                 cmd = rng.randrange(-1023, 1024)
             pos = ((pos + rng.choice([0, 0, 1, -1, rng.randrange(-500, 500), rng.randrange(-2**20, 2**20)])
                     + 2**31) % 2**32) - 2**31
-            vel = rng.randrange(-2**31, 2**31) if rng.random() < 0.05 else rng.randrange(-10**7, 10**7)
+            # the control law's speed estimate saturates to +-(2^31 - 1) (control_step.h)
+            vel = rng.randrange(-2**31 + 1, 2**31) if rng.random() < 0.05 else rng.randrange(-10**7, 10**7)
             lines.append(f"e {cmd} {pos} {vel}")
             trip = ref.step(cmd, pos, vel)
             want.append((int(trip), ref.vlo_q8, ref.behind_q24))

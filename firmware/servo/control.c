@@ -101,6 +101,7 @@ uint32_t tl_speed_numerator(uint64_t n, uint32_t *k)
 
 uint32_t tl_ctl_speed_m[TL_CTL_SPEED_TAB];
 uint8_t tl_ctl_speed_k[TL_CTL_SPEED_TAB];
+uint32_t tl_ctl_recip[TL_CTL_SPEED_TAB];
 
 /* The speed table for clock clk_hz (the SoC's clock never changes, so a refill
  * writes the values already there and the control iteration may read it meanwhile). */
@@ -113,6 +114,7 @@ TL_FOR_SIZE static void speed_table(uint32_t clk_hz)
         uint32_t k;
         tl_ctl_speed_m[n] = tl_speed_numerator((uint64_t)n * clk_hz * 256u, &k);
         tl_ctl_speed_k[n] = (uint8_t)k;
+        tl_ctl_recip[n] = n ? 0xFFFFFFFFu / n : 0u;
     }
     filled_for = clk_hz;
 }

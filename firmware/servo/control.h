@@ -32,6 +32,17 @@
 #else
 #define TL_FOR_SIZE
 #endif
+/* The control iteration: basic blocks laid out in source order (GCC's "simple" block
+ * reordering) rather than by its guessed probabilities, which put the common path
+ * behind taken forward branches (3 cycles each on the pipelined core, 1 when not taken;
+ * docs/firmware.md, "Timing"). */
+#define TL_LIKELY(x) __builtin_expect(!!(x), 1)
+#define TL_UNLIKELY(x) __builtin_expect(!!(x), 0)
+#if defined(__riscv) && defined(__GNUC__) && !defined(__clang__)
+#define TL_HOT_LAYOUT __attribute__((optimize("reorder-blocks-algorithm=simple")))
+#else
+#define TL_HOT_LAYOUT
+#endif
 
 #define TL_LAW_OFF 0u
 #define TL_LAW_P 1u
@@ -52,6 +63,8 @@
 #define TL_CTL_SPEED_TAB 64u
 extern uint32_t tl_ctl_speed_m[TL_CTL_SPEED_TAB];
 extern uint8_t tl_ctl_speed_k[TL_CTL_SPEED_TAB];
+/* floor((2^32 - 1) / k) for 1 <= k < TL_CTL_SPEED_TAB (control_step.h div_small), filled with the speed table. */
+extern uint32_t tl_ctl_recip[TL_CTL_SPEED_TAB];
 
 typedef struct {
     uint32_t law;

@@ -42,13 +42,24 @@ static inline uint64_t stop_distance(uint32_t v, uint32_t m, uint32_t a)
     return ((uint64_t)(m + 1u) * (uint64_t)(2u * v - a * m)) >> 1;   /* 2v - a m = v + (v mod a) < 2^31 */
 }
 
+/* floor(x / k), k >= 1: below TL_CTL_SPEED_TAB through the reciprocal table (a multiply,
+ * a check and at most one correction: floor(x R / 2^32) with R = floor((2^32 - 1) / k) is
+ * the quotient or one less), the hardware divide (35 cycles) beyond. */
+static inline uint32_t div_small(uint32_t x, uint32_t k)
+{
+    if (k >= TL_CTL_SPEED_TAB)
+        return x / k;
+    uint32_t q = (uint32_t)(((uint64_t)x * tl_ctl_recip[k]) >> 32);
+    return x - q * k >= k ? q + 1u : q;
+}
+
 static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
 {
     int64_t d = c->target_q16 - c->sp_q16;
-    int32_t dir = d >= 0 ? 1 : -1;
+    int32_t s = (int32_t)(d >> 63);                  /* toward the target: 0 up, -1 down */
     uint64_t ad = (uint64_t)abs64(d);
     uint32_t a = (uint32_t)c->d.amax_q16;
-    int32_t v = c->prof_v_q16 * dir;                 /* speed toward the target, accelerated: */
+    int32_t v = (c->prof_v_q16 ^ s) - s;             /* speed toward the target (|v| < 2^31), accelerated: */
     int32_t vs = v + (int32_t)a;
     uint32_t m = v >= 0 ? c->prof_m + 1u : (c->prof_m ? c->prof_m - 1u : 0u);
     if (vs > c->d.vmax_q16) {
@@ -69,7 +80,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
                 tn -= a * (n + 1u);   /* a (n + 1) <= v + a < 2^31: a 32-bit product */
             }
             uint64_t x = ad + tn - (uint64_t)(n + 1u) * lo;   /* >= 0: v_allow >= lo */
-            vs = (int32_t)(lo + ((x >> 32) ? tl_div64_32(x, n + 1u) : (uint32_t)x / (n + 1u)));
+            vs = (int32_t)(lo + ((x >> 32) ? tl_div64_32(x, n + 1u) : div_small((uint32_t)x, n + 1u)));
             m = n;
         }
     }
@@ -80,7 +91,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
         c->moving = false;
         return;
     }
-    c->prof_v_q16 = vs * dir;
+    c->prof_v_q16 = (vs ^ s) - s;
     c->prof_m = m;
     c->sp_q16 += c->prof_v_q16;
 }
@@ -92,7 +103,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
 static inline __attribute__((always_inline)) int32_t edge_speed(const tl_ctl_t *c, uint32_t ad, uint32_t dt)
 {
     uint32_t m, k;
-    if (ad < TL_CTL_SPEED_TAB) {
+    if (TL_LIKELY(ad < TL_CTL_SPEED_TAB)) {
         m = tl_ctl_speed_m[ad];
         k = tl_ctl_speed_k[ad];
     } else {
@@ -107,7 +118,7 @@ static inline __attribute__((always_inline)) int32_t edge_speed(const tl_ctl_t *
 static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos,
                                                             uint32_t edge_time, uint32_t now, uint32_t interval)
 {
-    if (p->vel_mode == 0u) {
+    if (TL_UNLIKELY(p->vel_mode == 0u)) {
         /* The paper: Euler difference over T_s, low-pass weight 1/2 (torqueloop/sim/model_loop.py),
          * with 2^8 1e6 / T_s rounded once per configuration (exact for T_s dividing 2^14 5^6 us). */
         int64_t euler = (int64_t)count_diff(pos, c->pos_prev) * c->d.euler_k;
@@ -119,11 +130,11 @@ static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl
          * so take one count over the decoder's last edge interval instead. */
         int32_t d = count_diff(pos, c->pos_ref);
         uint32_t dt = edge_time - c->t_ref;
-        if (!c->moved_last) {
+        if (TL_UNLIKELY(!c->moved_last)) {
             d = d > 0 ? 1 : -1;
             dt = interval;
         }
-        if (dt == 0u)
+        if (TL_UNLIKELY(dt == 0u))
             dt = 1u;
         int32_t v = edge_speed(c, d < 0 ? 0u - (uint32_t)d : (uint32_t)d, dt);
         c->vel_q8 = d < 0 ? -v : v;
@@ -135,16 +146,17 @@ static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl
         /* No count this sample: the speed cannot exceed one count over the time since the
          * last edge, so the estimate decays as 1/t to zero when the axis stops. */
         uint32_t dt = now - c->t_ref;
-        if (dt > 0x7FFFFFFFu)
+        if (TL_UNLIKELY(dt > 0x7FFFFFFFu))
             c->t_ref = now - 0x7FFFFFFFu;   /* keep the reference inside the 32-bit window */
         int32_t v = c->vel_q8;
         uint32_t av = v < 0 ? 0u - (uint32_t)v : (uint32_t)v;
         /* |v| > bound = floor(m / dt) 2^k (m, k: one count)  <=>  ceil(|v| / 2^k) dt > m,
          * a multiply: the bound's divide only when it clamps (|v| < 2^31, k <= 30: no overflow) */
         uint32_t k = c->d.bound_k;
-        if (dt && (uint64_t)((av + (1u << k) - 1u) >> k) * dt > c->d.bound_m) {
-            int32_t bound = edge_speed(c, 1u, dt);
-            c->vel_q8 = v < 0 ? -bound : bound;
+        uint64_t need = (uint64_t)((av + (1u << k) - 1u) >> k) * dt;   /* one branch: high word or low word over */
+        if ((uint32_t)(need >> 32) | ((uint32_t)need > c->d.bound_m)) {
+            int32_t bound = edge_speed(c, 1u, dt), sv = v >> 31;
+            c->vel_q8 = (bound ^ sv) - sv;
         }
     }
     c->pos_prev = pos;
@@ -208,13 +220,13 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     int64_t e_q16 = c->sp_q16 - (int64_t)pos * 65536;
     int32_t e = (int32_t)e_q16;
     bool fits = (int32_t)(e_q16 >> 32) == (e >> 31) && e != INT32_MIN;
-    if (fits) {
+    if (TL_LIKELY(fits)) {
         c->err_counts = (e >> 16) + ((e >> 15) & 1);   /* (e + 2^15) >> 16 without overflow */
     } else {
         c->err_counts = sat31((e_q16 + 32768) >> 16);
         e = e_q16 < 0 ? -0x7FFFFFFF : 0x7FFFFFFF;
     }
-    if (!run_law || p->law == TL_LAW_OFF) {
+    if (TL_UNLIKELY(!run_law || p->law == TL_LAW_OFF)) {
         c->integ_q32 = 0;
         c->cmd = 0;
         return 0;
@@ -228,18 +240,22 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
         pd_q16 -= mul32(p->kd_q16, c->vel_q8) >> 8;
     int32_t i_q16 = 0;
     if (p->law == TL_LAW_PID) {
-        int32_t e_sign = e > 0 ? 1 : (e < 0 ? -1 : 0);
-        bool frozen = c->sat_sign != 0 && e_sign == c->sat_sign;
-        if (c->d.friction && p->izone_q16 != 0 && (e < 0 ? -e : e) <= p->izone_q16)
+        int32_t e_sign = (e > 0) - (e < 0);
+        bool frozen = (c->sat_sign != 0) & (e_sign == c->sat_sign);   /* & not &&: no branch */
+        if (TL_UNLIKELY(c->d.friction) && p->izone_q16 != 0 && (e < 0 ? -e : e) <= p->izone_q16)
             frozen = true;   /* the hunting guard */
-        if (!frozen) {
-            int32_t ek = e > c->d.ki_e_max ? c->d.ki_e_max : (e < -c->d.ki_e_max ? -c->d.ki_e_max : e);
+        if (TL_LIKELY(!frozen)) {
+            int32_t ek = e;
+            if (TL_UNLIKELY(e > c->d.ki_e_max))
+                ek = c->d.ki_e_max;
+            else if (TL_UNLIKELY(e < -c->d.ki_e_max))
+                ek = -c->d.ki_e_max;
             int64_t i = c->integ_q32 + (mul64u32s(c->d.ki_dt_q32, ek) >> 16);
             /* clamp to +-cmd_limit q32, whose low word is zero: compare high words */
             int32_t ih = (int32_t)(i >> 32);
-            if (ih >= limit && (ih > limit || (uint32_t)i != 0u))
+            if (TL_UNLIKELY(ih >= limit && (ih > limit || (uint32_t)i != 0u)))
                 i = c->d.lim_q32;
-            else if (ih < -limit)
+            else if (TL_UNLIKELY(ih < -limit))
                 i = -c->d.lim_q32;
             c->integ_q32 = i;
         }
@@ -248,14 +264,14 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     } else {
         c->integ_q32 = 0;
     }
-    if (c->d.friction)
+    if (TL_UNLIKELY(c->d.friction))
         friction_terms(c, p, &pd_q16, i_q16);
     /* round to the nearest PWM step and saturate (eq. 19/25): u = (pd + i + 2^15) >> 16.  The
      * bounds are within +-2^26 (CMD_LIMIT <= 1023) and |i| < 2^27: with |pd| < 2^30 the sum
      * fits 32 bits, and beyond, pd's sign alone decides the saturation. */
     int32_t pd = (int32_t)pd_q16;
     int32_t cmd;
-    if ((int32_t)(pd_q16 >> 32) == (pd >> 31) && (uint32_t)pd + 0x40000000u < 0x80000000u) {
+    if (TL_LIKELY((int32_t)(pd_q16 >> 32) == (pd >> 31) && (uint32_t)pd + 0x40000000u < 0x80000000u)) {
         int32_t t = pd + i_q16 + 32768;
         if (t >= (int32_t)c->d.sat_hi_q16) {
             cmd = limit;

@@ -44,24 +44,37 @@ static inline void enc_check_derive(tl_enc_cfg_t *e, int32_t cps, int32_t tau_ms
 static inline void enc_check_reset(tl_axis_t *a) { a->enc_dir = 0; }
 
 /* One period: the command applied during it (a->cmd), the position and the
- * measured speed at its end.  Returns TLP_FAULT_RUNAWAY or 0. */
+ * measured speed at its end.  Returns TLP_FAULT_RUNAWAY or 0.
+ *
+ * 32-bit where the ranges allow (docs/firmware.md, "Timing"): the speed
+ * estimate is within +-(2^31 - 1) (control_step.h saturates it there), the
+ * model's speed (|cmd| - ENC_CMD0) k_q8 <= 1023 * ENC_CPS_max 256 / 2046 < 2^31,
+ * and the lower bound always lies between the two, so it is 32-bit too; only
+ * the distance it covers (up to ENC_SLACK 2^24 and a period's worth beyond)
+ * needs 64 bits. */
 static inline __attribute__((always_inline)) uint16_t enc_check(tl_axis_t *a, int32_t cmd0, int32_t slack)
 {
     int32_t cmd = a->cmd;
     int8_t dir = cmd > cmd0 ? 1 : (cmd < -cmd0 ? -1 : 0);
-    if (dir == 0 || dir != a->enc_dir) {
+    if (TL_UNLIKELY(dir == 0 || dir != a->enc_dir)) {
         a->enc_dir = dir;
         a->enc_ref = a->pos;
         a->enc_exp_q24 = 0;
-        a->enc_vlo_q8 = dir * (int64_t)a->c.vel_q8;
+        a->enc_vlo_q8 = dir < 0 ? -a->c.vel_q8 : (dir ? a->c.vel_q8 : 0);
         return 0;
     }
-    int64_t v_ss = (int64_t)((dir > 0 ? cmd : -cmd) - cmd0) * a->enc.k_q8;
-    if (v_ss <= a->enc_vlo_q8)
-        a->enc_vlo_q8 = v_ss;
-    else
-        a->enc_vlo_q8 += ((v_ss - a->enc_vlo_q8) * a->enc.alpha_q16) >> 16;
-    if (a->enc_vlo_q8 <= 0) {
+    int32_t v_ss = ((dir > 0 ? cmd : -cmd) - cmd0) * a->enc.k_q8;
+    int32_t vlo = a->enc_vlo_q8;
+    if (v_ss <= vlo) {
+        vlo = v_ss;
+    } else {
+        /* v_ss - vlo in (0, 2^32): exact as an unsigned difference; times alpha over 2^16 it
+         * is at most the difference, so vlo stays between its old value and v_ss */
+        uint32_t gap = (uint32_t)v_ss - (uint32_t)vlo;
+        vlo = (int32_t)((uint32_t)vlo + (uint32_t)(((uint64_t)gap * (uint32_t)a->enc.alpha_q16) >> 16));
+    }
+    a->enc_vlo_q8 = vlo;
+    if (TL_UNLIKELY(vlo <= 0)) {
         /* still braking from the other direction: the speed estimate lags the
          * reversal, so nothing is asked of the encoder until the lower bound
          * says the axis must move the command's way */
@@ -69,13 +82,14 @@ static inline __attribute__((always_inline)) uint16_t enc_check(tl_axis_t *a, in
         a->enc_exp_q24 = 0;
         return 0;
     }
-    a->enc_exp_q24 += a->enc_vlo_q8 * a->enc.dt_q16;
+    /* 0 < vlo < 2^31, dt_q16 < 2^11 (PERIOD_US <= 25 000): one 32 x 32-bit unsigned product */
+    int64_t exp = a->enc_exp_q24 + (int64_t)((uint64_t)(uint32_t)vlo * (uint32_t)a->enc.dt_q16);
     int32_t moved = (int32_t)((uint32_t)a->pos - (uint32_t)a->enc_ref);
     if (dir < 0)
         moved = (int32_t)(0u - (uint32_t)moved);
     a->enc_ref = a->pos;
     /* what the encoder is behind the lower bound; ahead of it counts for nothing later */
-    int64_t behind = a->enc_exp_q24 - (int64_t)moved * (1 << 24);
+    int64_t behind = exp - (int64_t)((uint64_t)(int64_t)moved << 24);
     a->enc_exp_q24 = behind > 0 ? behind : 0;
     return behind > ((int64_t)slack << 24) ? TLP_FAULT_RUNAWAY : 0u;
 }

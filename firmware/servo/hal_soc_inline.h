@@ -14,17 +14,13 @@
 /* Axis register of axis i: the AXIS0 offset moved to that axis's page. */
 #define AX(i, REG) TL_REG32(((i) ? TL_AXIS1_BASE : TL_AXIS0_BASE) + (TL_AXIS0_##REG##_ADDR - TL_AXIS0_BASE))
 
-static inline __attribute__((always_inline)) void hal_enc_read_inline(uint32_t axis, tl_enc_sample_t *s)
+/* One reading of the decoder; false if a count fell between the two edge-time reads. */
+static inline __attribute__((always_inline)) bool hal_enc_read_once(uint32_t axis, tl_enc_sample_t *s)
 {
-    /* Position and edge time are two reads: retry if a count fell between them,
-     * so the pair always belongs to the same edge. */
-    uint32_t t0, t1;
-    do {
-        t0 = AX(axis, ENC_EDGE_TIME);
-        s->pos = (int32_t)AX(axis, ENC_POS);
-        s->interval = AX(axis, ENC_EDGE_INTERVAL);
-        t1 = AX(axis, ENC_EDGE_TIME);
-    } while (t0 != t1);
+    uint32_t t0 = AX(axis, ENC_EDGE_TIME);
+    s->pos = (int32_t)AX(axis, ENC_POS);
+    s->interval = AX(axis, ENC_EDGE_INTERVAL);
+    uint32_t t1 = AX(axis, ENC_EDGE_TIME);
     s->edge_time = t1;
     s->now = AX(axis, ENC_TIMESTAMP);
     s->illegal = AX(axis, ENC_ILLEGAL) & TL_AXIS_ENC_ILLEGAL_COUNT_MSK;
@@ -32,6 +28,17 @@ static inline __attribute__((always_inline)) void hal_enc_read_inline(uint32_t a
     s->bridge_fault = (st & TL_AXIS_PWM_STATUS_BRIDGE_FAULT_MSK) != 0u;
     s->limits = (uint8_t)(((st & TL_AXIS_PWM_STATUS_LIM_NEG_MSK) ? TL_HAL_LIM_NEG : 0u) |
                           ((st & TL_AXIS_PWM_STATUS_LIM_POS_MSK) ? TL_HAL_LIM_POS : 0u));
+    return t0 == t1;
+}
+
+static inline __attribute__((always_inline)) void hal_enc_read_inline(uint32_t axis, tl_enc_sample_t *s)
+{
+    /* Position and edge time are two reads: read again if a count fell between them,
+     * so the pair always belongs to the same edge.  The first reading straight through
+     * and the retry out of the way: a loop's back edge not taken costs a misprediction. */
+    if (__builtin_expect(!hal_enc_read_once(axis, s), 0))
+        while (!hal_enc_read_once(axis, s)) {
+        }
 }
 
 static inline __attribute__((always_inline)) void hal_pwm_cmd(uint32_t axis, int32_t cmd)

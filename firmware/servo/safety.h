@@ -42,7 +42,7 @@ static inline __attribute__((always_inline)) uint16_t stall_check(tl_axis_t *a)
 {
     int32_t lim = pv(a, TLP_P_STALL_CMD);
     int8_t dir = a->cmd >= lim ? 1 : (a->cmd <= -lim ? -1 : 0);
-    if (dir == 0 || dir != a->stall_dir) {
+    if (TL_UNLIKELY(dir == 0 || dir != a->stall_dir)) {
         a->stall_dir = dir;
         a->stall_ref = a->pos;
         a->stall_vel_q8 = a->c.vel_q8;
@@ -51,13 +51,16 @@ static inline __attribute__((always_inline)) uint16_t stall_check(tl_axis_t *a)
     }
     /* each reference only ever moves on in dir */
     int32_t moved = (int32_t)((uint32_t)a->pos - (uint32_t)a->stall_ref);
-    int64_t dv = (int64_t)a->c.vel_q8 - a->stall_vel_q8;
+    /* the speed's rise in dir, 32-bit: when v is past the reference in dir the difference
+     * is below 2^32, exact as an unsigned one */
+    int32_t v = a->c.vel_q8, vr = a->stall_vel_q8;
     bool progress = false;
     if (dir > 0 ? moved > 0 : moved < 0) {
         a->stall_ref = a->pos;
         progress = true;
     }
-    if (dir > 0 ? dv > STALL_DV_Q8 : dv < -STALL_DV_Q8) {
+    if (dir > 0 ? v > vr && (uint32_t)v - (uint32_t)vr > (uint32_t)STALL_DV_Q8
+                : v < vr && (uint32_t)vr - (uint32_t)v > (uint32_t)STALL_DV_Q8) {
         a->stall_vel_q8 = a->c.vel_q8;
         progress = true;
     }
@@ -92,40 +95,40 @@ static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, 
 {
     /* latch_faults, the e-stop input and the bridge input */
     uint16_t f = t->all | latch_bridge(i, t->safety);
-    if (e->bridge_fault)
+    if (TL_UNLIKELY(e->bridge_fault))
         f |= TLP_FAULT_BRIDGE;
-    if (e->illegal != a->illegal_seen) {
+    if (TL_UNLIKELY(e->illegal != a->illegal_seen)) {
         f |= TLP_FAULT_ENCODER;
         a->illegal_seen = e->illegal;
     }
     uint8_t lim = pv(a, TLP_P_LIMIT_SW) ? (uint8_t)(e->limits & (TLP_LIMIT_NEG | TLP_LIMIT_POS)) : 0u;
     a->limits = lim;
-    if (lim) {
+    if (TL_UNLIKELY(lim)) {
         lim &= (uint8_t)~home_switch(a);
         if (lim & TLP_LIMIT_NEG)
             f |= TLP_FAULT_LIMIT_NEG;
         if (lim & TLP_LIMIT_POS)
             f |= TLP_FAULT_LIMIT_POS;
     }
-    if (!a->enabled)
+    if (TL_UNLIKELY(!a->enabled))
         return f;
     f |= t->enabled;
-    if ((t->safety & TL_HAL_SAFE_FORCED) && f == 0u)
+    if (TL_UNLIKELY((t->safety & TL_HAL_SAFE_FORCED) && f == 0u))
         f |= TLP_FAULT_HW_SAFE;   /* forced off by a cause not seen above */
-    if (t->link)
+    if (TL_UNLIKELY(t->link))
         f |= TLP_FAULT_LINK;
     /* following error |sp - pos| > FOLLOW_LIMIT, sp in counts (int32 range: it lies between
      * positions and targets), the difference in 33 bits */
     int32_t sp = (int32_t)(a->c.sp_q16 >> 16);
     uint32_t fl = (uint32_t)pv(a, TLP_P_FOLLOW_LIMIT);
     uint32_t ad = sp >= a->pos ? (uint32_t)sp - (uint32_t)a->pos : (uint32_t)a->pos - (uint32_t)sp;
-    if (ad > fl)
+    if (TL_UNLIKELY(ad > fl))
         f |= TLP_FAULT_FOLLOWING;
     /* Outside the soft limits: a fault unless the axis was enabled out there
      * (it may then only come back in); back inside, that allowance ends. */
     uint8_t o = soft_side(a);
     *out = o;
-    if (a->recover | o) {
+    if (TL_UNLIKELY(a->recover | o)) {
         a->recover &= o;
         if (o & (uint8_t)~a->recover)
             f |= TLP_FAULT_SOFT_LIMIT;

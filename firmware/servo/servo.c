@@ -64,11 +64,11 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
     tl_enc_sample_t e;
     hal_enc_read_inline(i, &e);
     a->pos = wrap_add(e.pos, a->offset);
-    if (a->drive)
+    if (TL_UNLIKELY(a->drive))
         tl_ctl_hold(&a->c, a->pos);   /* open loop: the set-point follows, no following error */
     uint8_t out = 0;
     uint16_t f = axis_checks(a, i, &e, t, &out);
-    if (f) {
+    if (TL_UNLIKELY(f)) {
         uint16_t fresh = f & (uint16_t)~a->faults;
         a->faults |= f;
         if (f & (TLP_FAULT_ENCODER | TLP_FAULT_RUNAWAY))
@@ -77,27 +77,27 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
             tl_axis_disable(s, i);
     }
     /* An old direction-blocking fault lets the axis be driven out; any other stops it. */
-    if (a->enabled && (a->faults & (uint16_t)~TLP_FAULT_DIRECTIONAL))
+    if (TL_UNLIKELY((a->faults & (uint16_t)~TLP_FAULT_DIRECTIONAL) && a->enabled))
         tl_axis_disable(s, i);
     bool homing = a->home == TLP_HOME_STATE_HOMING;
     if (__builtin_expect(homing, 0))   /* homing.c, a call: keep the path of an axis under control straight */
         tl_home_tick(a, i, e.now);
     int32_t cmd = tl_ctl_step_inline(&a->c, &a->ctl, a->pos, e.edge_time, e.now, e.interval, a->enabled);
-    if (a->drive)
+    if (TL_UNLIKELY(a->drive))
         cmd = a->drive_duty;
-    if (!a->enabled) {
+    if (TL_UNLIKELY(!a->enabled)) {
         cmd = 0;
     } else {
         /* blocked(a): the soft-limit sides from the checks, unless homing moved the position */
         uint8_t b = blocked_with(a, homing ? soft_side(a) : out);
-        if (((b & TLP_LIMIT_NEG) && cmd < 0) || ((b & TLP_LIMIT_POS) && cmd > 0))
+        if (TL_UNLIKELY(((b & TLP_LIMIT_NEG) && cmd < 0) || ((b & TLP_LIMIT_POS) && cmd > 0)))
             cmd = 0;
     }
     a->cmd = cmd;
     hal_pwm_cmd(i, cmd);
 }
 
-void tl_servo_tick(tl_servo_t *s)
+TL_HOT_LAYOUT void tl_servo_tick(tl_servo_t *s)
 {
     tick_faults_t t;
     t.safety = hal_safety();

@@ -49,7 +49,7 @@ typedef struct {
     int64_t home_step_q16;        /* derived: HOME_VEL per period, counts q16 */
     int8_t enc_dir;               /* encoder plausibility: sign of a command above ENC_CMD0, 0 none */
     int32_t enc_ref;              /* position at the last period */
-    int64_t enc_vlo_q8;           /* lower bound of the speed in enc_dir, counts/s q8 */
+    int32_t enc_vlo_q8;           /* lower bound of the speed in enc_dir, counts/s q8 */
     int64_t enc_exp_q24;          /* counts the encoder is behind that speed's distance, q24 */
     tl_enc_cfg_t enc;             /* derived */
     bool drive;                   /* open-loop drive (DRIVE, openloop.c): the command is drive_duty */

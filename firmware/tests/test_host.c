@@ -1094,7 +1094,7 @@ static int ctl_main(void)
             ea.pos = (int32_t)a[1];
             ea.c.vel_q8 = (int32_t)a[2];
             uint16_t f = enc_check(&ea, enc_cmd0, enc_slack);
-            printf("%d %" PRId64 " %" PRId64 "\n", f != 0, ea.enc_vlo_q8, ea.enc_exp_q24);
+            printf("%d %" PRId32 " %" PRId64 "\n", f != 0, ea.enc_vlo_q8, ea.enc_exp_q24);
             break;
         }
         default: break;

@@ -121,7 +121,8 @@ def main() -> int:
     if not QUICK:
         fw = load(Path(__file__).resolve().with_name("bench_firmware.py"))
         BUDGET_CYCLES, _measure = fw.BUDGET_CYCLES, fw._measure
-        for mode, short, what in ((0, False, "step moves"), (1, True, "trapezoid moves (60 counts, braking)")):
+        for mode, short, what in ((0, False, "step moves"), (1, False, "trapezoid moves (2000 counts, accelerating)"),
+                                  (1, True, "trapezoid moves (60 counts, braking)")):
             m = _measure(50, mode, short, cpu_pipelined=1)
             cyc, late = m["loop_cycles_max"], m["jitter_cycles_max"]
             print(f"pipe  control iteration at 20 kHz, both axes PID, {what}: worst {cyc} cycles "
