@@ -104,3 +104,29 @@ def test_the_measured_tau_max_row_changes_only_the_scaling(tmp_path) -> None:
     # the same error asks for more duty: saturated for longer, further along the step after 1 s
     assert (abs(moved["traj"].cmd) >= 1023).sum() > (abs(base["traj"].cmd) >= 1023).sum()
     assert (moved["traj"].pos[-1] > base["traj"].pos[-1]).all()
+
+
+def test_the_decomposition_is_reused_while_its_inputs_are_unchanged(tmp_path, monkeypatch) -> None:
+    """make run keeps the table in build/characterize/ and recomputes it when
+    the characterisation file (its tau_max) or the laws change."""
+    calls = []
+
+    def fake_run(plant, laws, t_end_s, engine, say=print, char_config=None):
+        calls.append((tuple(laws), char_config))
+        return {"energy_consistent": {law: {"rmse_position_rad": 0.1 * len(calls)} for law in laws}}
+
+    monkeypatch.setattr(table3, "run", fake_run)
+    paper = {a.name: a.tau_max_paper_N_m for a in PlantSpec("paper").params().axes}
+    char = _char_file(tmp_path, paper)
+    out = tmp_path / "dec.json"
+    said: list[str] = []
+    first = table3.study(PlantSpec("lab"), ("P",), 40.0, out, "digest", say=said.append, char_config=char)
+    again = table3.study(PlantSpec("lab"), ("P",), 40.0, out, "digest", say=said.append, char_config=char)
+    assert first == again and len(calls) == 1 and any("reused" in m for m in said)
+    table3.study(PlantSpec("lab"), ("P", "PD"), 40.0, out, "digest", say=said.append, char_config=char)
+    assert len(calls) == 2
+    other = _char_file(tmp_path, {k: 0.9 * v for k, v in paper.items()})
+    table3.study(PlantSpec("lab"), ("P", "PD"), 40.0, out, "digest", say=said.append, char_config=other)
+    assert len(calls) == 3
+    table3.study(PlantSpec("lab"), ("P", "PD"), 40.0, out, "another digest", say=said.append, char_config=other)
+    assert len(calls) == 4

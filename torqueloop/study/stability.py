@@ -192,9 +192,11 @@ def protocols(settles: Sequence[float | str] = SETTLES, orders: Sequence[str] = 
 
 def run(plant: PlantSpec, axes: Sequence[str] = ("x", "z"), settles: Sequence[float | str] = SETTLES,
         orders: Sequence[str] = ORDERS, freqs_hz: Sequence[float] = FREQS_HZ, seed: int = 0,
-        engine: Engine = Engine(), say=print, converged_orders: Sequence[str] | None = None) -> list[dict[str, Any]]:
-    """Every (axis, protocol) on the engine; rows in a fixed order."""
-    jobs = [Job(plant, a, p, tuple(freqs_hz)) for a in axes
+        engine: Engine = Engine(), say=print, converged_orders: Sequence[str] | None = None,
+        dead_zone: bool = True) -> list[dict[str, Any]]:
+    """Every (axis, protocol) on the engine; rows in a fixed order (``dead_zone``
+    False: the chosen carrier only, without the motion threshold at it)."""
+    jobs = [Job(plant, a, p, tuple(freqs_hz), dead_zone) for a in axes
             for p in protocols(settles, orders, seed, converged_orders)]
     say(f"stability: {len(jobs)} sweeps ({len(freqs_hz)} carriers each, plant {plant.label}; "
         f"shuffled order's seed {seed}) on the {engine.name}")

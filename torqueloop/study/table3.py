@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Sequence
 
 from sim_models.variants import PlantSpec, effects_of
@@ -107,6 +108,44 @@ def run(experiment_plant: PlantSpec, laws: Sequence[str], t_end_s: float, engine
             cell = {"rmse_position_rad": c["rmse_position_rad"], "rmse_velocity_rad_s": c["rmse_velocity_rad_s"]}
         out.setdefault(job.row, {})[job.law] = cell | {"cpu_s": r["cpu_s"]}
     return out
+
+
+def arms_digest(base_digest: str, char_config: str | None) -> str:
+    """What the decomposition's runs depend on beyond the plant and the
+    method (``base_digest``: characterization.inputs_digest): the two arms'
+    code (torqueloop/sim, the firmware law's oracle, the spec) and the
+    characterisation file's content."""
+    import hashlib
+
+    from torqueloop.spec.repo import REPO_ROOT
+
+    root = REPO_ROOT / "torqueloop"
+    files = sorted([*(root / "sim").glob("*.py"), *(root / "oracles").glob("*.py"), *(root / "spec").glob("*.py"),
+                    *(root / "spec").glob("*.toml")])
+    h = hashlib.sha256(base_digest.encode())
+    for f in [*files, *([Path(char_config)] if char_config else [])]:
+        h.update(f.name.encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def study(experiment_plant: PlantSpec, laws: Sequence[str], t_end_s: float, out_json: Path, digest: str,
+          engine: Engine = Engine(), say=print, char_config: str | None = None) -> dict[str, Any]:
+    """:func:`run`, reused from ``out_json`` while the plant, the method, the
+    arms' code, the characterisation file, the laws and T are unchanged
+    (``digest``: characterization.inputs_digest)."""
+    from torqueloop.study.cache import cached
+
+    key = repr((experiment_plant.label, tuple(laws), t_end_s, char_config is not None))
+
+    def compute() -> dict[str, Any]:
+        t0 = time.monotonic()
+        rows = run(experiment_plant, laws, t_end_s, engine, say=say, char_config=char_config)
+        return {"rows": rows, "wall_s": time.monotonic() - t0}
+
+    doc = cached(out_json, arms_digest(digest, char_config), __file__, key, compute,
+                 say=lambda m: say(f"Table 3 decomposition: {m}"))
+    return doc["rows"]
 
 
 def add_whole(dec: dict[str, Any], table3: dict[str, Any]) -> dict[str, Any]:
