@@ -181,8 +181,16 @@ def markdown(dec: dict[str, Any]) -> list[str]:
                 cells.append(f"did not run ({c['error'][:60]})")
             elif "rmse_position_rad" in c:
                 frac = c.get("of_whole_position")
-                cells.append(f"{c['rmse_position_rad']:.4f}" + ("" if frac is None else f", {100 * frac:.0f} %"))
+                cells.append(_rad(c["rmse_position_rad"]) + ("" if frac is None else f", {100 * frac:.0f} %"))
             else:
                 cells.append("-")
         L.append(f"| {row} | " + " | ".join(cells) + " |")
     return L + [""]
+
+
+def _rad(v: float) -> str:
+    """An RMSE as people read it: four decimals, a small one in powers of
+    ten rather than as 0.0000, rounding noise (below 1e-9 rad) as 0."""
+    if v >= 1e-4:
+        return f"{v:.4f}"
+    return "0" if v < 1e-9 else f"{v:.1e}"
