@@ -36,7 +36,7 @@ def test_the_gear_efficiency_row_finishes_and_moves_the_step_by_little() -> None
     """Gear efficiency alone (a rotor without friction of its own, held at
     rest only by the gearbox's band (1 - xi_b) |T_g| / G) once switched the
     rotor's mode about 90 times per control sample on axis x under P once the
-    step had settled (from 7.5 s on): the row cost minutes.  Its RMSE against
+    step had settled (from 7.5 s on), most of the row's CPU.  Its RMSE against
     the model arm must stay small: xi_b differs from xi by 0.05 %."""
     import math
 

@@ -53,7 +53,7 @@ from torqueloop.study.engine import Engine
 #: a converged reading at 24.4 kHz costs minutes of CPU
 FREQS_HZ = (109.0, 235.0, 509.0, 1111.0, 2444.0, 5431.0)
 QUICK_FREQS_HZ = (235.0, 1111.0, 5431.0)
-SETTLES: tuple[float | str, ...] = (0.3, 1.0, "converged")
+SETTLES: tuple[float | str, ...] = (0.3, 1.0, 3.0, "converged")
 ORDERS = ("up", "down", "shuffled")
 
 
