@@ -277,8 +277,17 @@ def rotor_hold_torque(c: AxisConsts, x: np.ndarray, mode: Mode, direction: int) 
 #: With no rotor friction the band is the gearbox's own (xi_b T_g .. T_g) and
 #: can be zero wide; without the margin a state resting on its edge (net
 #: torque zero to rounding) switched stuck/sliding at every step (Zeno).
-#: 1e-9 N m is 1e-7 of a stall torque.
-ROTOR_BREAKAWAY_MARGIN = 1e-9
+#: The margin must also exceed the net torque that event location leaves at a
+#: velocity reversal: a stop is found to a 10 ns tick, in which a rotor on
+#: the stiff mesh gains about 1e-5 rad/s, and the net torque at the stop
+#: then lies a few 1e-9 N m outside the gearbox's band, which is
+#: (1 - xi_b) |T_g| / G, about 3e-8 N m for a rotor at rest on a tiny load.
+#: At 1e-9 N m a rotor without friction of its own (gear efficiency alone)
+#: ping-ponged stuck -> forward -> back -> forward -> stuck about 90 times per
+#: 25 ms control sample on axis x under P (41 000 switches in 20 s, half the
+#: run's CPU); at 1e-8 N m it sticks (109 switches).  1e-8 N m is 3e-7 of
+#: a stall torque and 1e-5 of the lab rotor's breakaway torque.
+ROTOR_BREAKAWAY_MARGIN = 1e-8
 
 
 #: a sliding table sticks when the force on it is within its Coulomb force plus

@@ -396,12 +396,19 @@ def run_paper_model(cfg: ExperimentConfig) -> ModelRun:
     ``cfg.plant`` with the paper's tau_max in the scaling (eq. 23-25), the
     Table 1 gains and the firmware's anti-windup (the paper's firmware law is
     unknown; the same law in both arms keeps the comparison about the plant
-    and the drive, not the integrator)."""
+    and the drive, not the integrator).  With ``cfg.char_config`` the scaling
+    takes the tau_max the file sets instead (what ``config load`` writes: the
+    measured stall torque), the plant unchanged: the Table 3 decomposition's
+    ``measured_tau_max`` row."""
     params = cfg.plant_params()
     target_rad = cfg.target_counts * 2 * math.pi / COUNTS_PER_REV
     lc = LoopConfig(setpoint_rad=target_rad, t_end_s=cfg.t_end_s, sample_s=cfg.period_us * 1e-6,
                     gains=TABLE1[cfg.law])
-    r = run_averaged(lc, params, TwoAxisPlant(params, seed=0))
+    scaling = params
+    if cfg.char_config is not None:
+        scaling = dataclasses.replace(params, axes=tuple(
+            a.replace(tau_max_paper_N_m=s["TAU_MAX_MNM"] / 1000.0) for a, s in zip(params.axes, cfg.loaded_settings())))
+    r = run_averaged(lc, scaling, TwoAxisPlant(params, seed=0))
     traj = Trajectory(r.t, r.x_meas, r.v_est, r.cmd, target_rad - r.x_meas, r.x_true)
     return ModelRun(traj, r.wall_s, {"arm": "model", "plant": cfg.plant.label, "law": cfg.law, "drive": "averaged voltage",
                                      "gains": [asdict(g) for g in lc.gains]},

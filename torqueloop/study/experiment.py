@@ -299,7 +299,9 @@ def _run_experiment(plan: ExperimentPlan, term) -> int:
                            inputs_digest(plan.experiment_plant, "model"), engine, say=_say)
     st.characterization["stability"] = stability.summary_rows(stab)
     st.characterization["stability_verdict"] = {"axes": stab["verdict"], "quick": stab["quick"]}
-    dec = table3.run(plan.experiment_plant, plan.laws, plan.t_end_s, engine, say=_say)
+    dec = table3.study(plan.experiment_plant, plan.laws, plan.t_end_s,
+                       plan.char_dir / ("table3_decomposition_quick.json" if plan.quick else "table3_decomposition.json"),
+                       inputs_digest(plan.experiment_plant, "model"), engine, say=_say, char_config=str(char))
     unc = uncertainty.study(uncertainty.QUICK if plan.quick else uncertainty.FULL, plan.experiment_plant,
                             plan.char_dir / ("uncertainty_quick.json" if plan.quick else "uncertainty.json"),
                             inputs_digest(plan.experiment_plant, "model"), engine, say=_say)

@@ -53,7 +53,7 @@ from torqueloop.study.engine import Engine
 #: a converged reading at 24.4 kHz costs minutes of CPU
 FREQS_HZ = (109.0, 235.0, 509.0, 1111.0, 2444.0, 5431.0)
 QUICK_FREQS_HZ = (235.0, 1111.0, 5431.0)
-SETTLES: tuple[float | str, ...] = (0.3, 1.0, "converged")
+SETTLES: tuple[float | str, ...] = (0.3, 1.0, 3.0, "converged")
 ORDERS = ("up", "down", "shuffled")
 
 
@@ -192,9 +192,11 @@ def protocols(settles: Sequence[float | str] = SETTLES, orders: Sequence[str] = 
 
 def run(plant: PlantSpec, axes: Sequence[str] = ("x", "z"), settles: Sequence[float | str] = SETTLES,
         orders: Sequence[str] = ORDERS, freqs_hz: Sequence[float] = FREQS_HZ, seed: int = 0,
-        engine: Engine = Engine(), say=print, converged_orders: Sequence[str] | None = None) -> list[dict[str, Any]]:
-    """Every (axis, protocol) on the engine; rows in a fixed order."""
-    jobs = [Job(plant, a, p, tuple(freqs_hz)) for a in axes
+        engine: Engine = Engine(), say=print, converged_orders: Sequence[str] | None = None,
+        dead_zone: bool = True) -> list[dict[str, Any]]:
+    """Every (axis, protocol) on the engine; rows in a fixed order (``dead_zone``
+    False: the chosen carrier only, without the motion threshold at it)."""
+    jobs = [Job(plant, a, p, tuple(freqs_hz), dead_zone) for a in axes
             for p in protocols(settles, orders, seed, converged_orders)]
     say(f"stability: {len(jobs)} sweeps ({len(freqs_hz)} carriers each, plant {plant.label}; "
         f"shuffled order's seed {seed}) on the {engine.name}")
