@@ -64,10 +64,14 @@ def _random_run(rng: random.Random, start: int | None = None) -> tuple[list[str]
         p = dataclasses.replace(p, fc_pos=rng.choice([0, rng.randrange(1024)]), fc_neg=rng.choice([0, rng.randrange(1024)]),
                                 izone_q16=rng.choice([0, rng.randrange(0x80000), rng.randrange(2**31)]),
                                 kvff_q16=rng.choice([0, rng.randrange(5000), rng.randrange(0x100_0000)]))
+    if rng.random() < 0.3:       # the dither (control_step.h friction_terms), alone or with the terms above
+        p = dataclasses.replace(p, dither_amp=rng.choice([1, rng.randrange(1, 64), rng.randrange(1, 1024)]),
+                                dither_half=rng.choice([1, 2, rng.randrange(1, 50), rng.randrange(1, 0x10000)]))
     period = rng.randrange(200, 25_001)
     ax = Axis(p, period)
     lines = [f"P {p.law} {p.kp_q16} {p.kd_q16} {p.ki_q16} {p.deadband_q16} {p.cmd_limit} {p.vel_mode} "
-             f"{p.vmax_cps} {p.amax_cps2} {period} {p.fc_pos} {p.fc_neg} {p.izone_q16} {p.kvff_q16}"]
+             f"{p.vmax_cps} {p.amax_cps2} {period} {p.fc_pos} {p.fc_neg} {p.izone_q16} {p.kvff_q16} "
+             f"{p.dither_amp} {p.dither_half}"]
     pos, t, edge = rng.randrange(-10**6, 10**6) if start is None else start, rng.randrange(2**32), 0
     ax.reset(pos, t)
     lines.append(f"R {pos} {t}")

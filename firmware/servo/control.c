@@ -73,6 +73,7 @@ void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now)
     c->t_ref = t_now;
     c->moved_last = false;
     c->err_counts = 0;
+    c->dither_n = 0;   /* enabling resets: the dither starts with a positive half-period */
     c->cmd = 0;
 }
 
@@ -130,7 +131,7 @@ TL_FOR_SIZE void tl_ctl_derived(tl_ctl_derived_t *d, const tl_ctl_params_t *p, u
     uint32_t kb = bitlen64((uint64_t)d->ki_dt_q32);
     d->ki_e_max = kb <= 30u ? 0x7FFFFFFF : (int32_t)(1u << (61u - kb));
     d->lim_q32 = (int64_t)p->cmd_limit << 32;
-    d->friction = (p->fc_pos | p->fc_neg | p->izone_q16 | p->kvff_q16) != 0;
+    d->friction = (p->fc_pos | p->fc_neg | p->izone_q16 | p->kvff_q16 | p->dither_amp) != 0;
     /* u > limit  <=>  u_q16 + 2^15 >= (limit + 1) 2^16;  u < -limit  <=>  u_q16 + 2^15 < -limit 2^16 */
     d->sat_hi_q16 = ((int64_t)p->cmd_limit + 1) * 65536;
     d->sat_lo_q16 = -(int64_t)p->cmd_limit * 65536;

@@ -77,6 +77,8 @@ typedef struct {
     int32_t fc_pos, fc_neg;     /* PWM steps added to a positive / the size of a negative command */
     int32_t izone_q16;          /* hunting guard: the integral is frozen while |e| <= this (counts q16) */
     int32_t kvff_q16;           /* velocity feed-forward: q16 PWM steps per count/s of the profile speed */
+    int32_t dither_amp;         /* square-wave dither, PWM steps (0: off) ... */
+    int32_t dither_half;        /* ... and its half-period, samples (>= 1) */
 } tl_ctl_params_t;
 
 /* What the parameters and the period give (tl_ctl_derived): computed apart
@@ -117,6 +119,7 @@ typedef struct {
     bool moved_last;            /* the previous sample saw a count */
     int32_t err_counts;         /* last error (rounded counts), for telemetry */
     int32_t cmd;                /* last PWM command */
+    uint32_t dither_n;          /* samples into the dither's period: + while < DITHER_HALF, - after */
 } tl_ctl_t;
 
 void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now);

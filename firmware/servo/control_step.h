@@ -197,9 +197,12 @@ static inline int32_t sat31(int64_t v) { return v > 0x7FFFFFFF ? 0x7FFFFFFF : (v
  * velocity feed-forward Kvff v_sp (v_sp the trapezoid profile's speed, q8 counts/s: counts
  * per sample q16 times euler_k = 2^8 1e6 / T, saturated to 31 bits), then the dead zone
  * beyond PW0 per direction: FC_POS steps added to a positive command, FC_NEG to the size of a
- * negative one (the sign of pd + i before rounding).  Zero parameters add nothing. */
-static inline __attribute__((always_inline)) void friction_terms(const tl_ctl_t *c, const tl_ctl_params_t *p,
-                                                                  int64_t *pd_q16, int32_t i_q16)
+ * negative one (the sign of pd + i before rounding), then the dither: +DITHER_AMP steps for
+ * DITHER_HALF samples, -DITHER_AMP for the next DITHER_HALF, while the error e (after the
+ * dead band) is nonzero and outside the hunting guard's zone; inside, the dither is off and
+ * its phase held (docs/firmware.md, "Control").  Zero parameters add nothing. */
+static inline __attribute__((always_inline)) void friction_terms(tl_ctl_t *c, const tl_ctl_params_t *p,
+                                                                  int64_t *pd_q16, int32_t i_q16, int32_t e)
 {
     if (p->kvff_q16 != 0 && c->prof_v_q16 != 0) {
         int32_t v_q8 = sat31(((int64_t)c->prof_v_q16 * c->d.euler_k) >> 16);
@@ -211,6 +214,12 @@ static inline __attribute__((always_inline)) void friction_terms(const tl_ctl_t 
             *pd_q16 += (int64_t)p->fc_pos << 16;
         else if (u < 0)
             *pd_q16 -= (int64_t)p->fc_neg << 16;
+    }
+    if (p->dither_amp != 0 && e != 0 && !(p->izone_q16 != 0 && (e < 0 ? -e : e) <= p->izone_q16)) {
+        uint32_t n = c->dither_n, h = (uint32_t)p->dither_half;
+        int64_t d = (int64_t)p->dither_amp << 16;
+        *pd_q16 += n < h ? d : -d;
+        c->dither_n = ++n >= 2u * h ? 0u : n;
     }
 }
 
@@ -228,6 +237,7 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     }
     if (TL_UNLIKELY(!run_law || p->law == TL_LAW_OFF)) {
         c->integ_q32 = 0;
+        c->dither_n = 0;
         c->cmd = 0;
         return 0;
     }
@@ -265,7 +275,7 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
         c->integ_q32 = 0;
     }
     if (TL_UNLIKELY(c->d.friction))
-        friction_terms(c, p, &pd_q16, i_q16);
+        friction_terms(c, p, &pd_q16, i_q16, e);
     /* round to the nearest PWM step and saturate (eq. 19/25): u = (pd + i + 2^15) >> 16.  The
      * bounds are within +-2^26 (CMD_LIMIT <= 1023) and |i| < 2^27: with |pd| < 2^30 the sum
      * fits 32 bits, and beyond, pd's sign alone decides the saturation. */

@@ -9,6 +9,7 @@ is round(u) saturated to +-cmd_limit (eq. 19/25).  The law is eq. (20)-(22)
 with the derivative taken from the measured velocity:
     u = Kp e - Kd v + I,    I_k = I_{k-1} + Ki T_s e_k   (held while saturated
                                                          toward the error)
+plus the friction compensation and the dither (``friction_terms``, ``dither_q16``).
 """
 
 from __future__ import annotations
@@ -96,6 +97,20 @@ def friction_terms(p: "AxisParams", u_q16: int, prof_v_q16: int, euler_k: int) -
     return u_q16
 
 
+def dither_on(p: "AxisParams", e_q16: int) -> bool:
+    """The dither acts while the error (after the dead band) is nonzero and outside
+    the hunting guard's zone: an axis at rest on its target does not buzz."""
+    return p.dither_amp != 0 and e_q16 != 0 and not in_izone(p, e_q16)
+
+
+def dither_q16(p: "AxisParams", n: int) -> tuple[int, int]:
+    """The square wave of control_step.h, q16 PWM steps, at sample ``n`` of its period
+    (+DITHER_AMP while n < DITHER_HALF, -DITHER_AMP after), and the next ``n``."""
+    d = p.dither_amp << 16 if n < p.dither_half else -(p.dither_amp << 16)
+    n += 1
+    return d, (0 if n >= 2 * p.dither_half else n)
+
+
 @dataclass
 class AxisParams:
     law: int = 1
@@ -112,6 +127,9 @@ class AxisParams:
     fc_neg: int = 0
     izone_q16: int = 0
     kvff_q16: int = 0
+    # square-wave dither (control_step.h friction_terms): amplitude in PWM steps (0: off), half-period in samples
+    dither_amp: int = 0
+    dither_half: int = 1
 
 
 @dataclass
@@ -132,6 +150,7 @@ class Axis:
     moved_last: bool = False
     t_ref: int = 0
     cmd: int = 0
+    dither_n: int = 0
 
     def __post_init__(self) -> None:
         self.derive()
@@ -156,6 +175,7 @@ class Axis:
         self.t_ref = now
         self.moved_last = False
         self.cmd = 0
+        self.dither_n = 0
 
     def move(self, target: int, trapezoid: bool) -> None:
         self.target_q16 = target << 16
@@ -219,7 +239,7 @@ class Axis:
         self._profile()
         e = self.sp_q16 - (pos << 16)
         if not run or p.law == 0:
-            self.integ_q32, self.cmd = 0, 0
+            self.integ_q32, self.cmd, self.dither_n = 0, 0, 0
             return 0
         if abs(e) <= p.deadband_q16:
             e = 0
@@ -237,6 +257,9 @@ class Axis:
         else:
             self.integ_q32 = 0
         u = friction_terms(p, u, self.prof_v_q16, self.euler_k)
+        if dither_on(p, e):
+            d, self.dither_n = dither_q16(p, self.dither_n)
+            u += d
         out = round_q16(u)
         self.saturated = abs(out) > lim
         self.sat_sign = 1 if out > lim else (-1 if out < -lim else 0)
