@@ -5,7 +5,7 @@ simulator (torqueloop/oracles/rv32.py), each instruction charged the
 pipelined core's cycles (docs/cpu.md, "Cycles per instruction", tl_cpu_pipe),
 the worst period attributed to the functions the iteration inlines.
 
-    python scripts/profile_tick.py [--case step|trap|short] [--ticks N] [--lines]
+    python scripts/profile_tick.py [--case step|trap|short] [--ticks N] [--dither AMP] [--lines]
 
 A model, not the RTL: the decoder registers are plain memory with no wait
 states, and the interrupt's own bookkeeping around the iteration (main.c) is
@@ -36,11 +36,11 @@ BRANCH_TAKEN_BACK, BRANCH_TAKEN_FWD, BRANCH_MISS_BACK = 2, 3, 3
 JAL, JALR, CSR_WRITE, MUL, DIV = 2, 3, 5, 4, 35
 
 
-def build(case: str, ticks: int, out: Path) -> Path:
+def build(case: str, ticks: int, out: Path, dither: int = 0) -> Path:
     mode, short, _ = CASES[case]
     elf = out / f"tick_{case}.elf"
     srcs = [str(s) for s in F.SOURCES if s.name != "main.c"] + [str(HARNESS)]
-    cmd = [F.CC, *F.CFLAGS, "-g", f"-DMODE={mode}", f"-DSHORT={short}", f"-DNTICKS={ticks}",
+    cmd = [F.CC, *F.CFLAGS, "-g", f"-DMODE={mode}", f"-DSHORT={short}", f"-DNTICKS={ticks}", f"-DDITHER_AMP={dither}",
            *(f"-I{i}" for i in F.INCLUDES), "-T", str(F.FW / "common" / "link.ld"), "-Wl,--gc-sections",
            "-Wl,--no-warn-rwx-segments", "-o", str(elf), *srcs, F.libgcc()]
     r = subprocess.run(cmd, capture_output=True, text=True)
@@ -125,15 +125,20 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--case", choices=sorted(CASES), default="step")
     ap.add_argument("--ticks", type=int, help="control periods to run (default: the case's)")
+    ap.add_argument("--dither", type=int, default=0, metavar="AMP",
+                    help="DITHER_AMP on both axes, PWM steps 0..1023 (half-period 2 samples; default 0: off)")
     ap.add_argument("--lines", action="store_true", help="also the source lines, dearest first")
     a = ap.parse_args()
     ticks_n = CASES[a.case][2] if a.ticks is None else a.ticks
     if ticks_n < 1:
         print("profile_tick: --ticks must be at least 1", file=sys.stderr)
         return 2
+    if not 0 <= a.dither <= 1023:
+        print("profile_tick: --dither must be 0..1023 PWM steps", file=sys.stderr)
+        return 2
     with tempfile.TemporaryDirectory() as tmp:
         try:
-            elf = build(a.case, ticks_n, Path(tmp))
+            elf = build(a.case, ticks_n, Path(tmp), a.dither)
             ticks = profile(elf)
         except RuntimeError as e:
             print(f"profile_tick: {e}", file=sys.stderr)

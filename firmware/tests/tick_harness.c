@@ -4,7 +4,8 @@
  * a step (MODE 0) or trapezoid (MODE 1) move of 2000 counts (SHORT 1: 60
  * counts at VMAX 50 000, AMAX 5e7, which brakes inside the run), both decoders
  * counting 300 counts at 125 000 counts/s and then still, telemetry every 16
- * periods.  The decoder registers are plain memory on the instruction-set
+ * periods (DITHER_AMP > 0: with that square-wave dither, half-period 2 samples).
+ * The decoder registers are plain memory on the instruction-set
  * simulator: this file writes them before each tl_servo_tick. */
 #include "servo_internal.h"
 #include "torqueloop_regs.h"
@@ -14,6 +15,9 @@
 #endif
 #ifndef SHORT
 #define SHORT 0
+#endif
+#ifndef DITHER_AMP
+#define DITHER_AMP 0
 #endif
 #ifndef NTICKS
 #define NTICKS 200
@@ -36,6 +40,10 @@ int main(void)
         tl_param_set(&s, ax, TLP_P_KD_Q16, 655, &why);
         tl_param_set(&s, ax, TLP_P_KI_Q16, 65536 * 20, &why);
         tl_param_set(&s, ax, TLP_P_FOLLOW_LIMIT, 1000000, &why);
+        if (DITHER_AMP) {
+            tl_param_set(&s, ax, TLP_P_DITHER_AMP, DITHER_AMP, &why);
+            tl_param_set(&s, ax, TLP_P_DITHER_HALF, 2, &why);
+        }
         if (SHORT) {
             tl_param_set(&s, ax, TLP_P_VMAX, 50000, &why);
             tl_param_set(&s, ax, TLP_P_AMAX, 50000000, &why);
