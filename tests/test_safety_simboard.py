@@ -319,3 +319,65 @@ def test_the_encoder_check_never_trips_on_a_healthy_axis(plant: str, law: str) -
         for a in (0, 1):
             st = host.ok("STATUS", axis=a)
             assert st["faults"] == 0 and st["enabled"], (plant, law, a, trapezoid, rel, st)
+
+
+def test_dither_drives_only_an_enabled_axis_away_from_its_target(host: Host, monkeypatch) -> None:
+    """DITHER_AMP 300 steps (30 % of full scale, far beyond any breakaway) on
+    both axes: an enabled axis at rest on its target (error within the dead
+    band) gets no dither (command 0);
+    after a small step its command alternates sign period by period (the
+    square wave, half-period one sample, dwarfs the P law's 13 steps); an axis
+    disabled mid-move, and then both after the e-stop, show only their safe
+    state on the bridge's PWM inputs (RPWM and LPWM low) at every pin change."""
+    from torqueloop.oracles.pwm_schedule import PwmChannel
+    from torqueloop.spec.bridge import Pins
+
+    b, amp = host.b, 300
+    for ax in (0, 1):
+        host.set(ax, "DITHER_AMP", amp)
+        host.set(ax, "DITHER_HALF", 1)
+    host.ok("ENABLE", mask=3, enable=1)
+    cmds: list[list[int]] = [[], []]
+
+    def sample() -> bool:
+        for ax in (0, 1):
+            cmds[ax].append(b.drive(ax)["cmd"])
+        return False
+
+    host.run(0.25, until=sample)
+    # at rest on target: still (axis 1, the paper plant's z axis, sags a count within 0.25 s, and an error
+    # outside the dead band is what the dither is for)
+    assert cmds[0] and all(c == 0 for c in cmds[0]), cmds
+    # axis 1's pins at every change from here on: its PWM channel, and the copies the board steps ahead with
+    seen: list[Pins] = []
+    fire, watching = PwmChannel.fire, False
+
+    def spy(ch: PwmChannel, now: int) -> Pins:
+        pins = fire(ch, now)
+        if watching and getattr(ch, "watched", False):
+            seen.append(pins)
+        return pins
+
+    b._pwm[1].watched = True
+    monkeypatch.setattr(PwmChannel, "fire", spy)
+    for ax, rel in ((0, 50), (1, 4000)):
+        host.ok("MOVE", axis=ax, mode=P.MOVE_UNHOMED, target=b.encoder_count(ax) + rel)
+    host.run(0.05)
+    host.ok("ENABLE", mask=2, enable=0)
+    watching = True
+    cmds = [[], []]
+    host.run(0.5, until=sample)
+    signs = [(c > 0) - (c < 0) for c in cmds[0]]
+    print(f"axis 0 commands with the dither: {cmds[0][:8]} ...; axis 1 (disabled): {sorted(set(cmds[1]))}, "
+          f"{len(seen)} pin changes seen")
+    assert all(s != 0 for s in signs) and all(s == -t for s, t in zip(signs, signs[1:])), cmds[0]
+    assert all(abs(c) >= amp - 30 for c in cmds[0]), cmds[0]
+    assert set(cmds[1]) == {0} and not b.drive(1)["on"]
+    assert seen and all(p.rpwm == 0 and p.lpwm == 0 for p in seen), sorted(set(seen))
+    # a faulted axis: the e-stop latches ESTOP on both and the dither stops with the law
+    seen.clear()
+    b.set_estop(True)
+    host.run(0.3, until=sample)
+    assert not b.drive(0)["on"] and not b.drive(1)["on"]
+    assert all(p.rpwm == 0 and p.lpwm == 0 for p in seen), sorted(set(seen))
+    assert all(c == 0 for c in cmds[0][-5:]), cmds[0][-5:]
