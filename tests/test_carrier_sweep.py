@@ -50,6 +50,20 @@ def test_the_opening_says_when_the_carrier_cannot_be_ranked_and_when_the_choice_
     json.dumps(numbers)
 
 
+@pytest.mark.parametrize("found, says", [(0, "none of the 4"), (2, "only 2 of the 4")])
+def test_protocols_that_found_no_carrier_are_said_and_the_choice_is_not_named(found: int, says: str) -> None:
+    """A stability table whose protocols found no carrier (a 3 s or converged settle on lab), or only some
+    of them: the opening says so instead of "no stability table" or a span over the ones that found one."""
+    rows = [_row(50.0, True, 0, 2.0), _row(24_400.0, True, 0, 1.0)]
+    v = ({"stable": False, "min_hz": None, "max_hz": None, "median_hz": None, "n": 4, "chosen": 0} if not found else
+         {"stable": False, "min_hz": 676.0, "max_hz": 994.0, "median_hz": 820.0, "n": 4, "chosen": found,
+          "tolerance_factor": 1.25})
+    rep = {"meta": {"experiment_plant": "lab", "sweep_T_s": 1.0},
+           "characterization": {"axes": {"x": {"achieved_hz": 1163.7}}, "stability_verdict": {"axes": {"x": v}}}}
+    text, _ = answer.paragraph(rep, summarise(rows))
+    assert says in text and "names none" in text and "no stability table" not in text, text
+
+
 @pytest.mark.parametrize("chosen_hz, survives", [(1050.0, True), (1286.0, False)])
 def test_the_choice_survives_only_if_the_protocols_agree_with_it(chosen_hz: float, survives: bool) -> None:
     """Protocols that agree among themselves (850-1073 Hz) back the characterisation's

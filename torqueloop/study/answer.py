@@ -63,8 +63,18 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]]) -> tuple[str, 
     st = numbers["stability"]
     for a, hz in numbers["chosen"].items():
         v = st.get(a)
-        if v is None or v.get("median_hz") is None:
+        if v is None:
             parts.append(f"The characterisation chose {hz:.4g} Hz for axis {a}; no stability table backs it.")
+        elif v.get("median_hz") is None:
+            # a table, but no protocol found a carrier meeting step 5's target on the grid
+            parts.append(f"The characterisation chose {hz:.4g} Hz for axis {a}, but none of the {v['n']} settle / "
+                         f"sweep-order protocols found a carrier that meets step 5's target on the grid, so the "
+                         f"choice is a property of the bench's timing and this study names none.")
+        elif v.get("chosen", v["n"]) < v["n"]:
+            parts.append(f"The characterisation chose {hz:.4g} Hz for axis {a}, but only {v['chosen']} of the "
+                         f"{v['n']} settle / sweep-order protocols found a carrier ({v['min_hz']:.4g}-"
+                         f"{v['max_hz']:.4g} Hz); the others found none on the grid, so the choice does not survive "
+                         f"the bench protocol and this study names none.")
         elif v["stable"] and abs(math.log(hz / v["median_hz"])) <= math.log(v["tolerance_factor"]):
             parts.append(f"The characterisation chose {hz:.4g} Hz for axis {a}, and the choice survives the bench "
                          f"protocols tried ({v['n']} settle / sweep-order protocols: {v['min_hz']:.4g}-"
