@@ -11,6 +11,13 @@ collection sorts by it, longest first (the same order on every worker, as
 xdist requires).  A test it does not know yet counts as the median.  Every
 run writes what it measured to build/test-durations.<worker>.json;
 ``make test-durations`` folds that into tests/durations.json.
+
+xdist's load scheduler starts each worker on a block of consecutive tests
+(a quarter of its share: 89 of 717), so sorted longest first, the first
+worker got every long bench (1 404 s of recorded time against 133 s) and
+the second sat idle for its last 15 minutes.  One test at a time
+(``--maxschedchunk 1``, unless given) keeps two queued per worker and hands
+out the rest as workers free up.
 """
 
 from __future__ import annotations
@@ -34,6 +41,12 @@ def _known() -> dict[str, float]:
         return {str(k): float(v) for k, v in json.loads(DURATIONS.read_text()).items()}
     except (OSError, ValueError):
         return {}
+
+
+def pytest_configure(config):
+    # the controller builds its scheduler after this; a value given on the command line wins
+    if getattr(config.option, "maxschedchunk", 0) is None:
+        config.option.maxschedchunk = 1
 
 
 def pytest_collection_modifyitems(session, config, items):
