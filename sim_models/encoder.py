@@ -80,7 +80,10 @@ def add_glitches(edges: list[Edge], t0: float, t1: float, rate_hz: float, width_
     at Poisson-distributed times one channel (A or B, chosen at random) flips
     for ``width_s`` and flips back, as a pickup spike on the cable would.
     ``state`` holds each axis's pin state at t0 and is updated.  A glitch is
-    never reported across a real edge (it is dropped if one falls inside)."""
+    never reported across a real edge (it is dropped if one falls inside),
+    nor across another glitch (one starting before the last one ended is
+    dropped: two overlapping flips of A and B would reach the pins as both
+    channels changing at once, which no single pickup spike does)."""
     if rate_hz <= 0:
         for e in edges:
             state[e.axis] = (e.a, e.b, e.z)
@@ -100,13 +103,15 @@ def add_glitches(edges: list[Edge], t0: float, t1: float, rate_hz: float, width_
             glitches.append((t, rng.randrange(2)))
         cur = state[axis]
         ri = 0
+        busy_until = -math.inf
         for tg, ch in glitches:
             while ri < len(real) and real[ri].t <= tg:
                 cur = real[ri][2:]
                 out.append(real[ri])
                 ri += 1
-            if ri < len(real) and real[ri].t < tg + width_s:
+            if tg < busy_until or (ri < len(real) and real[ri].t < tg + width_s):
                 continue
+            busy_until = tg + width_s
             a, b, z = cur
             g = (1 - a, b, z) if ch == 0 else (a, 1 - b, z)
             out.append(Edge(tg, axis, *g))

@@ -96,10 +96,14 @@ def test_glitches_are_single_short_pulses_and_do_not_change_the_count():
     fwd = (Pins(1, 0, 1, 1), Pins(0, 1, 1, 1))
     real = [0, 0]
     n_glitch = 0
+    pins = [pins_of(plant.count(ax), ENC)[:2] for ax in range(2)]
     for _ in range(50):
         edges = plant.advance(1e-3, fwd)
         for ax in range(2):
             ev = [e for e in edges if e.axis == ax]
+            for e in ev:        # one channel at a time, glitch or not (two overlapping glitches once broke this)
+                assert (e.a != pins[ax][0]) + (e.b != pins[ax][1]) == 1, f"seed {seed}: A and B changed together at {e.t}"
+                pins[ax] = (e.a, e.b)
             k = 0
             while k < len(ev):
                 # a glitch: a flip and its return 100 ns later to the previous state
