@@ -276,9 +276,8 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     }
     if (TL_UNLIKELY(c->d.friction))
         friction_terms(c, p, &pd_q16, i_q16, e);
-    /* round to the nearest PWM step and saturate (eq. 19/25): u = (pd + i + 2^15) >> 16.  The
-     * bounds are within +-2^26 (CMD_LIMIT <= 1023) and |i| < 2^27: with |pd| < 2^30 the sum
-     * fits 32 bits, and beyond, pd's sign alone decides the saturation. */
+    /* round and saturate (eq. 19/25): u = (pd + i + 2^15) >> 16.  Bounds within +-2^26 (CMD_LIMIT
+     * <= 1023), |i| < 2^27: with |pd| < 2^30 the sum fits 32 bits; beyond, pd's sign decides. */
     int32_t pd = (int32_t)pd_q16;
     int32_t cmd;
     if (TL_LIKELY((int32_t)(pd_q16 >> 32) == (pd >> 31) && (uint32_t)pd + 0x40000000u < 0x80000000u)) {
