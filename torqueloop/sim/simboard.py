@@ -346,6 +346,10 @@ class SimBoard:
         the end (where the edges would have left it); its last edge time and
         the interval before it keep their values."""
         run_pins_until(self.plant, self._pwm, start, end, CLK_HZ)
+        self._decoder_from_plant()
+
+    def _decoder_from_plant(self) -> None:
+        """The decoder's count and Gray state where the plant's edges would have left them."""
         for a in range(2):
             self._count[a], self._gray[a] = self.plant.count(a), self._gray_index(a)
 
@@ -380,8 +384,7 @@ class SimBoard:
         j = next(j for j in range(i + 1, n + 1) if counts[j] == c1)
         plant, self._pwm = saved[i]
         self.plant.restore(plant)
-        for a in range(2):
-            self._count[a], self._gray[a] = counts[i][a], counts[i][a] & 3
+        self._decoder_from_plant()
         run_until(self.plant, self._pwm, bounds[i], bounds[j], CLK_HZ, self._edges)
         if j < n:
             self._run_pins(bounds[j], end)
