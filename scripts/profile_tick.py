@@ -5,7 +5,7 @@ simulator (torqueloop/oracles/rv32.py), each instruction charged the
 pipelined core's cycles (docs/cpu.md, "Cycles per instruction", tl_cpu_pipe),
 the worst period attributed to the functions the iteration inlines.
 
-    python scripts/profile_tick.py [--case step|trap|short] [--ticks N] [--dither AMP] [--lines]
+    python scripts/profile_tick.py [--case step|trap|short] [--ticks N] [--dither AMP] [--kvff Q16] [--kaff Q16] [--lines]
 
 A model, not the RTL: the decoder registers are plain memory with no wait
 states, and the interrupt's own bookkeeping around the iteration (main.c) is
@@ -36,11 +36,12 @@ BRANCH_TAKEN_BACK, BRANCH_TAKEN_FWD, BRANCH_MISS_BACK = 2, 3, 3
 JAL, JALR, CSR_WRITE, MUL, DIV = 2, 3, 5, 4, 35
 
 
-def build(case: str, ticks: int, out: Path, dither: int = 0) -> Path:
+def build(case: str, ticks: int, out: Path, dither: int = 0, kvff: int = 0, kaff: int = 0) -> Path:
     mode, short, _ = CASES[case]
     elf = out / f"tick_{case}.elf"
     srcs = [str(s) for s in F.SOURCES if s.name != "main.c"] + [str(HARNESS)]
     cmd = [F.CC, *F.CFLAGS, "-g", f"-DMODE={mode}", f"-DSHORT={short}", f"-DNTICKS={ticks}", f"-DDITHER_AMP={dither}",
+           f"-DKVFF_Q16={kvff}", f"-DKAFF_Q16={kaff}",
            *(f"-I{i}" for i in F.INCLUDES), "-T", str(F.FW / "common" / "link.ld"), "-Wl,--gc-sections",
            "-Wl,--no-warn-rwx-segments", "-o", str(elf), *srcs, F.libgcc()]
     r = subprocess.run(cmd, capture_output=True, text=True)
@@ -127,6 +128,10 @@ def main() -> int:
     ap.add_argument("--ticks", type=int, help="control periods to run (default: the case's)")
     ap.add_argument("--dither", type=int, default=0, metavar="AMP",
                     help="DITHER_AMP on both axes, PWM steps 0..1023 (half-period 2 samples; default 0: off)")
+    ap.add_argument("--kvff", type=int, default=0, metavar="Q16",
+                    help="KVFF_Q16 on both axes (velocity feed-forward, 0..16777215; default 0: off)")
+    ap.add_argument("--kaff", type=int, default=0, metavar="Q16",
+                    help="KAFF_Q16 on both axes (acceleration feed-forward, 0..16777215; default 0: off)")
     ap.add_argument("--lines", action="store_true", help="also the source lines, dearest first")
     a = ap.parse_args()
     ticks_n = CASES[a.case][2] if a.ticks is None else a.ticks
@@ -136,9 +141,12 @@ def main() -> int:
     if not 0 <= a.dither <= 1023:
         print("profile_tick: --dither must be 0..1023 PWM steps", file=sys.stderr)
         return 2
+    if not (0 <= a.kvff <= 0xFF_FFFF and 0 <= a.kaff <= 0xFF_FFFF):
+        print("profile_tick: --kvff and --kaff must be 0..16777215 (q16)", file=sys.stderr)
+        return 2
     with tempfile.TemporaryDirectory() as tmp:
         try:
-            elf = build(a.case, ticks_n, Path(tmp), a.dither)
+            elf = build(a.case, ticks_n, Path(tmp), a.dither, a.kvff, a.kaff)
             ticks = profile(elf)
         except RuntimeError as e:
             print(f"profile_tick: {e}", file=sys.stderr)

@@ -67,11 +67,13 @@ def _random_run(rng: random.Random, start: int | None = None) -> tuple[list[str]
     if rng.random() < 0.3:       # the dither (control_step.h friction_terms), alone or with the terms above
         p = dataclasses.replace(p, dither_amp=rng.choice([1, rng.randrange(1, 64), rng.randrange(1, 1024)]),
                                 dither_half=rng.choice([1, 2, rng.randrange(1, 50), rng.randrange(1, 0x10000)]))
+    if rng.random() < 0.3:       # the acceleration feed-forward (control_step.h friction_terms), with the rest or alone
+        p = dataclasses.replace(p, kaff_q16=rng.choice([1, rng.randrange(1, 5000), rng.randrange(1, 0x100_0000)]))
     period = rng.randrange(200, 25_001)
     ax = Axis(p, period)
     lines = [f"P {p.law} {p.kp_q16} {p.kd_q16} {p.ki_q16} {p.deadband_q16} {p.cmd_limit} {p.vel_mode} "
              f"{p.vmax_cps} {p.amax_cps2} {period} {p.fc_pos} {p.fc_neg} {p.izone_q16} {p.kvff_q16} "
-             f"{p.dither_amp} {p.dither_half}"]
+             f"{p.dither_amp} {p.dither_half} {p.kaff_q16}"]
     pos, t, edge = rng.randrange(-10**6, 10**6) if start is None else start, rng.randrange(2**32), 0
     ax.reset(pos, t)
     lines.append(f"R {pos} {t}")
@@ -90,7 +92,7 @@ def _random_run(rng: random.Random, start: int | None = None) -> tuple[list[str]
         interval = rng.randrange(1, period * 50)
         cmd = ax.step(pos, edge, t, bool(run), interval)
         lines.append(f"S {pos} {edge} {t} {run} {interval}")
-        expect.append((cmd, ax.sp_q16, ax.vel_q8, ax.integ_q32))
+        expect.append((cmd, ax.sp_q16, ax.vel_q8, ax.integ_q32, ax.prof_a_q16))
     return lines, expect
 
 
@@ -105,7 +107,7 @@ def test_control_matches_the_reference_model(host_tests: Path) -> None:
     want = [e for _, exp in runs for e in exp]
     assert len(got) == len(want)
     for i, (g, w) in enumerate(zip(got, want)):
-        assert g == w, f"seed {seed}, step {i}: C (cmd, sp_q16, vel_q8, integ_q32) = {g}, reference {w}"
+        assert g == w, f"seed {seed}, step {i}: C (cmd, sp_q16, vel_q8, integ_q32, prof_a_q16) = {g}, reference {w}"
 
 
 def test_encoder_check_matches_the_reference_model(host_tests: Path) -> None:

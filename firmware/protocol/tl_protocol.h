@@ -380,13 +380,14 @@ static inline int tlp_needs_key(uint8_t cmd, const uint8_t *payload)
 #define TLP_P_KVFF_Q16 34u
 #define TLP_P_DITHER_AMP 35u
 #define TLP_P_DITHER_HALF 36u
+#define TLP_P_KAFF_Q16 37u
 
 #define TLP_AXIS_COUNT 2u
 /* dflt[axis]: a global parameter's default is dflt[0]; tighten: +1 / -1 = while an axis is
    enabled the value may only rise / fall (a safety limit), 0 = free */
 typedef struct { uint8_t id; uint8_t global; int8_t tighten; int32_t min; int32_t max; int32_t dflt[TLP_AXIS_COUNT]; } tlp_param_info_t;
-#define TLP_PARAM_COUNT 41u
-#define TLP_PARAM_LAYOUT 0x08131D76u   /* the stored record's layout word ([store]) */
+#define TLP_PARAM_COUNT 42u
+#define TLP_PARAM_LAYOUT 0xB34978A2u   /* the stored record's layout word ([store]) */
 static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {
     {0u, 0u, 0, 0L, 3L, {1L, 1L}},  /* LAW */
     {1u, 0u, 0, 0L, 2147483647L, {17134L, 23145L}},  /* KP_Q16 */
@@ -429,12 +430,13 @@ static const tlp_param_info_t TLP_PARAM_INFO[TLP_PARAM_COUNT] = {
     {34u, 0u, 0, 0L, 16777215L, {0L, 0L}},  /* KVFF_Q16 */
     {35u, 0u, 0, 0L, 1023L, {0L, 0L}},  /* DITHER_AMP */
     {36u, 0u, 0, 1L, 65535L, {1L, 1L}},  /* DITHER_HALF */
+    {37u, 0u, 0, 0L, 16777215L, {0L, 0L}},  /* KAFF_Q16 */
 };
 /* parameter id -> index into TLP_PARAM_INFO, -1: no such parameter */
 static const int8_t TLP_PARAM_INDEX[256] = {
      0,  1,  2,  3,  4,  5,  6,  7,  8,  9, 10, 11, 12, 13, 14, 15,
     16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 35,
-    36, 37, 38, 39, 40, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
+    36, 37, 38, 39, 40, 41, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
     -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
     31, 32, 33, 34, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
     -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,

@@ -63,6 +63,7 @@ void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now)
     c->target_q16 = c->sp_q16;
     c->prof_v_q16 = 0;
     c->prof_m = 0;
+    c->prof_a_q16 = 0;
     c->moving = false;
     c->integ_q32 = 0;
     c->saturated = false;
@@ -131,7 +132,7 @@ TL_FOR_SIZE void tl_ctl_derived(tl_ctl_derived_t *d, const tl_ctl_params_t *p, u
     uint32_t kb = bitlen64((uint64_t)d->ki_dt_q32);
     d->ki_e_max = kb <= 30u ? 0x7FFFFFFF : (int32_t)(1u << (61u - kb));
     d->lim_q32 = (int64_t)p->cmd_limit << 32;
-    d->friction = (p->fc_pos | p->fc_neg | p->izone_q16 | p->kvff_q16 | p->dither_amp) != 0;
+    d->friction = (p->fc_pos | p->fc_neg | p->izone_q16 | p->kvff_q16 | p->dither_amp | p->kaff_q16) != 0;
     /* u > limit  <=>  u_q16 + 2^15 >= (limit + 1) 2^16;  u < -limit  <=>  u_q16 + 2^15 < -limit 2^16 */
     d->sat_hi_q16 = ((int64_t)p->cmd_limit + 1) * 65536;
     d->sat_lo_q16 = -(int64_t)p->cmd_limit * 65536;
@@ -170,6 +171,7 @@ void tl_ctl_move(tl_ctl_t *c, int32_t target, bool trapezoid)
         c->sp_q16 = c->target_q16;   /* the paper's step experiment */
         c->prof_v_q16 = 0;
         c->prof_m = 0;
+        c->prof_a_q16 = 0;
         c->moving = false;
     }
 }
@@ -180,6 +182,7 @@ void tl_ctl_hold(tl_ctl_t *c, int32_t pos)
     c->target_q16 = c->sp_q16;
     c->prof_v_q16 = 0;
     c->prof_m = 0;
+    c->prof_a_q16 = 0;
     c->moving = false;
 }
 

@@ -79,6 +79,7 @@ typedef struct {
     int32_t kvff_q16;           /* velocity feed-forward: q16 PWM steps per count/s of the profile speed */
     int32_t dither_amp;         /* square-wave dither, PWM steps (0: off) ... */
     int32_t dither_half;        /* ... and its half-period, samples (>= 1) */
+    int32_t kaff_q16;           /* acceleration feed-forward: q16 PWM steps per count/s^2 of the profile's */
 } tl_ctl_params_t;
 
 /* What the parameters and the period give (tl_ctl_derived): computed apart
@@ -108,6 +109,8 @@ typedef struct {
     int64_t target_q16;
     int32_t prof_v_q16;         /* profile speed, counts per sample q16 (signed) */
     uint32_t prof_m;            /* floor(|prof_v_q16| / amax_q16), kept so no sample divides by amax */
+    int32_t prof_a_q16;         /* the profile speed's change over the last sample, counts per sample^2 q16
+                                   (signed: + speeding up toward +, - braking it; 0 at rest and on landing) */
     bool moving;
     int64_t integ_q32;
     bool saturated;             /* last output hit cmd_limit */

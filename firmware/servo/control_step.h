@@ -88,10 +88,13 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
         c->sp_q16 = c->target_q16;
         c->prof_v_q16 = 0;
         c->prof_m = 0;
+        c->prof_a_q16 = 0;
         c->moving = false;
         return;
     }
-    c->prof_v_q16 = (vs ^ s) - s;
+    vs = (vs ^ s) - s;
+    c->prof_a_q16 = vs - c->prof_v_q16;   /* at most a, or a drop to a lower vmax: fits 31 bits */
+    c->prof_v_q16 = vs;
     c->prof_m = m;
     c->sp_q16 += c->prof_v_q16;
 }
@@ -195,7 +198,9 @@ static inline int32_t sat31(int64_t v) { return v > 0x7FFFFFFF ? 0x7FFFFFFF : (v
 
 /* Friction compensation beyond eq. (1), added to the law's P and D part in q16 PWM steps:
  * velocity feed-forward Kvff v_sp (v_sp the trapezoid profile's speed, q8 counts/s: counts
- * per sample q16 times euler_k = 2^8 1e6 / T, saturated to 31 bits), then the dead zone
+ * per sample q16 times euler_k = 2^8 1e6 / T, saturated to 31 bits), acceleration
+ * feed-forward Kaff a_sp (a_sp the profile speed's change over the sample, q8 counts/s^2:
+ * counts per sample^2 q16 times euler_k twice, each product saturated to 31 bits), then the dead zone
  * beyond PW0 per direction: FC_POS steps added to a positive command, FC_NEG to the size of a
  * negative one (the sign of pd + i before rounding), then the dither: +DITHER_AMP steps for
  * DITHER_HALF samples, -DITHER_AMP for the next DITHER_HALF, while the error e (after the
@@ -207,6 +212,11 @@ static inline __attribute__((always_inline)) void friction_terms(tl_ctl_t *c, co
     if (p->kvff_q16 != 0 && c->prof_v_q16 != 0) {
         int32_t v_q8 = sat31(((int64_t)c->prof_v_q16 * c->d.euler_k) >> 16);
         *pd_q16 += mul32(p->kvff_q16, v_q8) >> 8;
+    }
+    if (p->kaff_q16 != 0 && c->prof_a_q16 != 0) {
+        int32_t dv_q8 = sat31(mul32(c->prof_a_q16, c->d.euler_k) >> 16);
+        int32_t a_q8 = sat31(mul32(dv_q8, c->d.euler_k) >> 8);
+        *pd_q16 += mul32(p->kaff_q16, a_q8) >> 8;
     }
     if ((p->fc_pos | p->fc_neg) != 0) {
         int64_t u = *pd_q16 + i_q16;

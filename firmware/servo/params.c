@@ -52,6 +52,7 @@ TL_FOR_SIZE static void axis_cfg(const int32_t *p, uint32_t period_us, uint32_t 
     out->ctl.kvff_q16 = p[PI(TLP_P_KVFF_Q16)];
     out->ctl.dither_amp = p[PI(TLP_P_DITHER_AMP)];
     out->ctl.dither_half = p[PI(TLP_P_DITHER_HALF)];
+    out->ctl.kaff_q16 = p[PI(TLP_P_KAFF_Q16)];
     tl_ctl_derived(&out->d, &out->ctl, period_us, clk_hz);
     out->stall_limit_ticks = ((uint32_t)p[PI(TLP_P_STALL_MS)] * 1000u + period_us - 1u) / period_us;
     /* counts/s * us * 2^16 / 1e6 = x * 1024 / 15625, as control.c's vmax; HOME_VEL >= 1, so

@@ -1055,16 +1055,17 @@ static int ctl_main(void)
     while (fgets(line, sizeof line, stdin)) {
         long long a[18] = {0};
         char op = line[0];
-        int n = sscanf(line + 1, "%lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld",
+        int n = sscanf(line + 1,
+                       "%lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld %lld",
                        &a[0], &a[1], &a[2], &a[3], &a[4], &a[5], &a[6], &a[7], &a[8], &a[9], &a[10], &a[11], &a[12],
-                       &a[13], &a[14], &a[15], &a[16]);
+                       &a[13], &a[14], &a[15], &a[16], &a[17]);
         (void)n;
         switch (op) {
         case 'P':
             p = (tl_ctl_params_t){(uint32_t)a[0], (int32_t)a[1], (int32_t)a[2], (int32_t)a[3], (int32_t)a[4],
                                   (int32_t)a[5], (uint32_t)a[6], (int32_t)a[7], (int32_t)a[8],
                                   (int32_t)a[10], (int32_t)a[11], (int32_t)a[12], (int32_t)a[13],
-                                  (int32_t)a[14], a[15] > 0 ? (int32_t)a[15] : 1};
+                                  (int32_t)a[14], a[15] > 0 ? (int32_t)a[15] : 1, (int32_t)a[16]};
             period = (uint32_t)a[9];
             tl_ctl_derive(&c, &p, period, 50000000u);
             break;
@@ -1072,7 +1073,8 @@ static int ctl_main(void)
         case 'M': tl_ctl_move(&c, (int32_t)a[0], a[1] != 0); break;
         case 'S': {
             int32_t cmd = tl_ctl_step(&c, &p, (int32_t)a[0], (uint32_t)a[1], (uint32_t)a[2], (uint32_t)a[4], a[3] != 0);
-            printf("%" PRId32 " %" PRId64 " %" PRId32 " %" PRId64 "\n", cmd, c.sp_q16, c.vel_q8, c.integ_q32);
+            printf("%" PRId32 " %" PRId64 " %" PRId32 " %" PRId64 " %" PRId32 "\n", cmd, c.sp_q16, c.vel_q8, c.integ_q32,
+                   c.prof_a_q16);
             break;
         }
         case 'D': {   /* tl_div64_32(hi:lo, d) */

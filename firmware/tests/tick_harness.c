@@ -4,7 +4,8 @@
  * a step (MODE 0) or trapezoid (MODE 1) move of 2000 counts (SHORT 1: 60
  * counts at VMAX 50 000, AMAX 5e7, which brakes inside the run), both decoders
  * counting 300 counts at 125 000 counts/s and then still, telemetry every 16
- * periods (DITHER_AMP > 0: with that square-wave dither, half-period 2 samples).
+ * periods (DITHER_AMP > 0: with that square-wave dither, half-period 2 samples; KVFF_Q16,
+ * KAFF_Q16 > 0: with that velocity and acceleration feed-forward).
  * The decoder registers are plain memory on the instruction-set
  * simulator: this file writes them before each tl_servo_tick. */
 #include "servo_internal.h"
@@ -18,6 +19,12 @@
 #endif
 #ifndef DITHER_AMP
 #define DITHER_AMP 0
+#endif
+#ifndef KVFF_Q16
+#define KVFF_Q16 0
+#endif
+#ifndef KAFF_Q16
+#define KAFF_Q16 0
 #endif
 #ifndef NTICKS
 #define NTICKS 200
@@ -44,6 +51,10 @@ int main(void)
             tl_param_set(&s, ax, TLP_P_DITHER_AMP, DITHER_AMP, &why);
             tl_param_set(&s, ax, TLP_P_DITHER_HALF, 2, &why);
         }
+        if (KVFF_Q16)
+            tl_param_set(&s, ax, TLP_P_KVFF_Q16, KVFF_Q16, &why);
+        if (KAFF_Q16)
+            tl_param_set(&s, ax, TLP_P_KAFF_Q16, KAFF_Q16, &why);
         if (SHORT) {
             tl_param_set(&s, ax, TLP_P_VMAX, 50000, &why);
             tl_param_set(&s, ax, TLP_P_AMAX, 50000000, &why);

@@ -81,15 +81,22 @@ def in_izone(p: "AxisParams", e_q16: int) -> bool:
     return p.izone_q16 != 0 and abs(e_q16) <= p.izone_q16
 
 
-def friction_terms(p: "AxisParams", u_q16: int, prof_v_q16: int, euler_k: int) -> int:
+def friction_terms(p: "AxisParams", u_q16: int, prof_v_q16: int, euler_k: int, prof_a_q16: int) -> int:
     """The law's output (q16 PWM steps, before rounding) with the friction
     compensation of control_step.h: the velocity feed-forward Kvff v_sp (v_sp
-    the profile's speed in q8 counts/s, saturated to 31 bits), then FC_POS
-    added to a positive output, FC_NEG to the size of a negative one (the sign
-    of P + D + I + feed-forward, before rounding)."""
+    the profile's speed in q8 counts/s, saturated to 31 bits), the acceleration
+    feed-forward Kaff a_sp (a_sp the profile speed's change over the sample in
+    q8 counts/s^2: the change in q8 counts/s, then per second, each saturated to
+    31 bits), then FC_POS added to a positive output, FC_NEG to the size of a
+    negative one (the sign of P + D + I + feed-forward, before rounding)."""
+    lim = (1 << 31) - 1
     if p.kvff_q16 and prof_v_q16:
-        v_q8 = clamp((prof_v_q16 * euler_k) >> 16, (1 << 31) - 1)
+        v_q8 = clamp((prof_v_q16 * euler_k) >> 16, lim)
         u_q16 += (p.kvff_q16 * v_q8) >> 8
+    if p.kaff_q16 and prof_a_q16:
+        dv_q8 = clamp((prof_a_q16 * euler_k) >> 16, lim)
+        a_q8 = clamp((dv_q8 * euler_k) >> 8, lim)
+        u_q16 += (p.kaff_q16 * a_q8) >> 8
     if u_q16 > 0:
         u_q16 += p.fc_pos << 16
     elif u_q16 < 0:
@@ -130,6 +137,8 @@ class AxisParams:
     # square-wave dither (control_step.h friction_terms): amplitude in PWM steps (0: off), half-period in samples
     dither_amp: int = 0
     dither_half: int = 1
+    # acceleration feed-forward (control_step.h friction_terms): q16 PWM steps per count/s^2 of the profile's
+    kaff_q16: int = 0
 
 
 @dataclass
@@ -140,6 +149,7 @@ class Axis:
     sp_q16: int = 0
     target_q16: int = 0
     prof_v_q16: int = 0
+    prof_a_q16: int = 0          # the profile speed's change over the last sample (0 at rest and on landing)
     moving: bool = False
     integ_q32: int = 0
     saturated: bool = False
@@ -169,7 +179,7 @@ class Axis:
 
     def reset(self, pos: int, now: int) -> None:
         self.sp_q16 = self.target_q16 = pos << 16
-        self.prof_v_q16, self.moving, self.integ_q32 = 0, False, 0
+        self.prof_v_q16, self.prof_a_q16, self.moving, self.integ_q32 = 0, 0, False, 0
         self.saturated, self.sat_sign, self.vel_q8 = False, 0, 0
         self.pos_prev = self.pos_ref = pos
         self.t_ref = now
@@ -182,7 +192,7 @@ class Axis:
         if trapezoid:
             self.moving = True
         else:
-            self.sp_q16, self.prof_v_q16, self.moving = self.target_q16, 0, False
+            self.sp_q16, self.prof_v_q16, self.prof_a_q16, self.moving = self.target_q16, 0, 0, False
 
     def _profile(self) -> None:
         """Each sample the speed toward the target rises by at most a, never
@@ -204,8 +214,9 @@ class Axis:
             else:
                 vs = v_allow(ad, a)
         if 0 <= vs and vs >= ad:
-            self.sp_q16, self.prof_v_q16, self.moving = self.target_q16, 0, False
+            self.sp_q16, self.prof_v_q16, self.prof_a_q16, self.moving = self.target_q16, 0, 0, False
             return
+        self.prof_a_q16 = vs * direction - self.prof_v_q16
         self.prof_v_q16 = vs * direction
         self.sp_q16 += self.prof_v_q16
 
@@ -256,7 +267,7 @@ class Axis:
             u += self.integ_q32 >> 16
         else:
             self.integ_q32 = 0
-        u = friction_terms(p, u, self.prof_v_q16, self.euler_k)
+        u = friction_terms(p, u, self.prof_v_q16, self.euler_k, self.prof_a_q16)
         if dither_on(p, e):
             d, self.dither_n = dither_q16(p, self.dither_n)
             u += d
