@@ -58,7 +58,8 @@ BOTH_AXES = 0b11              # the axis mask of ENABLE and CLEAR_FAULT for both
 #: the law's parameters a tuned run may set (protocol.toml name: torqueloop.oracles.servo.AxisParams field)
 TUNED_FIELDS = {"LAW": "law", "KP_Q16": "kp_q16", "KD_Q16": "kd_q16", "KI_Q16": "ki_q16", "VEL_MODE": "vel_mode",
                 "DEADBAND_Q16": "deadband_q16", "FC_POS": "fc_pos", "FC_NEG": "fc_neg", "IZONE_Q16": "izone_q16",
-                "KVFF_Q16": "kvff_q16"}
+                "KVFF_Q16": "kvff_q16", "KAFF_Q16": "kaff_q16", "DITHER_AMP": "dither_amp",
+                "DITHER_HALF": "dither_half", "VMAX": "vmax_cps", "AMAX": "amax_cps2"}
 
 
 @dataclass(frozen=True)
@@ -99,6 +100,8 @@ class ExperimentConfig:
     #: per axis, raw board settings written after the Table 1 law and gains, which they replace
     #: (``torqueloop tune --verify``: LAW, KP_Q16, KD_Q16, KI_Q16, PW0, FDIV, VEL_MODE); None: the paper's
     tuned: tuple[dict[str, int], ...] | None = None
+    #: the move: the paper's step (MOVE mode 0), or the trapezoid profile (mode 1) at each axis's VMAX and AMAX
+    trapezoid: bool = False
 
     @property
     def target_counts(self) -> int:
@@ -139,6 +142,11 @@ class ExperimentConfig:
         """The settings the board runs with, per axis."""
         return tuple(l | o for l, o in zip(self.loaded_settings(), self.overrides()))
 
+    def profile(self, ax: int) -> tuple[int, int]:
+        """VMAX (counts/s) and AMAX (counts/s^2) of an axis's trapezoid: the tuned ones, else the board's defaults."""
+        t = {} if self.tuned is None else self.tuned[ax]
+        return (t.get("VMAX", tp.PARAMS["VMAX"].defaults[ax]), t.get("AMAX", tp.PARAMS["AMAX"].defaults[ax]))
+
     @property
     def fdiv(self) -> tuple[int, ...]:
         return tuple(b["FDIV"] for b in self.board())
@@ -155,7 +163,7 @@ class Trajectory:
     pos: np.ndarray            # (n, 2) measured position (encoder; the model arm: unquantised)
     vel: np.ndarray            # (n, 2) the controller's velocity estimate
     cmd: np.ndarray            # (n, 2) PWM command, -1023..1023
-    err: np.ndarray            # (n, 2) tracking error
+    err: np.ndarray            # (n, 2) tracking error: set-point - position (the firmware's, rounded to counts)
     true_pos: np.ndarray       # (n, 2) plant screw angle at the sample
     charge: np.ndarray | None = None   # (n, 2) integral of the armature current since the step, A s
     i2: np.ndarray | None = None       # (n, 2) integral of its square, A^2 s
@@ -279,7 +287,8 @@ def run_rtl(cfg: ExperimentConfig, board_factory=None, log=print) -> RtlRun:
         target = cfg.target_counts
         # the paper's step from rest, relative to where the stage was at power-up: UNHOMED
         bridge.watch(board.cycle)       # the first drive edges give the carriers' phase at the step
-        seqs = [link.post("MOVE", axis=ax, mode=tp.MOVE_UNHOMED, target=target) for ax in AXES]
+        mode = tp.MOVE_UNHOMED | (tp.MOVE_TRAPEZOID if cfg.trapezoid else 0)
+        seqs = [link.post("MOVE", axis=ax, mode=mode, target=target) for ax in AXES]
         for s in seqs:
             r = link.wait(s)
             if r["status"] != tp.STATUS["OK"]:
@@ -349,7 +358,7 @@ def _assemble(cfg: ExperimentConfig, link: Client, trace: list[tuple], target: i
     cols: dict[str, list[np.ndarray]] = {k: [] for k in ("pos", "vel", "cmd", "err", "true", "q", "q2")}
     start, tts, k0s = [], [], []
     for a in AXES:
-        k0 = next((i for i, f in enumerate(tel) if f.axes[a]["error"] == target - f.axes[a]["position"]), None)
+        k0 = _first_sample(cfg, tel, a, target)
         if k0 is None:
             raise RuntimeError(f"no telemetry frame of axis {a} shows an iteration that used the step's target")
         sel = tel[k0:k0 + n]
@@ -381,6 +390,30 @@ def _assemble(cfg: ExperimentConfig, link: Client, trace: list[tuple], target: i
     return RtlRun(cfg, traj, tt[keep], tr[keep][:, 1:3], tr[keep][:, 3:5], tr[keep][:, 5:7],
                   t0_jitter_s=float(np.percentile(off, 95) - base) / CLK_HZ, faults=faults,
                   carrier_start_clk=tuple(start))
+
+
+def _first_sample(cfg: ExperimentConfig, tel: list, a: int, target: int) -> int | None:
+    """The telemetry frame of the first iteration that used the move.  A step: the first
+    whose error is target - position.  A trapezoid starts where the axis stands, so its first
+    samples look like the hold before it: the first frame whose set-point (floor of the
+    profile's, as the firmware reports it) left the hold's, less the samples the firmware's
+    profile (its oracle, bit for bit) takes to leave it."""
+    if not cfg.trapezoid:
+        return next((i for i, f in enumerate(tel) if f.axes[a]["error"] == target - f.axes[a]["position"]), None)
+    from torqueloop.oracles.servo import Axis, AxisParams
+    s0 = tel[0].axes[a]["setpoint"]
+    j1 = next((i for i, f in enumerate(tel) if f.axes[a]["setpoint"] != s0), None)
+    vmax, amax = cfg.profile(a)
+    ref = Axis(AxisParams(vmax_cps=vmax, amax_cps2=amax), cfg.period_us)
+    ref.reset(s0, 0)
+    ref.move(target, True)
+    m1 = 0
+    while True:
+        ref.step(s0, 0, 0, run=False)
+        if ref.sp_q16 >> 16 != s0 or not ref.moving:
+            break
+        m1 += 1
+    return None if j1 is None or j1 < m1 else j1 - m1
 
 
 @dataclass
@@ -484,7 +517,7 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = (), edges: bool =
             if kk == 0 and n_pre:
                 axes[a].move(cfg.start_counts[a], False)
             if k == 0:
-                axes[a].move(cfg.start_counts[a] + cfg.target_counts, False)
+                axes[a].move(cfg.start_counts[a] + cfg.target_counts, cfg.trapezoid)
                 q0[a], q20[a] = plant.charge(a), plant.current_sq_integral(a)   # the step's own current
             pos = plant.count(a)
             cmd = axes[a].step(pos, edge_clk[a] & 0xFFFF_FFFF, ts & 0xFFFF_FFFF, interval=min(edge_gap[a], 0xFFFF_FFFF))
@@ -494,7 +527,7 @@ def run_fast(cfg: ExperimentConfig, carrier_start_clk: tuple = (), edges: bool =
             out["pos"][k, a] = pos - cfg.start_counts[a]
             out["vel"][k, a] = axes[a].vel_q8 / 256
             out["cmd"][k, a] = cmd
-            out["err"][k, a] = cfg.start_counts[a] + cfg.target_counts - pos
+            out["err"][k, a] = (axes[a].sp_q16 - (pos << 16) + 0x8000) >> 16     # as the firmware reports it
             out["true"][k, a] = plant.screw_angle(a) - cfg.start_counts[a] * 2 * math.pi / COUNTS_PER_REV
             out["q"][k, a] = plant.charge(a) - q0[a]
             out["q2"][k, a] = plant.current_sq_integral(a) - q20[a]
