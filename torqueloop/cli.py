@@ -1122,7 +1122,11 @@ def cmd_tune(ctx: Ctx) -> int:
                   f"  friction compensation: FC_POS {dz.fc[0]} FC_NEG {dz.fc[1]} steps (smallest duty "
                   + " / ".join(f"{100 * (dz.pw0 + f * (P.SYSTEM.pwm_full - dz.pw0) / P.SYSTEM.pwm_full) / P.SYSTEM.pwm_full:.2f}"
                                for f in dz.fc)
-                  + f" % +/-, dead zone {dz_pct[0]:.2f} / {dz_pct[1]:.2f} %), hunting guard {dz.izone_counts:g} counts, velocity feed-forward 0 (step moves)",
+                  + f" % +/-, dead zone {dz_pct[0]:.2f} / {dz_pct[1]:.2f} %), hunting guard {dz.izone_counts:g} counts",
+                  f"  feed-forward on trapezoid moves: KVFF {dz.kvff:.4g} steps/(count/s), KAFF {dz.kaff:.4g} "
+                  f"steps/(count/s^2); half the command left to the feedback up to VMAX {t.trapezoid[0]} counts/s, "
+                  f"AMAX {t.trapezoid[1]} counts/s^2 (predicted peak following error there "
+                  f"{t.predicted_following[0]:.0f} counts, {t.predicted_following[1]:.0f} without)",
                   f"  predicted one-turn step ({t.step_counts} counts): overshoot {p.overshoot_pct:.2f} %, "
                   f"settling {analysis.fmt_s(p.settling_time_s)} (+-2 counts: {analysis.fmt_s(t.predicted_tight_s)}), "
                   f"error {p.steady_state_error:.1f} counts",
@@ -1145,25 +1149,36 @@ def cmd_tune(ctx: Ctx) -> int:
             print(f"verifying on the {'RTL board image (Verilator)' if a.verify == 'rtl' else 'fast model'} "
                   f"with {verify_spec.label}, {a.verify_s:g} s ...", file=sys.stderr, flush=True)
         v = tuneverify.verify(tunes, verify_spec, a.verify, a.verify_s, a.table1_s,
-                              log=lambda *m, **k: print(*m, file=sys.stderr, flush=True))
-        out["verify"] = {k: m | ({"table1": v.table1[k]} if k in v.table1 else {}) for k, m in v.tuned.items()} | {
-            "path": v.path, "plant": v.plant, "seconds": v.seconds, "faults": v.faults, "wall_s": v.wall_s}
+                              log=lambda *m, **k: print(*m, file=sys.stderr, flush=True), move=a.verify_move)
+        out["verify"] = {k: m | ({"table1": v.table1[k]} if k in v.table1 else {})
+                         | ({"without_feedforward": v.without_ff[k]} if k in v.without_ff else {})
+                         for k, m in v.tuned.items()} | {
+            "path": v.path, "plant": v.plant, "seconds": v.seconds, "faults": v.faults, "wall_s": v.wall_s,
+            "move": v.move}
         out["table1"] = v.table1
         lines.append(f"{'':24}{'predicted':>11}{'measured':>11}{'Table 1' if v.table1 else '':>11}   "
                      f"({v.path}, {v.plant})")
         for t in tunes:
-            m, p = v.tuned[t.name], t.predicted
+            m = v.tuned[t.name]
+            trap = v.move == "trapezoid" and t.predicted_trapezoid is not None
+            p, p_tight = (t.predicted_trapezoid, t.predicted_trapezoid_tight_s) if trap else (t.predicted,
+                                                                                             t.predicted_tight_s)
             r = v.table1.get(t.name, {k: "" for k in m})
             for label, pv, mv, rv, f in (
                     ("overshoot (%)", p.overshoot_pct, m["overshoot_pct"], r["overshoot_pct"], ".2f"),
                     ("settling 2 % (s)", p.settling_time_s, m["settling_time_s"], r["settling_time_s"], ".3f"),
-                    ("settling 2 counts (s)", t.predicted_tight_s, m["settling_time_2_counts_s"],
+                    ("settling 2 counts (s)", p_tight, m["settling_time_2_counts_s"],
                      r["settling_time_2_counts_s"],
                      ".3f"),
                     ("error (counts)", p.steady_state_error, m["steady_state_error_counts"],
                      r["steady_state_error_counts"], ".1f")):
                 cells = ["-" if x is None else x if x == "" else format(x, f) for x in (pv, mv, rv)]
                 lines.append(f"  {t.name} {label:<22}{cells[0]:>11}{cells[1]:>11}{cells[2]:>11}")
+            if t.name in v.without_ff:
+                pf, w = t.predicted_following, v.without_ff[t.name]["peak_following_error_counts"]
+                lines.append(f"  {t.name} {'peak following (counts)':<22}{pf[0]:>11.0f}"
+                             f"{m['peak_following_error_counts']:>11.0f}")
+                lines.append(f"  {t.name} {'  without feed-forward':<22}{pf[1]:>11.0f}{w:>11.0f}   (fast model)")
         if v.faults and any(v.faults):
             lines.append(f"  faults during the run: {', '.join(describe_faults(f) for f in v.faults if f)}")
     if a.apply:
@@ -1440,6 +1455,9 @@ def parser() -> argparse.ArgumentParser:
                     help="phase margin the design must keep, degrees [30]")
     sp.add_argument("--verify", choices=["model", "rtl"], default=None,
                     help="run the tuned one-turn step in the closed loop: on the fast model or the RTL board image")
+    sp.add_argument("--verify-move", choices=["step", "trapezoid"], default="step",
+                    help="the verification's one-turn move: the paper's step, or a trapezoid (at the VMAX, AMAX "
+                         "printed) with the feed-forward and, on the fast model, without it [step]")
     sp.add_argument("--verify-plant", default=None, metavar="FILE",
                     help="the plant file to verify on [the --plant-file]")
     sp.add_argument("--verify-s", type=_bounded(float, 0.1, 60, "--verify-s"), default=3.0, metavar="S",

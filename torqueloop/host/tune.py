@@ -7,7 +7,8 @@ the predicted step); this module turns a :class:`~.tunedesign.Design` into
 the firmware's raw parameters (protocol.toml: LAW, KP_Q16, KD_Q16, KI_Q16
 in PWM steps per count, per count/s and per count s, q16; PW0 in PWM ticks;
 FDIV for the carrier; VEL_MODE, the speed the derivative is taken on;
-FC_POS, FC_NEG, IZONE_Q16, KVFF_Q16, the friction compensation; PERIOD_US,
+FC_POS, FC_NEG, IZONE_Q16, the friction compensation; KVFF_Q16, KAFF_Q16, the
+feed-forward on trapezoid moves; PERIOD_US,
 the control period the design was discretised at) and writes them through the normal client, refusing while
 the axis moves.  The verification on the fast model and on the RTL board
 image is torqueloop/sim/tuneverify.py's (it needs the simulation stack).
@@ -21,7 +22,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from torqueloop.host.client import Client, ProtocolError
-from torqueloop.host.tunedesign import TIGHT_BAND_COUNTS, AxisModel, Design, Wish, design, predict
+from torqueloop.host.tunedesign import (TIGHT_BAND_COUNTS, AxisModel, Design, Wish, design, predict,
+                                        predict_following, verify_profile)
 from torqueloop.spec import protocol as P
 from torqueloop.spec.metrics import StepMetrics, step_metrics
 from torqueloop.spec.pwm import carrier_hz, full_scale
@@ -63,6 +65,11 @@ class AxisTune:
     predicted: StepMetrics
     step_counts: int
     predicted_tight_s: float | None = None    # the design model's settling into +-TIGHT_BAND_COUNTS
+    trapezoid: tuple[int, int] = (0, 0)       # VMAX, AMAX of the move the feed-forward is verified on
+    #: the design model's peak following error on that move (counts), with and without the feed-forward
+    predicted_following: tuple[float, float] = (math.nan, math.nan)
+    predicted_trapezoid: StepMetrics | None = None     # the design model's metrics of that move (feed-forward on)
+    predicted_trapezoid_tight_s: float | None = None
 
     @property
     def carrier_hz(self) -> float:
@@ -71,7 +78,7 @@ class AxisTune:
     def settings(self) -> dict[str, int]:
         """The axis's raw parameters (protocol.toml names), in the order they are written."""
         return {"FDIV": self.fdiv, "PW0": self.design.pw0, "LAW": LAW_CODE[self.design.law],
-                **self.design.q16(), "VEL_MODE": VEL_MODE, **self.design.compensation(), "KVFF_Q16": 0}
+                **self.design.q16(), "VEL_MODE": VEL_MODE, **self.design.compensation(), **self.design.feedforward()}
 
     def as_dict(self) -> dict[str, Any]:
         d = self.design
@@ -83,10 +90,18 @@ class AxisTune:
                 "phase_margin_deg": d.phase_margin_deg, "stick_band_counts": d.stick_band_counts,
                 "pid_pole_alpha": d.alpha, "fc_steps": {"pos": d.fc[0], "neg": d.fc[1]},
                 "hunting_guard_counts": d.izone_counts,
+                "feedforward": {"kvff_steps_per_count_per_s": d.kvff, "kaff_steps_per_count_per_s2": d.kaff},
+                "verify_trapezoid": {"VMAX": self.trapezoid[0], "AMAX": self.trapezoid[1]},
                 "notes": list(d.notes), "step_counts": self.step_counts,
                 "predicted": {"overshoot_pct": p.overshoot_pct, "settling_time_s": p.settling_time_s,
                               "settling_time_2_counts_s": self.predicted_tight_s,
-                              "steady_state_error_counts": p.steady_state_error}}
+                              "steady_state_error_counts": p.steady_state_error},
+                "predicted_trapezoid": None if (q := self.predicted_trapezoid) is None else {
+                    "overshoot_pct": q.overshoot_pct, "settling_time_s": q.settling_time_s,
+                    "settling_time_2_counts_s": self.predicted_trapezoid_tight_s,
+                    "steady_state_error_counts": q.steady_state_error,
+                    "peak_following_error_counts": self.predicted_following[0],
+                    "peak_following_error_without_feedforward_counts": self.predicted_following[1]}}
 
 
 def divider_at_least(f_hz: float) -> int:
@@ -142,7 +157,11 @@ def tune_axis(axis: int, ident: dict[str, float], wish: Wish, pwm_hz: float, whe
     d = best[1]
     ts, xs, met = predict(m, d, step_counts, predict_s, wish.cmd_limit)     # over the record asked for
     tight = _tight(ts, xs, step_counts, TIGHT_BAND_COUNTS)
-    return AxisTune(axis, SYSTEM.axes[axis].name, m, d, divider_at_least(pwm_hz), met, step_counts, tight)
+    trap = verify_profile(m, d, wish.cmd_limit)
+    peak, ts, xs = predict_following(m, d, step_counts, *trap, predict_s, wish.cmd_limit)
+    peak_off = predict_following(m, d, step_counts, *trap, predict_s, wish.cmd_limit, feedforward=False)[0]
+    return AxisTune(axis, SYSTEM.axes[axis].name, m, d, divider_at_least(pwm_hz), met, step_counts, tight, trap,
+                    (peak, peak_off), step_metrics(ts, xs, step_counts), _tight(ts, xs, step_counts, TIGHT_BAND_COUNTS))
 
 
 def check_margins(t: AxisTune, min_gm_db: float, min_pm_deg: float) -> str | None:

@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import cmath
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -54,6 +54,10 @@ MAX_WN_T = 0.15
 IZONE_COUNTS = 1.0
 #: settled means within this many counts of the target (beside the 2 % band of report.json's arms)
 TIGHT_BAND_COUNTS = 2.0
+#: the trapezoid the feed-forward is verified on (:func:`verify_profile`): its top speed takes this share
+#: of the command through the velocity feed-forward, its acceleration this share through the
+#: acceleration feed-forward; the rest is the feedback's
+VERIFY_VMAX_SHARE, VERIFY_AMAX_SHARE = 0.5, 0.25
 
 
 @dataclass(frozen=True)
@@ -141,6 +145,8 @@ class Design:
     fc: tuple[int, int] = (0, 0)   # FC_POS, FC_NEG: PWM steps, the dead zone beyond PW0 per direction
     izone_counts: float = 0.0      # the hunting guard: the integral frozen while |e| is within it
     alpha: float = 0.0             # PID: the real pole at alpha wn
+    kvff: float = 0.0              # velocity feed-forward, PWM steps per count/s of the profile's speed
+    kaff: float = 0.0              # acceleration feed-forward, PWM steps per count/s^2 of the profile's
 
     def q16(self) -> dict[str, int]:
         """The firmware's raw gains (KP_Q16, KD_Q16, KI_Q16)."""
@@ -149,6 +155,30 @@ class Design:
     def compensation(self) -> dict[str, int]:
         """The firmware's friction compensation beyond PW0 (FC_POS, FC_NEG, IZONE_Q16)."""
         return {"FC_POS": self.fc[0], "FC_NEG": self.fc[1], "IZONE_Q16": round(self.izone_counts * 65536)}
+
+    def feedforward(self) -> dict[str, int]:
+        """The firmware's feed-forward on a trapezoid move (KVFF_Q16, KAFF_Q16)."""
+        return {"KVFF_Q16": round(self.kvff * 65536), "KAFF_Q16": round(self.kaff * 65536)}
+
+
+def feedforward(m: AxisModel, pw0: int, kd: float) -> tuple[float, float]:
+    """Kvff, Kaff (PWM steps per count/s, per count/s^2): what makes the loop follow a
+    profile (v, a) with no error.  The compensated, sliding plant (:meth:`AxisModel.kc`: the
+    identified speed gain and time constant through eq. (1) and PW0) needs u = v / Kc + tau a / Kc,
+    and the law's D term, on the measured speed, takes Kd v from it: Kvff = 1 / Kc + Kd (the
+    steady-speed relation), Kaff = tau / Kc (the inertia, as the time constant carries it).
+    The friction is PW0's and the integral's."""
+    kc = m.kc(pw0)
+    return 1.0 / kc + kd, m.tau / kc
+
+
+def verify_profile(m: AxisModel, d: Design, cmd_limit: int = SYSTEM.pwm_full) -> tuple[int, int]:
+    """VMAX (counts/s) and AMAX (counts/s^2) of the trapezoid the feed-forward is verified on:
+    the fastest whose feed-forward keeps within VERIFY_VMAX_SHARE and VERIFY_AMAX_SHARE of the
+    command (the axis's, with or without the feed-forward set)."""
+    kvff, kaff = feedforward(m, d.pw0, 0.0)      # the plant's share (the D term's is the feedback's)
+    return (max(1, math.floor(VERIFY_VMAX_SHARE * cmd_limit / kvff)),
+            max(1, math.floor(VERIFY_AMAX_SHARE * cmd_limit / kaff)))
 
 
 def zeta_for_overshoot(pct: float) -> float:
@@ -258,8 +288,32 @@ def design(m: AxisModel, w: Wish, alpha: float = 1.0, zeta: float | None = None)
         notes.append("UNSTABLE at this control period: a closed-loop pole lies outside the unit circle")
     gm, pm = margins(ad, bd, kp, kd, ki, w.period_s)
     izone = IZONE_COUNTS if w.law == "pid" and w.tolerance_counts >= IZONE_COUNTS else 0.0
+    kvff, kaff = feedforward(m, pw0, kd)
     return Design(w.law, kp, kd, ki, pw0, wn, zeta, w.period_s, gm, pm, poles, stick, tuple(notes), fc, izone,
-                  alpha if w.law == "pid" else 0.0)
+                  alpha if w.law == "pid" else 0.0, kvff, kaff)
+
+
+def trapezoid(distance: float, vmax: float, amax: float, t_ctl: float, n: int) -> np.ndarray:
+    """The design model's trapezoid set-point, per control sample: rows (set-point counts,
+    speed counts/s, acceleration counts/s^2).  As the firmware's profile (docs/firmware.md,
+    "Control", step 4): the speed rises by amax T^2 per sample up to vmax T and never beyond
+    the speed from which braking by amax T^2 per sample stops at the target, the last step
+    lands on it (in real numbers; the firmware's is in q16 and bit for bit the oracle's)."""
+    a, vm = amax * t_ctl**2, vmax * t_ctl
+    out = np.zeros((n, 3))
+    sp, v, sgn, d0 = 0.0, 0.0, math.copysign(1.0, distance), abs(distance)
+    for k in range(n):
+        d = d0 - sp
+        # D(v) = v + (v - a) + ... ~ v^2 / (2a) + v / 2 <= d
+        allow = a * (-0.5 + math.sqrt(0.25 + 2 * d / a)) if d > 0 else 0.0
+        vs = min(v + a, vm, allow)
+        if vs >= d:
+            sp, acc, v = d0, 0.0, 0.0
+        else:
+            acc, v = vs - v, vs
+            sp += v
+        out[k] = (sgn * sp, sgn * v / t_ctl, sgn * acc / t_ctl**2)
+    return out
 
 
 def predict(m: AxisModel, d: Design, step_counts: float, t_end_s: float, cmd_limit: int = SYSTEM.pwm_full,
@@ -267,18 +321,36 @@ def predict(m: AxisModel, d: Design, step_counts: float, t_end_s: float, cmd_lim
     """The design model's step response (nonlinear: saturation, the eq. 1
     map, sliding and breakaway friction, the integrator held while
     saturated toward the error): times (s), positions (counts), metrics."""
+    t_arr, x_arr, _ = simulate(m, d, np.full((round(t_end_s / d.period_s), 3), [step_counts, 0.0, 0.0]), cmd_limit)
+    return t_arr, x_arr, step_metrics(t_arr, x_arr, step_counts)
+
+
+def predict_following(m: AxisModel, d: Design, distance: float, vmax: float, amax: float, t_end_s: float,
+                      cmd_limit: int = SYSTEM.pwm_full, feedforward: bool = True
+                      ) -> tuple[float, np.ndarray, np.ndarray]:
+    """The design model on a trapezoid move, with the design's feed-forward or (``feedforward``
+    False) without: its peak following error (counts, |set-point - position|), times (s) and
+    positions (counts)."""
+    sp = trapezoid(distance, vmax, amax, d.period_s, round(t_end_s / d.period_s))
+    ts, xs, _ = simulate(m, d if feedforward else replace(d, kvff=0.0, kaff=0.0), sp, cmd_limit)
+    return float(np.max(np.abs(sp[:, 0] - xs))), ts, xs
+
+
+def simulate(m: AxisModel, d: Design, setpoint: np.ndarray, cmd_limit: int = SYSTEM.pwm_full
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The design model in the loop with a set-point per control sample (rows: counts, counts/s,
+    counts/s^2, the last two for the feed-forward): times (s), positions (counts), commands."""
     t_ctl = d.period_s
     sub = max(1, math.ceil(t_ctl / 2e-4))
     h = t_ctl / sub
     c = m.counts_per_motor_rad
     theta, w, integ = 0.0, 0.0, 0.0
-    ts, xs = [], []
-    n = round(t_end_s / t_ctl)
-    for k in range(n):
+    ts, xs, us = [], [], []
+    for k, (target, v_sp, a_sp) in enumerate(setpoint):
         pos = math.floor(theta + 0.5)
-        e = step_counts - pos
+        e = target - pos
         v = w * c
-        u_lin = d.kp * e - d.kd * v
+        u_lin = d.kp * e - d.kd * v + d.kvff * v_sp + d.kaff * a_sp
         cand = integ + d.ki * t_ctl * e
         u = u_lin + cand
         if abs(u) > cmd_limit and math.copysign(1, e) == math.copysign(1, u):
@@ -311,5 +383,5 @@ def predict(m: AxisModel, d: Design, step_counts: float, t_end_s: float, cmd_lim
             w = w_new if not (w == 0.0 and (w_new > 0) != (s > 0)) else 0.0
         ts.append((k + 1) * t_ctl)
         xs.append(math.floor(theta + 0.5))
-    t_arr, x_arr = np.array(ts), np.array(xs, dtype=float)
-    return t_arr, x_arr, step_metrics(t_arr, x_arr, step_counts)
+        us.append(u)
+    return np.array(ts), np.array(xs, dtype=float), np.array(us, dtype=float)

@@ -10,8 +10,12 @@ plant, measured with the metrics of report.json's arms.
   firmware) configured over its link as ``tune --apply`` would, closing the
   loop through its pins with the plant (torqueloop.sim.experiment.run_rtl).
 
-Both step both axes by one screw turn from rest; an axis not tuned runs the
-board's Table 1 law.  The plant is the plant file the design came from, or
+Both move both axes by one screw turn from rest, a step (the paper's
+experiment) or, with ``move="trapezoid"``, the firmware's trapezoid profile at
+the design's verification VMAX and AMAX (torqueloop.host.tunedesign.verify_profile),
+which the velocity and acceleration feed-forward act on; beside a trapezoid, the
+same move without the feed-forward on the fast path, so its benefit shows.  An
+axis not tuned runs the board's Table 1 law.  The plant is the plant file the design came from, or
 the one ``--verify-plant`` names (in tests: the true plant the
 identification did not see).  Beside each tuned axis, on request, the
 Table 1 gains of the same law on the same plant on the fast path (the
@@ -23,12 +27,12 @@ CPU per simulated second), hence on request.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from sim_models.variants import PlantSpec
 from torqueloop.host.tune import AxisTune
-from torqueloop.host.tunedesign import TIGHT_BAND_COUNTS
+from torqueloop.host.tunedesign import TIGHT_BAND_COUNTS, verify_profile
 from torqueloop.sim import experiment
 from torqueloop.sim.report import axis_metrics
 from torqueloop.spec.metrics import step_metrics
@@ -47,36 +51,53 @@ class Verification:
     table1: dict[str, dict[str, Any]]        # the Table 1 gains of the same law, same plant
     faults: list[int]
     wall_s: float
+    move: str = "step"                       # "step" or "trapezoid"
+    #: a trapezoid: per tuned axis name, the same move without the feed-forward (fast path)
+    without_ff: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
-def _metrics(run: Any, target_counts: int, a: int) -> dict[str, Any]:
+def _metrics(run: Any, target_counts: int, a: int, trapezoid: bool = False) -> dict[str, Any]:
+    """report.json's metrics of axis ``a``, the settling into +-2 counts, the largest error
+    over the record's last tenth and, on a trapezoid, the peak |set-point - position|."""
     tr = run.traj
+    follow = {"peak_following_error_counts": float(max(abs(tr.err[:, a])) / RAD_PER_COUNT)} if trapezoid else {}
     out = axis_metrics(tr, target_counts * RAD_PER_COUNT, a)
     tight = step_metrics(tr.t, tr.pos[:, a] / RAD_PER_COUNT, target_counts, band_frac=0.0,
                          band_min=TIGHT_BAND_COUNTS)
     out["settling_time_2_counts_s"] = tight.settling_time_s
     out["max_abs_error_last_10pct_counts"] = float(max(abs(target_counts - tr.pos[-max(1, len(tr.t) // 10):, a]
                                                            / RAD_PER_COUNT)))
-    return out
+    return out | follow
 
 
-def config(tunes: list[AxisTune], plant: PlantSpec, seconds: float) -> experiment.ExperimentConfig:
+def config(tunes: list[AxisTune], plant: PlantSpec, seconds: float, move: str = "step",
+           feedforward: bool = True) -> experiment.ExperimentConfig:
+    """The verification's experiment: the tuned settings per axis; a trapezoid at the
+    design's verification VMAX and AMAX; ``feedforward`` False: KVFF_Q16 and KAFF_Q16 0."""
+    if move not in ("step", "trapezoid"):
+        raise ValueError(f"move {move!r}: step or trapezoid")
     period = {round(t.design.period_s * 1e6) for t in tunes}
     if len(period) != 1:
         raise ValueError("the axes were designed at different control periods")
     tuned: list[dict[str, int]] = [{}, {}]
     for t in tunes:
         tuned[t.axis] = t.settings()
+        if move == "trapezoid":
+            tuned[t.axis] |= dict(zip(("VMAX", "AMAX"), verify_profile(t.model, t.design)))
+        if not feedforward:
+            tuned[t.axis] |= {"KVFF_Q16": 0, "KAFF_Q16": 0}
     law = "PID" if any(t.design.law == "pid" for t in tunes) else "PD"
     return experiment.ExperimentConfig(law=law, t_end_s=seconds, period_us=period.pop(), plant=plant,
-                                       tuned=tuple(tuned), baud_div=FAST_BAUD_DIV, progress=False)
+                                       tuned=tuple(tuned), baud_div=FAST_BAUD_DIV, progress=False,
+                                       trapezoid=move == "trapezoid")
 
 
 def verify(tunes: list[AxisTune], plant: PlantSpec, path: str, seconds: float, table1_s: float = 0.0,
-           log: Any = print) -> Verification:
-    """Run the tuned step on ``path`` ("model" or "rtl") and, for ``table1_s`` > 0
+           log: Any = print, move: str = "step") -> Verification:
+    """Run the tuned move (``move``: "step" or "trapezoid") on ``path`` ("model" or "rtl");
+    a trapezoid also without the feed-forward on the fast path; for ``table1_s`` > 0
     seconds, the Table 1 step on the fast path."""
-    cfg = config(tunes, plant, seconds)
+    cfg = config(tunes, plant, seconds, move)
     if path == "rtl":
         run = experiment.run_rtl(cfg, log=log)
         faults = list(run.faults)
@@ -86,10 +107,15 @@ def verify(tunes: list[AxisTune], plant: PlantSpec, path: str, seconds: float, t
     else:
         raise ValueError(f"--verify {path!r}: model or rtl")
     target = cfg.target_counts
-    tuned = {t.name: _metrics(run, target, t.axis) for t in tunes}
+    trap = move == "trapezoid"
+    tuned = {t.name: _metrics(run, target, t.axis, trap) for t in tunes}
     table1 = {}
     if table1_s > 0:
         ref = experiment.run_fast(experiment.ExperimentConfig(law=cfg.law, t_end_s=table1_s, plant=plant,
                                                               progress=False))
         table1 = {t.name: _metrics(ref, target, t.axis) for t in tunes}
-    return Verification(path, plant.label, seconds, tuned, table1, faults, run.wall_s)
+    without = {}
+    if move == "trapezoid":
+        ref = experiment.run_fast(config(tunes, plant, seconds, move, feedforward=False))
+        without = {t.name: _metrics(ref, target, t.axis, trap) for t in tunes}
+    return Verification(path, plant.label, seconds, tuned, table1, faults, run.wall_s, move, without)
