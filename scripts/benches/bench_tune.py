@@ -21,6 +21,20 @@ prediction and the fast model, and the tuned gains over a grid of plant spreads.
    worst overshoot, settling, final error and the largest swing in the last
    second (a limit cycle, or a slow return) named.  The table goes into
    docs/identification.md.
+3. The RTL loop at the grid's worst corners (``RTL_CORNERS``: the worst
+   overshoot on both axes, friction 0.7, inertia 1.3, k_t 0.9, and the worst
+   settling into +-2 counts on both, friction 1.3, inertia 1.3, k_t 0.9,
+   breakaway +1 point): both axes tuned on the nominal plant, ``tune --verify
+   rtl`` on the corner's plant for 5 s, beside the fast model on the same
+   plant.  Fails on a fault, if the board image's overshoot or 2 % settling
+   is off the fast model's by more than 0.1 point or 50 ms (the same law bit
+   for bit: only the implementation's timing differs), or if an axis does not
+   settle into +-2 counts or ends more than 2 counts off.  The +-2 counts
+   settling itself is not held to the fast model's: one count's wander in the
+   last counts moves it by hundreds of milliseconds either way (x at the
+   worst-settling corner: 1.13 s on the board image, 1.92 s on the fast
+   model).  Skipped with --quick (about 12 minutes of wall time per corner
+   on the shared 2-core machine).
 """
 
 from __future__ import annotations
@@ -48,6 +62,13 @@ SPREAD = {"friction": (0.7, 1.3), "inertia": (0.7, 1.3), "kt": (0.9, 1.1), "dead
 #: (the limit-cycle column) is past the approach
 SETTLED_S = 2.0
 BUILD = experiment.REPO_ROOT / "build" / "bench_tune"
+#: (friction, inertia, k_t, dead zone points) of the robustness grid run on the RTL loop: the worst
+#: overshoot (both axes) and the worst settling into +-2 counts (both axes) on the fast model
+RTL_CORNERS = ((0.7, 1.3, 0.9, -1.0), (1.3, 1.3, 0.9, 1.0))
+RTL_CORNER_S = 5.0
+#: the board image against the fast model on a corner: the same law bit for bit, so only the
+#: implementation's timing (the link, the carrier's phase) may differ
+RTL_VS_FAST_PCT, RTL_VS_FAST_S = 0.1, 0.05
 
 
 def nominal():
@@ -95,7 +116,7 @@ def tuned(seconds: float):
 
 
 def main() -> int:
-    return rtl_check() | robustness()
+    return rtl_check() | robustness() | rtl_corners()
 
 
 def rtl_check() -> int:
@@ -172,6 +193,49 @@ def robustness() -> int:
               f"{worst_st[1]['settling_time_s']} s at {worst_st[0]}; largest last-1 s swing {worst_lc[3]:.0f} counts "
               f"at {worst_lc[0]} (friction, inertia, k_t, dead zone)")
     return 0
+
+
+def rtl_corners(corners=RTL_CORNERS) -> int:
+    from bench import QUICK
+
+    if QUICK:
+        print("\nRTL corners: skipped (--quick)")
+        return 0
+    p, ts = tuned(RTL_CORNER_S)
+    rc = 0
+    print(f"\nRTL loop at the grid's corners (both axes tuned on the nominal plant, {RTL_CORNER_S:g} s one-turn step)")
+    print("| friction | inertia | k_t | dead zone (pts) | axis | overshoot (%) | settling 2 % (s) | "
+          "settling +-2 counts (s) | steady-state error (counts) | max error, last 0.5 s (counts) | "
+          "fast model: overshoot, settling 2 %, +-2 counts | wall (s) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for corner in corners:
+        spec = plant_spec(spread(p, *corner), "rtl_f{}_j{}_k{}_d{}".format(*corner))
+        w0 = time.monotonic()
+        rtl = tuneverify.verify(ts, spec, "rtl", RTL_CORNER_S, log=lambda *m, **k: None)
+        wall = time.monotonic() - w0
+        fast = tuneverify.verify(ts, spec, "model", RTL_CORNER_S)
+        for t in ts:
+            m, f = rtl.tuned[t.name], fast.tuned[t.name]
+            cells = [format(m["overshoot_pct"], ".2f")] + \
+                ["-" if m[x] is None else format(m[x], ".3f") for x in ("settling_time_s", "settling_time_2_counts_s")]
+            fc = [format(f["overshoot_pct"], ".2f")] + \
+                ["-" if f[x] is None else format(f[x], ".3f") for x in ("settling_time_s", "settling_time_2_counts_s")]
+            print("| {:g} | {:g} | {:g} | {:+g} | ".format(*corner) + f"{t.name} | {' | '.join(cells)} | "
+                  f"{m['steady_state_error_counts']:.1f} | {m['max_abs_error_last_10pct_counts']:.0f} | "
+                  f"{', '.join(fc)} | {wall:.0f} |", flush=True)
+            st, fst = m["settling_time_s"], f["settling_time_s"]
+            if abs(m["overshoot_pct"] - f["overshoot_pct"]) > RTL_VS_FAST_PCT or (st is None) != (fst is None) or (
+                    st is not None and abs(st - fst) > RTL_VS_FAST_S):
+                print(f"FAIL: {t.name} at {corner}: the board image is off the fast model")
+                rc = 1
+            if m["settling_time_2_counts_s"] is None or abs(m["steady_state_error_counts"]) > MAX_ERROR_COUNTS:
+                print(f"FAIL: {t.name} at {corner}: not settled into +-2 counts, or more than "
+                      f"{MAX_ERROR_COUNTS:g} counts off")
+                rc = 1
+        if any(rtl.faults):
+            print(f"FAIL: the board image faulted at {corner}: {rtl.faults}")
+            rc = 1
+    return rc
 
 
 if __name__ == "__main__":
