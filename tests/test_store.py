@@ -33,6 +33,10 @@ KP = P.PARAMS["KP_UNM_RAD"].id
 PW0 = P.PARAMS["PW0"].id
 PERIOD = P.PARAMS["PERIOD_US"].id
 SLOTS = {P.STORE["slot_a"], P.STORE["slot_b"]}
+#: the saved record (firmware/servo/store.c record_t): magic, seq, layout, every parameter slot of the
+#: global array and of each axis's, the CRC; one PAGE PROGRAM per page it touches
+RECORD_BYTES = 4 * (3 + (1 + P.AXIS_COUNT) * len(P.PARAMS) + 1)
+PAGES = -(-RECORD_BYTES // P.STORE["page_bytes"])
 
 
 def values(h: Host) -> tuple[int, int, int]:
@@ -89,7 +93,7 @@ def test_saves_alternate_sectors_and_never_touch_the_newest_copy(board: SimBoard
 
 
 @pytest.mark.parametrize("during", [True, False], ids=["during", "after"])
-@pytest.mark.parametrize("write", [0, 1, 2], ids=["erase", "page0", "page1"])
+@pytest.mark.parametrize("write", range(PAGES + 1), ids=["erase"] + [f"page{k}" for k in range(PAGES)])
 def test_a_power_loss_in_a_save_leaves_the_old_copy_or_the_whole_new_one(board: SimBoard, write: int,
                                                                          during: bool) -> None:
     h = Host(board)
@@ -101,7 +105,7 @@ def test_a_power_loss_in_a_save_leaves_the_old_copy_or_the_whole_new_one(board: 
     assert not board.flash.powered
     h = cycle(board)
     got, rep = values(h), h.ok("SAVE", op=0)
-    last_write = write == 2 and not during                # the CRC, the record's last word, is in the last page
+    last_write = write == PAGES and not during            # the CRC, the record's last word, is in the last page
     print(f"power lost {'during' if during else 'after'} write {write} of the save: "
           f"board starts with copy {rep['seq']} {got}")
     assert (got, rep["seq"]) == ((new, 2) if last_write else (old, 1)), (got, rep)
