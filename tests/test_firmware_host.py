@@ -339,3 +339,35 @@ def test_control_interrupt_never_divides_64_bit() -> None:
     assert not seen & div64, f"the interrupt reaches {seen & div64} via {sorted(seen)}"
     assert not seen & indirect, f"indirect calls from the interrupt path are not followed: {seen & indirect}"
     assert "tl_servo_tick" in seen and any(f.startswith("tl_div64_32") for f in seen), sorted(seen)
+
+
+@pytest.mark.parametrize("direction", [1, -1], ids=["up", "down"])
+def test_profile_acceleration_follows_the_trapezoids_phases(host_tests: Path, direction: int) -> None:
+    """The acceleration the feed-forward takes (control_step.h prof_a_q16, as the C
+    reports it): +AMAX T^2 toward the move while speeding up (the last step up to
+    VMAX T less), 0 cruising, the
+    opposite while braking (at most AMAX T^2, the sample that meets the braking
+    curve less), 0 from the landing on - and the C's set-point moves by the sum of
+    these changes, so the sign is the speed's change, not a guess."""
+    period, vmax, amax, dist = 1000, 5000, 20_000, 3000 * direction
+    ax = Axis(AxisParams(law=1, kp_q16=0, vmax_cps=vmax, amax_cps2=amax), period)
+    lines = [f"P 1 0 0 0 0 1023 1 {vmax} {amax} {period}", "R 0 0", f"M {dist} 1"]
+    lines += [f"S 0 0 {k * period * 50} 1 1" for k in range(1, 1200)]
+    out = subprocess.run([str(host_tests), "ctl"], input="\n".join(lines) + "\n", capture_output=True, text=True,
+                         check=True)
+    rows = [tuple(int(x) for x in ln.split()) for ln in out.stdout.splitlines()]
+    acc = [r[4] * direction for r in rows]            # toward the move
+    sp = [r[1] for r in rows]
+    a_q16 = ax.amax_q16
+    top = acc.index(0)                                # the first sample not speeding up: the cruise
+    assert top > 1 and set(acc[:top - 1]) == {a_q16} and 0 < acc[top - 1] <= a_q16   # the last: up to VMAX
+    brake = next(k for k in range(top, len(acc)) if acc[k] < 0)
+    land = next(k for k in range(brake, len(acc)) if sp[k] == dist << 16)
+    assert set(acc[top:brake]) == {0} and brake - top > 10            # a cruise at VMAX
+    assert all(-a_q16 <= a < 0 for a in acc[brake:land])
+    assert acc[brake + 1:land - 1].count(-a_q16) > 0.9 * (land - brake - 2)          # braking by AMAX T^2
+    assert set(acc[land:]) == {0}
+    v = 0
+    for k in range(land):                             # the speed is the sum of the changes
+        v += acc[k] * direction
+        assert sp[k] - (sp[k - 1] if k else 0) == v
