@@ -35,6 +35,14 @@ prediction and the fast model, and the tuned gains over a grid of plant spreads.
    worst-settling corner: 1.13 s on the board image, 1.92 s on the fast
    model).  Skipped with --quick (about 12 minutes of wall time per corner
    on the shared 2-core machine).
+4. The feed-forward (KVFF_Q16, KAFF_Q16) on the one-turn trapezoid
+   (``tune --verify-move trapezoid``): on the RTL board image with the nominal
+   plant, its peak following error beside the fast model's and the same move's
+   without the feed-forward (fails on a fault, a peak more than 2 counts off the
+   fast model's, or one above half of the peak without); then on the fast
+   model at the friction x inertia corners of the grid (k_t 0.9, breakaway -1
+   point), with and without, so what the feed-forward buys on a plant it was
+   not designed for shows.  --quick: the fast model at the nominal plant only.
 """
 
 from __future__ import annotations
@@ -116,7 +124,7 @@ def tuned(seconds: float):
 
 
 def main() -> int:
-    return rtl_check() | robustness() | rtl_corners()
+    return rtl_check() | robustness() | rtl_corners() | feedforward()
 
 
 def rtl_check() -> int:
@@ -235,6 +243,51 @@ def rtl_corners(corners=RTL_CORNERS) -> int:
         if any(rtl.faults):
             print(f"FAIL: the board image faulted at {corner}: {rtl.faults}")
             rc = 1
+    return rc
+
+
+FF_S = 2.5             # the one-turn trapezoid lands by 2.25 s on z
+FF_CORNERS = ((1.0, 1.0, 1.0, 0.0), (0.7, 0.7, 0.9, -1.0), (0.7, 1.3, 0.9, -1.0), (1.3, 0.7, 0.9, -1.0),
+              (1.3, 1.3, 0.9, -1.0))
+FF_RTL_VS_FAST_COUNTS, FF_MAX_SHARE = 2.0, 0.5
+
+
+def feedforward() -> int:
+    from bench import QUICK
+
+    p, ts = tuned(FF_S)
+    rc = 0
+    if not QUICK:
+        spec = plant_spec(p, "nominal")
+        rtl = tuneverify.verify(ts, spec, "rtl", FF_S, log=lambda *m, **k: None, move="trapezoid")
+        print(f"\nfeed-forward on the one-turn trapezoid, RTL board image ({rtl.wall_s:.0f} s wall), nominal plant")
+        print("| axis | VMAX (counts/s) | AMAX (counts/s^2) | peak following error (counts): predicted | RTL | "
+              "fast model | without feed-forward (fast model) |")
+        print("|---|---|---|---|---|---|---|")
+        fast = tuneverify.verify(ts, spec, "model", FF_S, move="trapezoid")
+        for t in ts:
+            on, f, off = (v[t.name]["peak_following_error_counts"] for v in (rtl.tuned, fast.tuned, rtl.without_ff))
+            print(f"| {t.name} | {t.trapezoid[0]} | {t.trapezoid[1]} | {t.predicted_following[0]:.0f} | {on:.0f} | "
+                  f"{f:.0f} | {off:.0f} |")
+            if abs(on - f) > FF_RTL_VS_FAST_COUNTS or on > FF_MAX_SHARE * off:
+                print(f"FAIL: {t.name}: the board image's peak is off the fast model's or above half of without")
+                rc = 1
+        if any(rtl.faults):
+            print(f"FAIL: the board image faulted: {rtl.faults}")
+            rc = 1
+    corners = FF_CORNERS[:1] if QUICK else FF_CORNERS
+    print(f"\nfeed-forward on the one-turn trapezoid over plant spreads (fast model, {FF_S:g} s, the gains above)")
+    print("| friction | inertia | k_t | dead zone (pts) | axis | peak following error with (counts) | without | "
+          "overshoot with (%) | settling +-2 counts with (s) |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for corner in corners:
+        spec = plant_spec(spread(p, *corner), "ff_f{}_j{}_k{}_d{}".format(*corner))
+        v = tuneverify.verify(ts, spec, "model", FF_S, move="trapezoid")
+        for t in ts:
+            m, off = v.tuned[t.name], v.without_ff[t.name]["peak_following_error_counts"]
+            st = "-" if m["settling_time_2_counts_s"] is None else f"{m['settling_time_2_counts_s']:.3f}"
+            print("| {:g} | {:g} | {:g} | {:+g} | ".format(*corner) + f"{t.name} | "
+                  f"{m['peak_following_error_counts']:.0f} | {off:.0f} | {m['overshoot_pct']:.2f} | {st} |", flush=True)
     return rc
 
 
