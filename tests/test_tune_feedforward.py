@@ -8,6 +8,7 @@ The plant is tests/test_tune.py's: lab-2025 with its rotor friction scaled
 by 1.25 and its inertia by 0.8, which the design only sees through the plant
 file's identifiable keys."""
 
+import dataclasses
 import json
 import tomllib
 
@@ -98,3 +99,30 @@ def test_the_fast_path_trapezoid_is_the_firmwares_profile(plant_file):
     assert v.max() == pytest.approx(vmax, abs=1000)          # one count per 1 ms sample of rounding
     t_top = np.argmax(v > 0.9 * vmax) * cfg.period_us * 1e-6  # it ramps at AMAX, it does not jump
     assert t_top == pytest.approx(0.9 * vmax / amax, abs=0.01)
+
+
+def test_the_dither_and_the_feedforward_reach_the_fast_paths_law(plant_file):
+    """ExperimentConfig's tuned fields carry DITHER_AMP, DITHER_HALF, KAFF_Q16, VMAX
+    and AMAX to the firmware's law on the fast path (as ``configure`` writes them to
+    the board): on a 20-count step (commands inside the limit, the error outside
+    the hunting guard's zone) a 300-step dither of half-period 1 moves the command
+    by about 600 steps the other way every sample; on the trapezoid's first
+    samples KAFF_Q16 adds KAFF AMAX steps."""
+    ident = tomllib.loads(plant_file.read_text())["identifiable"]
+    ts = [tune_axis(a, ident[n], Wish(settling_s=0.35), 20_000, "test") for a, n in enumerate(("x", "z"))]
+    spec = PlantSpec.from_file(plant_file)
+    step = dataclasses.replace(tuneverify.config(ts, spec, 0.01), step_rad=20 * tuneverify.RAD_PER_COUNT)
+    dith = dataclasses.replace(step, tuned=tuple(t | {"DITHER_AMP": 300, "DITHER_HALF": 1} for t in step.tuned))
+    a, b = (experiment.run_fast(cfg).traj.cmd[:, 0] for cfg in (step, dith))
+    assert step.target_counts == 20 and np.abs(a).max() < 1023 - 300
+    d = np.diff(b)
+    print(f"dithered command's changes: {d.tolist()}")
+    assert np.all(np.sign(d[1:]) == -np.sign(d[:-1])) and np.median(np.abs(d)) == pytest.approx(600, abs=60)
+    trap = tuneverify.config(ts, spec, 0.05, "trapezoid")
+    assert trap.profile(0) == ts[0].trapezoid and trap.profile(1) == ts[1].trapezoid
+    no_aff = dataclasses.replace(trap, tuned=tuple(t | {"KAFF_Q16": 0} for t in trap.tuned))
+    a, c = (experiment.run_fast(cfg).traj.cmd[1:, 0] for cfg in (trap, no_aff))
+    kaff = ts[0].design.kaff * ts[0].trapezoid[1]          # steps the acceleration feed-forward adds
+    print(f"KAFF AMAX {kaff:.0f} steps; the command's difference: {(a - c).tolist()}")
+    # until the plants' motions part (a few samples): exactly the feed-forward, within its rounding
+    assert np.all(np.abs((a - c)[:4] - kaff) <= 1)
