@@ -12,7 +12,8 @@ plant, measured with the metrics of report.json's arms.
 
 Both move both axes by one screw turn from rest, a step (the paper's
 experiment) or, with ``move="trapezoid"``, the firmware's trapezoid profile at
-the design's verification VMAX and AMAX (torqueloop.host.tunedesign.verify_profile),
+the design's verification VMAX and AMAX (``AxisTune.trapezoid``, from
+torqueloop.host.tunedesign.verify_profile),
 which the velocity and acceleration feed-forward act on; beside a trapezoid, the
 same move without the feed-forward on the fast path, so its benefit shows.  An
 axis not tuned runs the board's Table 1 law.  The plant is the plant file the design came from, or
@@ -32,7 +33,7 @@ from typing import Any
 
 from sim_models.variants import PlantSpec
 from torqueloop.host.tune import AxisTune
-from torqueloop.host.tunedesign import TIGHT_BAND_COUNTS, verify_profile
+from torqueloop.host.tunedesign import TIGHT_BAND_COUNTS
 from torqueloop.sim import experiment
 from torqueloop.sim.report import axis_metrics
 from torqueloop.spec.metrics import step_metrics
@@ -83,7 +84,7 @@ def config(tunes: list[AxisTune], plant: PlantSpec, seconds: float, move: str = 
     for t in tunes:
         tuned[t.axis] = t.settings()
         if move == "trapezoid":
-            tuned[t.axis] |= dict(zip(("VMAX", "AMAX"), verify_profile(t.model, t.design)))
+            tuned[t.axis] |= {"VMAX": t.trapezoid[0], "AMAX": t.trapezoid[1]}
         if not feedforward:
             tuned[t.axis] |= {"KVFF_Q16": 0, "KAFF_Q16": 0}
     law = "PID" if any(t.design.law == "pid" for t in tunes) else "PD"
