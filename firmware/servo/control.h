@@ -79,7 +79,7 @@ typedef struct {
     int32_t kvff_q16;           /* velocity feed-forward: q16 PWM steps per count/s of the profile speed */
     int32_t dither_amp;         /* square-wave dither, PWM steps (0: off) ... */
     int32_t dither_half;        /* ... and its half-period, samples (>= 1) */
-    int32_t kaff_q16;           /* acceleration feed-forward: q16 PWM steps per count/s^2 of the profile's */
+    int32_t kaff_q16;           /* acceleration feed-forward: q16 PWM steps per count/s^2 of the profile */
 } tl_ctl_params_t;
 
 /* What the parameters and the period give (tl_ctl_derived): computed apart

@@ -137,7 +137,7 @@ class AxisParams:
     # square-wave dither (control_step.h friction_terms): amplitude in PWM steps (0: off), half-period in samples
     dither_amp: int = 0
     dither_half: int = 1
-    # acceleration feed-forward (control_step.h friction_terms): q16 PWM steps per count/s^2 of the profile's
+    # acceleration feed-forward (control_step.h friction_terms): q16 PWM steps per count/s^2 of the profile's speed change
     kaff_q16: int = 0
 
 
