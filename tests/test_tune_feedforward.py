@@ -126,3 +126,12 @@ def test_the_dither_and_the_feedforward_reach_the_fast_paths_law(plant_file):
     print(f"KAFF AMAX {kaff:.0f} steps; the command's difference: {(a - c).tolist()}")
     # until the plants' motions part (a few samples): exactly the feed-forward, within its rounding
     assert np.all(np.abs((a - c)[:4] - kaff) <= 1)
+
+
+def test_a_trapezoid_without_a_verification_is_refused_in_one_line(plant_file, capsys):
+    try:
+        rc = cli.main(["tune", "-a", "0", "--plant-file", str(plant_file), "--verify-move", "trapezoid"])
+    except SystemExit as e:
+        rc = e.code
+    err = capsys.readouterr().err
+    assert rc != 0 and "--verify-move" in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err

@@ -1073,6 +1073,8 @@ def cmd_tune(ctx: Ctx) -> int:
     a = ctx.args
     if a.save and not a.apply:
         raise BadValue("--save stores what --apply writes: give both")
+    if a.verify_move != "step" and not a.verify:
+        raise BadValue("--verify-move is the move --verify runs: give --verify model or rtl")
     if a.bandwidth is not None and a.settling is not None:
         raise BadValue("give --settling or --bandwidth, not both")
     def read(path: str, how: Callable[[str], Any]) -> Any:
