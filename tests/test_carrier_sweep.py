@@ -15,7 +15,9 @@ import pytest
 from sim_models.variants import PlantSpec
 from torqueloop.sim.experiment import COUNTS_PER_REV, ExperimentConfig, run_fast
 from torqueloop.study import answer
-from torqueloop.study.carrier_sweep import pw0_counts, summarise
+from torqueloop.study import carrier_sweep
+from torqueloop.study.carrier_sweep import RunCache, pw0_counts, summarise, t_check, truncated
+from torqueloop.study.experiment import ExperimentPlan, runs, split_cached
 
 
 def test_one_pw0_for_both_directions_is_the_lower_stop_rounded_up() -> None:
@@ -102,3 +104,62 @@ def test_the_report_opens_with_the_answer_a_quick_banner_and_embeds_every_figure
     assert "![" in md and "(carrier_sweep.png)" in md and (tmp_path / "carrier_sweep.png").exists()
     out = json.loads((tmp_path / "report.json").read_text())
     assert out["answer"]["quick"] and out["carrier_sweep"]["rows"][0]["points"] == 2
+
+
+def test_a_runs_first_seconds_are_the_shorter_run() -> None:
+    """What lets the sweep be scored at T = 10 s from its 40 s runs: the fast
+    path is deterministic, so cutting a run gives the shorter run sample for sample."""
+    c = ExperimentConfig(law="PD", t_end_s=0.2, plant=PlantSpec("lab"), pwm_hz=(1700.0, 1700.0), progress=False,
+                         start_counts=(200, -200), start_s=0.1)
+    short, long = run_fast(c), run_fast(replace(c, t_end_s=0.4))
+    cut = truncated(long, 0.2)
+    for f in ("t", "pos", "vel", "cmd", "err", "true_pos", "charge", "i2"):
+        assert (getattr(cut.traj, f) == getattr(short.traj, f)).all(), f
+    assert len(long.traj.t) > len(cut.traj.t)
+
+
+def test_the_run_cache_keys_on_what_the_run_uses_and_gives_back_what_was_stored(tmp_path) -> None:
+    cache = RunCache(tmp_path / "runs")
+    c = ExperimentConfig(law="PD", t_end_s=40.0, plant=PlantSpec("lab"), pwm_hz=(50.0, 50.0), pw0_counts=(24, 32),
+                         progress=False)
+    assert cache.get(c) is None
+    cache.put(c, {"result": 1})
+    assert cache.get(c) == {"result": 1}
+    assert cache.get(replace(c, progress=True)) == {"result": 1}          # progress changes nothing a run computes
+    for other in (replace(c, pw0_counts=(25, 32)), replace(c, t_end_s=10.0), replace(c, law="PID"),
+                  replace(c, start_counts=(4200, 4200)), replace(c, plant=PlantSpec("lab-2025")),
+                  replace(c, pwm_hz=(300.0, 300.0))):
+        assert cache.get(other) is None, other
+    cache.digest = "another plant or firmware law"
+    assert cache.get(c) is None
+
+
+def test_cached_sweep_runs_are_not_run_again_and_nothing_else_is_taken_from_the_cache(tmp_path) -> None:
+    from test_table3_decomposition import _char_file
+
+    plan = ExperimentPlan.short()
+    every = runs(plan, _char_file(tmp_path, {"x": 2.0, "z": 2.5}), {f: (30, 8) for f in plan.sweep_hz})
+    cache = RunCache(tmp_path / "runs")
+    for j in every:
+        cache.put(j.config, "stored")        # even an arm's configuration: only sweep runs are reused
+    todo, reused = split_cached(every, cache)
+    assert {j.label() for j, _ in reused} == {j.label() for j in every if j.key[0] == "sweep"}
+    assert all(r == "stored" for _, r in reused)
+    assert len(todo) + len(reused) == len(every) and all(j.key[0] != "sweep" for j in todo)
+
+
+def _err(f: float, pw0: bool, e: float) -> dict:
+    return _row(f, pw0, 0, e) | {"law": "PID"}
+
+
+def test_t_check_says_when_the_shorter_t_ranks_the_carriers_otherwise() -> None:
+    long = [_err(50.0, True, 2.0), _err(24_400.0, True, 5.0), _err(50.0, False, 9.0), _err(24_400.0, False, 30.0)]
+    same = [_err(50.0, True, 20.0), _err(24_400.0, True, 40.0), _err(50.0, False, 90.0), _err(24_400.0, False, 99.0)]
+    flip = [_err(50.0, True, 20.0), _err(24_400.0, True, 4.0), _err(50.0, False, 90.0), _err(24_400.0, False, 99.0)]
+    tc = t_check(long, same, 40.0, 10.0)
+    assert [r["same_ranking"] for r in tc["rows"]] == [True, True]
+    tc = t_check(long, flip, 40.0, 10.0)
+    on = next(r for r in tc["rows"] if r["pw0"])
+    assert not on["same_ranking"] and on["best_hz_short"] == 24_400.0 and on["best_hz_long"] == 50.0
+    md = "\n".join(carrier_sweep.t_check_markdown(tc))
+    assert "| PID | x | at the carrier | 20.0 -> 2.0 | 4.0 -> 5.0 | 24.4 kHz -> 50 Hz | no |" in md, md

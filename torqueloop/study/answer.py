@@ -125,7 +125,8 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]]) -> tuple[str, 
 
 
 def finish(out: Path, quick_info: dict[str, Any] | None, stab: dict[str, Any], sweep_rows: list[dict[str, Any]],
-           dz: dict[str, Any], unc: dict[str, Any] | None = None, dec: dict[str, Any] | None = None) -> None:
+           dz: dict[str, Any], unc: dict[str, Any] | None = None, dec: dict[str, Any] | None = None,
+           t_check: dict[str, Any] | None = None) -> None:
     """Rewrite report.json and report.md with the opening, the tables and the figures."""
     rep = json.loads((out / "report.json").read_text())
     summary = carrier_sweep.summarise(sweep_rows)
@@ -135,6 +136,8 @@ def finish(out: Path, quick_info: dict[str, Any] | None, stab: dict[str, Any], s
     text, numbers = paragraph(rep, summary)
     rep["carrier_sweep"] = {"rows": summary, "dead_zones": dz["rows"],
                             "interval": "range over start positions and step sizes; not a confidence interval"}
+    if t_check is not None:
+        rep["carrier_sweep"]["t_check"] = t_check
     rep["answer"] = {"text": text, "numbers": numbers, "quick": quick_info is not None}
     if dec is not None:
         rep["table3_decomposition"] = table3.add_whole(dec, rep.get("table3", {}))
@@ -151,6 +154,8 @@ def finish(out: Path, quick_info: dict[str, Any] | None, stab: dict[str, Any], s
     if dec is not None:
         L += table3.markdown(rep["table3_decomposition"])
     L += carrier_sweep.markdown(summary, rep["meta"].get("sweep_T_s"))
+    if t_check is not None:
+        L += carrier_sweep.t_check_markdown(t_check)
     L += rest
     L += ["## Figures", ""]
     for p in sorted(out.glob("*.png")):
