@@ -163,3 +163,15 @@ def test_t_check_says_when_the_shorter_t_ranks_the_carriers_otherwise() -> None:
     assert not on["same_ranking"] and on["best_hz_short"] == 24_400.0 and on["best_hz_long"] == 50.0
     md = "\n".join(carrier_sweep.t_check_markdown(tc))
     assert "| PID | x | at the carrier | 20.0 -> 2.0 | 4.0 -> 5.0 | 24.4 kHz -> 50 Hz | no |" in md, md
+
+
+def test_the_opening_says_whether_a_shorter_t_would_have_given_the_same_answer() -> None:
+    long = [_err(50.0, True, 2.0), _err(24_400.0, True, 5.0)]
+    rep = {"meta": {"experiment_plant": "lab", "sweep_T_s": 40.0}, "characterization": {}}
+    same = answer.paragraph(rep, summarise(long), t_check(long, [_err(50.0, True, 9.0), _err(24_400.0, True, 12.0)],
+                                                          40.0, 10.0))[0]
+    assert "rank in the same order under every law and axis" in same
+    text, numbers = answer.paragraph(rep, summarise(long), t_check(long, [_err(50.0, True, 9.0),
+                                                                          _err(24_400.0, True, 3.0)], 40.0, 10.0))
+    assert "differently for PID axis x" in text and "24.4 kHz at 10 s, 50 Hz at 40 s" in text
+    assert "would not have given this answer" in text and numbers["t_check"]["ranking_differs"] == ["PID axis x"]

@@ -53,8 +53,11 @@ def _axis_answer(summary: list[dict[str, Any]], law: str, axis: str, key: str) -
             "copper_worst_J": None if not worst.get("copper_loss_J") else worst["copper_loss_J"]["median"]}
 
 
-def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]]) -> tuple[str, dict[str, Any]]:
-    """The answer in words and the numbers it quotes."""
+def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]],
+              t_check: dict[str, Any] | None = None) -> tuple[str, dict[str, Any]]:
+    """The answer in words and the numbers it quotes (``t_check``:
+    :func:`torqueloop.study.carrier_sweep.t_check`, whether a shorter T
+    ranks the carriers the same)."""
     m, ch = rep["meta"], rep.get("characterization", {})
     numbers: dict[str, Any] = {"chosen": {a: v["achieved_hz"] for a, v in ch.get("axes", {}).items()},
                                "stability": ch.get("stability_verdict", {}).get("axes", {}), "sweep": []}
@@ -121,6 +124,20 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]]) -> tuple[str, 
                                         f"({q['between_carriers']:.1f} against up to {q['within_point_max']:.1f} "
                                         "counts): the sweep cannot rank the carriers by accuracy."))
             parts.append(txt)
+    if t_check and t_check["rows"]:
+        tc = [r for r in t_check["rows"] if r["pw0"]]
+        differ = [f"{r['law']} axis {r['axis']}" for r in tc if not r["same_ranking"]]
+        moved = [f"{r['law']} axis {r['axis']} ({carrier_sweep.hz(r['best_hz_short'])} at "
+                 f"{t_check['t_short_s']:g} s, {carrier_sweep.hz(r['best_hz_long'])} at {t_check['t_long_s']:g} s)"
+                 for r in tc if r["best_hz_short"] != r["best_hz_long"]]
+        numbers["t_check"] = {"ranking_differs": differ, "best_moved": moved}
+        parts.append(f"Scored as if each run had ended at T = {t_check['t_short_s']:g} s instead of "
+                     f"{t_check['t_long_s']:g} s, with each carrier's own dead zone the carriers rank "
+                     + ("in the same order under every law and axis." if not differ else
+                        f"differently for {', '.join(differ)}"
+                        + (f"; the most accurate carrier moves for {', '.join(moved)}." if moved else
+                           ", though the most accurate carrier stays the same.")
+                        + f" A sweep at T = {t_check['t_short_s']:g} s would not have given this answer."))
     return " ".join(parts), numbers
 
 
@@ -133,7 +150,7 @@ def finish(out: Path, quick_info: dict[str, Any] | None, stab: dict[str, Any], s
     carrier_sweep.plot(summary, sweep_rows, out / "carrier_sweep.png")
     if unc is not None:
         rep["uncertainty"] = {k: v for k, v in unc.items() if k != "runs"}
-    text, numbers = paragraph(rep, summary)
+    text, numbers = paragraph(rep, summary, t_check)
     rep["carrier_sweep"] = {"rows": summary, "dead_zones": dz["rows"],
                             "interval": "range over start positions and step sizes; not a confidence interval"}
     if t_check is not None:
