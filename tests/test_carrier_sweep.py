@@ -98,12 +98,16 @@ def test_the_report_opens_with_the_answer_a_quick_banner_and_embeds_every_figure
     (tmp_path / "report.json").write_text(json.dumps(rep))
     (tmp_path / "report.md").write_text("# title\n\nintro\n## the rest\n")
     stab = {"rows": [], "verdict": {}}
-    answer.finish(tmp_path, {"T": 2, "n": 2, "laws": "P", "Ts": 1, "nf": 3, "np": 4}, stab, rows, {"rows": []})
+    short = [r | {"steady_state_error_counts": 3 * r["steady_state_error_counts"]} for r in rows]
+    answer.finish(tmp_path, {"T": 2, "n": 2, "laws": "P", "Ts": 1, "nf": 3, "np": 4}, stab, rows, {"rows": []},
+                  t_check=t_check(rows, short, 1.0, 0.5))
     md = (tmp_path / "report.md").read_text()
     assert md.index("QUICK RUN") < md.index("The answer on this model") < md.index("## the rest")
+    assert md.index("## The title question") < md.index("### Does the sweep's T change its answer?") < md.index("## the rest")
     assert "![" in md and "(carrier_sweep.png)" in md and (tmp_path / "carrier_sweep.png").exists()
     out = json.loads((tmp_path / "report.json").read_text())
     assert out["answer"]["quick"] and out["carrier_sweep"]["rows"][0]["points"] == 2
+    assert all(r["same_ranking"] for r in out["carrier_sweep"]["t_check"]["rows"])
 
 
 def test_a_runs_first_seconds_are_the_shorter_run() -> None:
