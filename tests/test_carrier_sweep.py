@@ -179,3 +179,12 @@ def test_the_opening_says_whether_a_shorter_t_would_have_given_the_same_answer()
                                                                           _err(24_400.0, True, 3.0)], 40.0, 10.0))
     assert "differently for PID axis x" in text and "24.4 kHz at 10 s, 50 Hz at 40 s" in text
     assert "would not have given this answer" in text and numbers["t_check"]["ranking_differs"] == ["PID axis x"]
+
+
+def test_the_opening_gives_the_error_at_the_screw_and_at_the_inaudible_carrier() -> None:
+    rows = [_row(f, True, 0, e) | {"screw_steady_state_error_counts": s}
+            for f, e, s in ((50.0, 2.0, 14.0), (1700.0, 30.0, 41.0), (24_400.0, 9.0, 20.0))]
+    text = answer.paragraph({"meta": {"experiment_plant": "lab", "sweep_T_s": 40.0}, "characterization": {}},
+                            summarise(rows))[0]
+    assert "at the screw, beyond the gear's backlash that the motor-side encoder cannot see, 14.0 against 41.0" in text
+    assert "at 24.4 kHz, above the audible band, 9.0" in text

@@ -113,8 +113,21 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]],
                    f"{b['median']:.1f} counts [{b['min']:.1f}, {b['max']:.1f}] at {q['best_hz']:.4g} Hz against "
                    f"{w['median']:.1f} [{w['min']:.1f}, {w['max']:.1f}] at {q['worst_hz']:.4g} Hz "
                    f"(median [range over start positions and step sizes])")
+            sc = [r for r in summary if r["law"] == law and r["axis"] == a and r["pw0"]
+                  and r.get("screw_steady_state_error_counts")]
+            by_f = {r["freq_hz"]: r["screw_steady_state_error_counts"]["median"] for r in sc}
+            if q["best_hz"] in by_f and q["worst_hz"] in by_f:
+                q["screw_best"], q["screw_worst"] = by_f[q["best_hz"]], by_f[q["worst_hz"]]
+                txt += (f"; at the screw, beyond the gear's backlash that the motor-side encoder cannot see, "
+                        f"{q['screw_best']:.1f} against {q['screw_worst']:.1f} counts")
             if q["copper_best_J"] is not None:
                 txt += f", copper loss {q['copper_best_J']:.2f} J against {q['copper_worst_J']:.2f} J"
+            quiet = [r for r in summary if r["law"] == law and r["axis"] == a and r["pw0"] and not r["audible"]
+                     and r.get("steady_state_error_counts")]
+            if quiet and quiet[0]["freq_hz"] not in (q["best_hz"], q["worst_hz"]):
+                qe = quiet[0]["steady_state_error_counts"]
+                txt += (f"; at {carrier_sweep.hz(quiet[0]['freq_hz'])}, above the audible band, "
+                        f"{qe['median']:.1f} [{qe['min']:.1f}, {qe['max']:.1f}]")
             if q["pw0_off_median_range"] is not None:
                 lo, hi = q["pw0_off_median_range"]
                 txt += f"; with PW0 off the medians span {lo:.1f}-{hi:.1f} counts"
