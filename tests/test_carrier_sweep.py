@@ -15,7 +15,9 @@ import pytest
 from sim_models.variants import PlantSpec
 from torqueloop.sim.experiment import COUNTS_PER_REV, ExperimentConfig, run_fast
 from torqueloop.study import answer
-from torqueloop.study.carrier_sweep import pw0_counts, summarise
+from torqueloop.study import carrier_sweep
+from torqueloop.study.carrier_sweep import RunCache, pw0_counts, summarise, t_check, truncated
+from torqueloop.study.experiment import ExperimentPlan, runs, split_cached
 
 
 def test_one_pw0_for_both_directions_is_the_lower_stop_rounded_up() -> None:
@@ -96,9 +98,93 @@ def test_the_report_opens_with_the_answer_a_quick_banner_and_embeds_every_figure
     (tmp_path / "report.json").write_text(json.dumps(rep))
     (tmp_path / "report.md").write_text("# title\n\nintro\n## the rest\n")
     stab = {"rows": [], "verdict": {}}
-    answer.finish(tmp_path, {"T": 2, "n": 2, "laws": "P", "Ts": 1, "nf": 3, "np": 4}, stab, rows, {"rows": []})
+    short = [r | {"steady_state_error_counts": 3 * r["steady_state_error_counts"]} for r in rows]
+    answer.finish(tmp_path, {"T": 2, "n": 2, "laws": "P", "Ts": 1, "nf": 3, "np": 4}, stab, rows, {"rows": []},
+                  t_check=t_check(rows, short, 1.0, 0.5))
     md = (tmp_path / "report.md").read_text()
     assert md.index("QUICK RUN") < md.index("The answer on this model") < md.index("## the rest")
+    assert md.index("## The title question") < md.index("### Does the sweep's T change its answer?") < md.index("## the rest")
     assert "![" in md and "(carrier_sweep.png)" in md and (tmp_path / "carrier_sweep.png").exists()
     out = json.loads((tmp_path / "report.json").read_text())
     assert out["answer"]["quick"] and out["carrier_sweep"]["rows"][0]["points"] == 2
+    assert all(r["same_ranking"] for r in out["carrier_sweep"]["t_check"]["rows"])
+
+
+def test_a_runs_first_seconds_are_the_shorter_run() -> None:
+    """What lets the sweep be scored at T = 10 s from its 40 s runs: the fast
+    path is deterministic, so cutting a run gives the shorter run sample for sample."""
+    c = ExperimentConfig(law="PD", t_end_s=0.2, plant=PlantSpec("lab"), pwm_hz=(1700.0, 1700.0), progress=False,
+                         start_counts=(200, -200), start_s=0.1)
+    short, long = run_fast(c), run_fast(replace(c, t_end_s=0.4))
+    cut = truncated(long, 0.2)
+    for f in ("t", "pos", "vel", "cmd", "err", "true_pos", "charge", "i2"):
+        assert (getattr(cut.traj, f) == getattr(short.traj, f)).all(), f
+    assert len(long.traj.t) > len(cut.traj.t)
+
+
+def test_the_run_cache_keys_on_what_the_run_uses_and_gives_back_what_was_stored(tmp_path) -> None:
+    cache = RunCache(tmp_path / "runs")
+    c = ExperimentConfig(law="PD", t_end_s=40.0, plant=PlantSpec("lab"), pwm_hz=(50.0, 50.0), pw0_counts=(24, 32),
+                         progress=False)
+    assert cache.get(c) is None
+    cache.put(c, {"result": 1})
+    assert cache.get(c) == {"result": 1}
+    assert cache.get(replace(c, progress=True)) == {"result": 1}          # progress changes nothing a run computes
+    for other in (replace(c, pw0_counts=(25, 32)), replace(c, t_end_s=10.0), replace(c, law="PID"),
+                  replace(c, start_counts=(4200, 4200)), replace(c, plant=PlantSpec("lab-2025")),
+                  replace(c, pwm_hz=(300.0, 300.0))):
+        assert cache.get(other) is None, other
+    cache.digest = "another plant or firmware law"
+    assert cache.get(c) is None
+
+
+def test_cached_sweep_runs_are_not_run_again_and_nothing_else_is_taken_from_the_cache(tmp_path) -> None:
+    from test_table3_decomposition import _char_file
+
+    plan = ExperimentPlan.short()
+    every = runs(plan, _char_file(tmp_path, {"x": 2.0, "z": 2.5}), {f: (30, 8) for f in plan.sweep_hz})
+    cache = RunCache(tmp_path / "runs")
+    for j in every:
+        cache.put(j.config, "stored")        # even an arm's configuration: only sweep runs are reused
+    todo, reused = split_cached(every, cache)
+    assert {j.label() for j, _ in reused} == {j.label() for j in every if j.key[0] == "sweep"}
+    assert all(r == "stored" for _, r in reused)
+    assert len(todo) + len(reused) == len(every) and all(j.key[0] != "sweep" for j in todo)
+
+
+def _err(f: float, pw0: bool, e: float) -> dict:
+    return _row(f, pw0, 0, e) | {"law": "PID"}
+
+
+def test_t_check_says_when_the_shorter_t_ranks_the_carriers_otherwise() -> None:
+    long = [_err(50.0, True, 2.0), _err(24_400.0, True, 5.0), _err(50.0, False, 9.0), _err(24_400.0, False, 30.0)]
+    same = [_err(50.0, True, 20.0), _err(24_400.0, True, 40.0), _err(50.0, False, 90.0), _err(24_400.0, False, 99.0)]
+    flip = [_err(50.0, True, 20.0), _err(24_400.0, True, 4.0), _err(50.0, False, 90.0), _err(24_400.0, False, 99.0)]
+    tc = t_check(long, same, 40.0, 10.0)
+    assert [r["same_ranking"] for r in tc["rows"]] == [True, True]
+    tc = t_check(long, flip, 40.0, 10.0)
+    on = next(r for r in tc["rows"] if r["pw0"])
+    assert not on["same_ranking"] and on["best_hz_short"] == 24_400.0 and on["best_hz_long"] == 50.0
+    md = "\n".join(carrier_sweep.t_check_markdown(tc))
+    assert "| PID | x | at the carrier | 20.0 -> 2.0 | 4.0 -> 5.0 | 24.4 kHz -> 50 Hz | no |" in md, md
+
+
+def test_the_opening_says_whether_a_shorter_t_would_have_given_the_same_answer() -> None:
+    long = [_err(50.0, True, 2.0), _err(24_400.0, True, 5.0)]
+    rep = {"meta": {"experiment_plant": "lab", "sweep_T_s": 40.0}, "characterization": {}}
+    same = answer.paragraph(rep, summarise(long), t_check(long, [_err(50.0, True, 9.0), _err(24_400.0, True, 12.0)],
+                                                          40.0, 10.0))[0]
+    assert "rank in the same order under every law and axis" in same
+    text, numbers = answer.paragraph(rep, summarise(long), t_check(long, [_err(50.0, True, 9.0),
+                                                                          _err(24_400.0, True, 3.0)], 40.0, 10.0))
+    assert "differently for PID axis x" in text and "24.4 kHz at 10 s, 50 Hz at 40 s" in text
+    assert "would not have given this answer" in text and numbers["t_check"]["ranking_differs"] == ["PID axis x"]
+
+
+def test_the_opening_gives_the_error_at_the_screw_and_at_the_inaudible_carrier() -> None:
+    rows = [_row(f, True, 0, e) | {"screw_steady_state_error_counts": s}
+            for f, e, s in ((50.0, 2.0, 14.0), (1700.0, 30.0, 41.0), (24_400.0, 9.0, 20.0))]
+    text = answer.paragraph({"meta": {"experiment_plant": "lab", "sweep_T_s": 40.0}, "characterization": {}},
+                            summarise(rows))[0]
+    assert "at the screw, beyond the gear's backlash that the motor-side encoder cannot see, 14.0 against 41.0" in text
+    assert "at 24.4 kHz, above the audible band, 9.0" in text

@@ -36,14 +36,15 @@ def test_the_quick_plan_is_the_runs_make_run_quick_does() -> None:
     assert all(r.config.t_end_s == plan.sweep_t_end_s for r in sweep)
 
 
-def test_a_full_plan_sweeps_each_carrier_with_its_own_dead_zone_from_three_starts() -> None:
-    pw0 = {f: (int(f) % 97, int(f) % 89) for f in ExperimentPlan().sweep_hz}
+def test_make_runs_sweep_is_pd_and_pid_at_40_s_each_carrier_with_its_own_dead_zone_from_two_starts() -> None:
+    pw0 = {f: (int(f) % 97, int(f) % 89) for f in ExperimentPlan.thorough().sweep_hz}
     rs = [r for r in runs(ExperimentPlan(), Path("char.json"), pw0) if r.key[0] == "sweep"]
-    assert len(rs) == 8 * 1 * 2 * 3
+    assert len(rs) == 4 * 2 * 2 * 1 * 2       # carriers x laws x PW0 on/off x steps x starts
     for r in rs:
         f, on = r.key[1], r.key[2]
         assert r.config.pw0_off != on and (not on or r.config.pw0_counts == pw0[f])
-    assert {r.config.start_counts for r in rs} == {(0, 0), (-4200, -4200), (4200, 4200)}
+        assert r.config.t_end_s == 40.0 and r.config.law in ("PD", "PID")
+    assert {r.config.start_counts for r in rs} == {(-4200, -4200), (4200, 4200)}
     assert sum(r.key[0] == "sweep" for r in runs(ExperimentPlan.thorough(), Path("c"), pw0)) == 8 * 2 * 2 * 2 * 3
 
 

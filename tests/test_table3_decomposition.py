@@ -130,3 +130,11 @@ def test_the_decomposition_is_reused_while_its_inputs_are_unchanged(tmp_path, mo
     assert len(calls) == 3
     table3.study(PlantSpec("lab"), ("P", "PD"), 40.0, out, "another digest", say=said.append, char_config=other)
     assert len(calls) == 4
+
+
+def test_the_slow_rows_are_handed_out_first_and_every_row_still_runs() -> None:
+    js = table3.jobs(PlantSpec("lab"), ("P", "PD", "PID"), 40.0)
+    order = table3.longest_first(js)
+    assert sorted(map(repr, order)) == sorted(map(repr, js))
+    assert [j.row for j in order[:3]] == ["all_plant_effects"] * 3
+    assert [j.row for j in order[3:6]] == ["gear_backlash"] * 3

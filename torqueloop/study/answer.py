@@ -53,8 +53,11 @@ def _axis_answer(summary: list[dict[str, Any]], law: str, axis: str, key: str) -
             "copper_worst_J": None if not worst.get("copper_loss_J") else worst["copper_loss_J"]["median"]}
 
 
-def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]]) -> tuple[str, dict[str, Any]]:
-    """The answer in words and the numbers it quotes."""
+def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]],
+              t_check: dict[str, Any] | None = None) -> tuple[str, dict[str, Any]]:
+    """The answer in words and the numbers it quotes (``t_check``:
+    :func:`torqueloop.study.carrier_sweep.t_check`, whether a shorter T
+    ranks the carriers the same)."""
     m, ch = rep["meta"], rep.get("characterization", {})
     numbers: dict[str, Any] = {"chosen": {a: v["achieved_hz"] for a, v in ch.get("axes", {}).items()},
                                "stability": ch.get("stability_verdict", {}).get("axes", {}), "sweep": []}
@@ -110,8 +113,21 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]]) -> tuple[str, 
                    f"{b['median']:.1f} counts [{b['min']:.1f}, {b['max']:.1f}] at {q['best_hz']:.4g} Hz against "
                    f"{w['median']:.1f} [{w['min']:.1f}, {w['max']:.1f}] at {q['worst_hz']:.4g} Hz "
                    f"(median [range over start positions and step sizes])")
+            sc = [r for r in summary if r["law"] == law and r["axis"] == a and r["pw0"]
+                  and r.get("screw_steady_state_error_counts")]
+            by_f = {r["freq_hz"]: r["screw_steady_state_error_counts"]["median"] for r in sc}
+            if q["best_hz"] in by_f and q["worst_hz"] in by_f:
+                q["screw_best"], q["screw_worst"] = by_f[q["best_hz"]], by_f[q["worst_hz"]]
+                txt += (f"; at the screw, beyond the gear's backlash that the motor-side encoder cannot see, "
+                        f"{q['screw_best']:.1f} against {q['screw_worst']:.1f} counts")
             if q["copper_best_J"] is not None:
                 txt += f", copper loss {q['copper_best_J']:.2f} J against {q['copper_worst_J']:.2f} J"
+            quiet = [r for r in summary if r["law"] == law and r["axis"] == a and r["pw0"] and not r["audible"]
+                     and r.get("steady_state_error_counts")]
+            if quiet and quiet[0]["freq_hz"] not in (q["best_hz"], q["worst_hz"]):
+                qe = quiet[0]["steady_state_error_counts"]
+                txt += (f"; at {carrier_sweep.hz(quiet[0]['freq_hz'])}, above the audible band, "
+                        f"{qe['median']:.1f} [{qe['min']:.1f}, {qe['max']:.1f}]")
             if q["pw0_off_median_range"] is not None:
                 lo, hi = q["pw0_off_median_range"]
                 txt += f"; with PW0 off the medians span {lo:.1f}-{hi:.1f} counts"
@@ -121,20 +137,37 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]]) -> tuple[str, 
                                         f"({q['between_carriers']:.1f} against up to {q['within_point_max']:.1f} "
                                         "counts): the sweep cannot rank the carriers by accuracy."))
             parts.append(txt)
+    if t_check and t_check["rows"]:
+        tc = [r for r in t_check["rows"] if r["pw0"]]
+        differ = [f"{r['law']} axis {r['axis']}" for r in tc if not r["same_ranking"]]
+        moved = [f"{r['law']} axis {r['axis']} ({carrier_sweep.hz(r['best_hz_short'])} at "
+                 f"{t_check['t_short_s']:g} s, {carrier_sweep.hz(r['best_hz_long'])} at {t_check['t_long_s']:g} s)"
+                 for r in tc if r["best_hz_short"] != r["best_hz_long"]]
+        numbers["t_check"] = {"ranking_differs": differ, "best_moved": moved}
+        parts.append(f"Scored as if each run had ended at T = {t_check['t_short_s']:g} s instead of "
+                     f"{t_check['t_long_s']:g} s, with each carrier's own dead zone the carriers rank "
+                     + ("in the same order under every law and axis." if not differ else
+                        f"differently for {', '.join(differ)}"
+                        + (f"; the most accurate carrier moves for {', '.join(moved)}." if moved else
+                           ", though the most accurate carrier stays the same.")
+                        + f" A sweep at T = {t_check['t_short_s']:g} s would not have given this answer."))
     return " ".join(parts), numbers
 
 
 def finish(out: Path, quick_info: dict[str, Any] | None, stab: dict[str, Any], sweep_rows: list[dict[str, Any]],
-           dz: dict[str, Any], unc: dict[str, Any] | None = None, dec: dict[str, Any] | None = None) -> None:
+           dz: dict[str, Any], unc: dict[str, Any] | None = None, dec: dict[str, Any] | None = None,
+           t_check: dict[str, Any] | None = None) -> None:
     """Rewrite report.json and report.md with the opening, the tables and the figures."""
     rep = json.loads((out / "report.json").read_text())
     summary = carrier_sweep.summarise(sweep_rows)
     carrier_sweep.plot(summary, sweep_rows, out / "carrier_sweep.png")
     if unc is not None:
         rep["uncertainty"] = {k: v for k, v in unc.items() if k != "runs"}
-    text, numbers = paragraph(rep, summary)
+    text, numbers = paragraph(rep, summary, t_check)
     rep["carrier_sweep"] = {"rows": summary, "dead_zones": dz["rows"],
                             "interval": "range over start positions and step sizes; not a confidence interval"}
+    if t_check is not None:
+        rep["carrier_sweep"]["t_check"] = t_check
     rep["answer"] = {"text": text, "numbers": numbers, "quick": quick_info is not None}
     if dec is not None:
         rep["table3_decomposition"] = table3.add_whole(dec, rep.get("table3", {}))
@@ -151,6 +184,8 @@ def finish(out: Path, quick_info: dict[str, Any] | None, stab: dict[str, Any], s
     if dec is not None:
         L += table3.markdown(rep["table3_decomposition"])
     L += carrier_sweep.markdown(summary, rep["meta"].get("sweep_T_s"))
+    if t_check is not None:
+        L += carrier_sweep.t_check_markdown(t_check)
     L += rest
     L += ["## Figures", ""]
     for p in sorted(out.glob("*.png")):

@@ -3,13 +3,9 @@
 dead zone measured at that carrier, not the one measured at the chosen
 carrier carried across.
 
-* :func:`dead_zones` - the paper's dead zone (raise the pulse until the
-  stage moves, lower it until it stops:
-  :func:`torqueloop.characterize.simbench.motion_dead_zones`) per axis and
-  carrier, as PW0 counts.  One PW0 per axis drives both directions; it is the
-  lower of the two directions' stop duties (a PW0 above either would push
-  that direction past its dead zone), rounded up to whole counts as step 8
-  rounds the intercept.
+* :func:`~torqueloop.study.dead_zones.dead_zones` - the paper's dead zone
+  per axis and carrier, as PW0 counts (in its own module, so that its cache
+  outlives changes to this one's report code).
 * :func:`summarise` - the sweep's points grouped by (carrier, PW0, law, axis):
   the median and the range over the points' start positions and step sizes.
   That range is the spread across start positions and step sizes of one
@@ -17,67 +13,153 @@ carrier carried across.
 * :func:`markdown`, :func:`plot` - the report's table (audible carriers
   marked) and figure (every point drawn, the median joined; the y range
   shared between the axes where a trend is read).
+* :class:`RunCache` - each sweep run's result kept in
+  build/characterize/sweep_runs/ under a key of everything it depends on
+  (the board settings it runs with, the law, T, step, start, plant, and the
+  sources of the plant, the firmware's law and the PWM model), so a second
+  ``make run``, or a plan with a carrier added, runs only what is new.
+* :func:`truncated`, :func:`t_check` - a run's metrics as if it had ended
+  earlier (the fast path is deterministic and a run's first 10 s are the
+  10 s run), and the sweep's answer at two T side by side: whether the T
+  of the sweep changes it, measured without running the sweep twice.
 """
 
 from __future__ import annotations
 
-import math
+import dataclasses
+import hashlib
+import pickle
 import statistics
-import time
 from pathlib import Path
 from typing import Any, Sequence
 
-from sim_models.variants import PlantSpec
-from torqueloop.characterize.config import CLK_HZ, PWM_BITS
-from torqueloop.characterize.simbench import motion_dead_zones
-from torqueloop.spec.pwm import carrier_hz, divider_for, full_scale
-from torqueloop.sim.report import save_figure
-from torqueloop.study.cache import cached
-from torqueloop.study.engine import Engine
+from torqueloop.spec.repo import REPO_ROOT
+from torqueloop.sim.report import run_metrics, save_figure
+from torqueloop.study.dead_zones import AXES, dead_zones, pw0_counts  # noqa: F401 - the sweep's PW0, re-exported
 
 #: carriers below this are in the audible band (20 Hz - 20 kHz)
 AUDIBLE_HZ = 20_000.0
-AXES = ("x", "z")
 
 
-def pw0_counts(stop_pcts: Sequence[float]) -> int:
-    """One PW0 for both directions: the lower stop duty, rounded up to counts."""
-    return int(math.ceil(min(stop_pcts) / 100.0 * full_scale(PWM_BITS) - 1e-9))
+#: what a fast-path run's result depends on beyond its configuration: the plant, the firmware law's oracle,
+#: the PWM block's event model, the run itself and the specs they read
+RUN_SOURCES = ("sim_models", "torqueloop/oracles", "torqueloop/spec", "torqueloop/sim/experiment.py",
+               "torqueloop/sim/model_loop.py")
 
 
-def _dz_job(job: tuple[PlantSpec, str, float]) -> dict[str, Any]:
-    plant, axis, f = job
-    t0 = time.process_time()
-    dz = motion_dead_zones(plant, [f], axes=(axis,))
-    return {"axis": axis, "freq_hz": f, "board_hz": carrier_hz(divider_for(f, CLK_HZ, PWM_BITS), CLK_HZ, PWM_BITS),
-            "stop_pct": {("forward" if d.direction > 0 else "reverse"): d.stop_pct for d in dz},
-            "start_pct": {("forward" if d.direction > 0 else "reverse"): d.start_pct for d in dz},
-            "pw0_counts": pw0_counts([d.stop_pct for d in dz]), "cpu_s": time.process_time() - t0}
+def sources_digest(roots: Sequence[str] = RUN_SOURCES) -> str:
+    h = hashlib.sha256()
+    for r in roots:
+        p = REPO_ROOT / r
+        files = sorted(x for x in ([p] if p.is_file() else p.rglob("*"))
+                       if x.is_file() and x.suffix in (".py", ".toml", ".h", ".c"))
+        for f in files:
+            h.update(str(f.relative_to(REPO_ROOT)).encode())
+            h.update(f.read_bytes())
+    return h.hexdigest()
 
 
-def dead_zones(plant: PlantSpec, freqs_hz: Sequence[float], cache: Path, digest: str, engine: Engine = Engine(),
-               say=print) -> dict[str, Any]:
-    """``{"rows": [...], "pw0": {freq: (x counts, z counts)}}``, reused from
-    ``cache`` while the inputs' digest and the carriers are unchanged."""
-    jobs = [(plant, a, float(f)) for f in freqs_hz for a in AXES]
+class RunCache:
+    """Sweep runs kept one file each in ``root``, keyed by
+    :meth:`key`: the configuration with the characterisation file replaced
+    by the board settings it resolves to (what the run actually uses), and
+    :func:`sources_digest`."""
 
-    def compute() -> dict[str, Any]:
-        say(f"dead zones per carrier: {len(jobs)} motion ramps (raise until the stage moves, lower until it stops) "
-            f"on the {engine.name}")
-        rows, t0 = [], time.monotonic()
-        for k, (_, r) in enumerate(engine.map_unordered(_dz_job, jobs), 1):
-            rows.append(r)
-            el = time.monotonic() - t0
-            say(f"dead zone {k}/{len(jobs)}: axis {r['axis']} at {r['board_hz']:.4g} Hz: PW0 {r['pw0_counts']} "
-                f"counts ({el:.0f} s so far, about {el / k * (len(jobs) - k):.0f} s left)")
-        rows.sort(key=lambda r: (r["freq_hz"], r["axis"]))
-        pw0 = {str(float(f)): [next(r["pw0_counts"] for r in rows if r["freq_hz"] == f and r["axis"] == a)
-                               for a in AXES] for f in freqs_hz}
-        return {"rows": rows, "pw0": pw0, "cpu_s": sum(r["cpu_s"] for r in rows)}
+    def __init__(self, root: Path) -> None:
+        self.root = root
+        self.digest = sources_digest()
 
-    doc = cached(cache, digest, __file__, repr((plant.label, tuple(freqs_hz))), compute,
-                 say=lambda m: say(f"dead zones per carrier: {m}"))
-    return doc | {"pw0": {float(k): tuple(v) for k, v in doc["pw0"].items()}}
+    def key(self, cfg: Any) -> str:
+        plain = dataclasses.replace(cfg, char_config=None, progress=False)
+        return hashlib.sha256(f"{self.digest}|{plain!r}|{cfg.board()!r}".encode()).hexdigest()[:40]
+
+    def get(self, cfg: Any) -> Any | None:
+        f = self.root / f"{self.key(cfg)}.pkl"
+        if not f.exists():
+            return None
+        try:
+            with open(f, "rb") as fh:
+                return pickle.load(fh)
+        except (OSError, EOFError, pickle.UnpicklingError, AttributeError):
+            return None
+
+    def put(self, cfg: Any, result: Any) -> None:
+        self.root.mkdir(parents=True, exist_ok=True)
+        f = self.root / f"{self.key(cfg)}.pkl"
+        tmp = f.with_suffix(".tmp")
+        with open(tmp, "wb") as fh:
+            pickle.dump(result, fh)
+        tmp.replace(f)
+
+
+def truncated(run: Any, t_end_s: float) -> Any:
+    """``run`` as if it had ended at ``t_end_s`` (every sample up to it): a
+    deterministic run's first samples are the shorter run's."""
+    tr = run.traj
+    n = int((tr.t <= t_end_s + 1e-9).sum())
+    cut = {f.name: (None if getattr(tr, f.name) is None else getattr(tr, f.name)[:n])
+           for f in dataclasses.fields(tr)}
+    return dataclasses.replace(run, traj=dataclasses.replace(tr, **cut))
+
+
+def short_rows(sweep: Sequence[tuple], t_end_s: float, target_rad: float) -> list[dict[str, Any]]:
+    """The sweep's report rows (as torqueloop.sim.report.build writes them)
+    for every run cut at ``t_end_s``."""
+    out = []
+    for f, pw0, law, r, *extra in sweep:
+        ex = extra[0] if extra else {}
+        for ax, mm in run_metrics(truncated(r, t_end_s), ex.get("target_rad", target_rad)).items():
+            out.append({"freq_hz": f, "pw0": pw0, "law": law, "axis": ax, **ex.get(ax, {}), **mm})
+    return out
+
+
+def t_check(long_rows: Sequence[dict[str, Any]], short_rows_: Sequence[dict[str, Any]], t_long: float,
+            t_short: float) -> dict[str, Any]:
+    """Per (law, axis, PW0): the carrier with the lowest median |error at the
+    encoder| at each T, and the medians side by side; ``same_ranking``: the
+    carriers ordered by that median are in the same order at both T."""
+    a, b = summarise(long_rows), summarise(short_rows_)
+    rows = []
+    for law in sorted({r["law"] for r in a}):
+        for axis in AXES:
+            for pw0 in (True, False):
+                la = [r for r in a if (r["law"], r["axis"], r["pw0"]) == (law, axis, pw0)]
+                lb = [r for r in b if (r["law"], r["axis"], r["pw0"]) == (law, axis, pw0)]
+                if not la or not lb:
+                    continue
+                med = lambda rr: {r["freq_hz"]: r["steady_state_error_counts"]["median"] for r in rr}
+                ma, mb = med(la), med(lb)
+                rank = lambda m: sorted(m, key=lambda f: (m[f], f))
+                rows.append({"law": law, "axis": axis, "pw0": pw0, "t_long_s": t_long, "t_short_s": t_short,
+                             "median_error_long": ma, "median_error_short": mb,
+                             "best_hz_long": rank(ma)[0], "best_hz_short": rank(mb)[0],
+                             "same_ranking": rank(ma) == rank(mb)})
+    return {"rows": rows, "t_long_s": t_long, "t_short_s": t_short,
+            "how": f"each T = {t_long:g} s run's first {t_short:g} s, scored as a T = {t_short:g} s run"}
+
+
+def hz(f: float) -> str:
+    """A carrier as people read it: 50 Hz, 1.7 kHz, 24.4 kHz."""
+    return f"{f / 1000:.3g} kHz" if f >= 1000 else f"{f:.3g} Hz"
+
+
+def t_check_markdown(tc: dict[str, Any]) -> list[str]:
+    if not tc or not tc["rows"]:
+        return []
+    fs = sorted({f for r in tc["rows"] for f in r["median_error_long"]})
+    L = [f"### Does the sweep's T change its answer? (T = {tc['t_short_s']:g} s against {tc['t_long_s']:g} s)", "",
+         f"The same runs scored at both T ({tc['how']}). Median |steady-state error| at the encoder (counts), "
+         f"T = {tc['t_short_s']:g} s -> {tc['t_long_s']:g} s:", "",
+         "| law | axis | PW0 | " + " | ".join(hz(f) for f in fs) + " | best carrier | same ranking |",
+         "|---|---|---|" + "---|" * len(fs) + "---|---|"]
+    for r in tc["rows"]:
+        cells = [f"{r['median_error_short'][f]:.1f} -> {r['median_error_long'][f]:.1f}"
+                 if f in r["median_error_long"] and f in r["median_error_short"] else "-" for f in fs]
+        best = (hz(r["best_hz_long"]) if r["best_hz_long"] == r["best_hz_short"] else
+                f"{hz(r['best_hz_short'])} -> {hz(r['best_hz_long'])}")
+        L.append(f"| {r['law']} | {r['axis']} | {'at the carrier' if r['pw0'] else 'off'} | " + " | ".join(cells)
+                 + f" | {best} | {'yes' if r['same_ranking'] else 'no'} |")
+    return L + [""]
 
 
 METRICS = ("steady_state_error_counts", "screw_steady_state_error_counts", "overshoot_pct", "settling_time_s",

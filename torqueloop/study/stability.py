@@ -2,7 +2,7 @@
 """Does the characterisation's answer survive the bench protocol?  Step 5
 (the chosen carrier) and the paper's dead zone at that carrier, per axis,
 under each bench protocol: the settle before a reading (fixed 0.3 s, 1 s,
-or until the reading has converged) and the order the carriers are swept in
+3 s, 10 s, or until the reading has converged) and the order the carriers are swept in
 (up, down, shuffled with a printed seed).
 
 The sweep order matters only if one reading leaves something behind for the
@@ -53,7 +53,7 @@ from torqueloop.study.engine import Engine
 #: a converged reading at 24.4 kHz costs minutes of CPU
 FREQS_HZ = (109.0, 235.0, 509.0, 1111.0, 2444.0, 5431.0)
 QUICK_FREQS_HZ = (235.0, 1111.0, 5431.0)
-SETTLES: tuple[float | str, ...] = (0.3, 1.0, 3.0, "converged")
+SETTLES: tuple[float | str, ...] = (0.3, 1.0, 3.0, 10.0, "converged")
 ORDERS = ("up", "down", "shuffled")
 
 
@@ -198,15 +198,24 @@ def run(plant: PlantSpec, axes: Sequence[str] = ("x", "z"), settles: Sequence[fl
     False: the chosen carrier only, without the motion threshold at it)."""
     jobs = [Job(plant, a, p, tuple(freqs_hz), dead_zone) for a in axes
             for p in protocols(settles, orders, seed, converged_orders)]
+    order = sorted(jobs, key=_cost, reverse=True)   # the longest first: no long job left alone at the end
     say(f"stability: {len(jobs)} sweeps ({len(freqs_hz)} carriers each, plant {plant.label}; "
         f"shuffled order's seed {seed}) on the {engine.name}")
     t0, rows = time.monotonic(), {}
-    for k, (job, row) in enumerate(engine.map_unordered(run_job, jobs), 1):
+    for k, (job, row) in enumerate(engine.map_unordered(run_job, order), 1):
         rows[(job.axis, job.protocol)] = row
         el = time.monotonic() - t0
         say(f"stability {k}/{len(jobs)} axis {job.axis}, {job.protocol.label}: chosen {_hz(row['freq_hz'])} "
             f"({row['cpu_s']:.0f} s CPU; {el:.0f} s so far, about {el / k * (len(jobs) - k):.0f} s left)")
     return [rows[(j.axis, j.protocol)] for j in jobs]
+
+
+def _cost(job: Job) -> float:
+    """A job's expected cost, for the order the engine takes them in: the
+    simulated time it holds (the converged rule's readings up to
+    ``max_settle_s`` each; a stall reading and one per carrier)."""
+    s = job.protocol.settle
+    return (job.protocol.max_settle_s if s == "converged" else float(s)) * (len(job.freqs_hz) + 1)
 
 
 def _hz(v: float | None) -> str:
@@ -251,9 +260,10 @@ def markdown(rows: Sequence[dict[str, Any]], ver: dict[str, Any]) -> list[str]:
         s = r["settle_s"] if r["settle_s"] == "converged" else f"{r['settle_s']:g} s"
         o = r["order"] + (f" (seed {r['seed']})" if r["seed"] is not None else "")
         dzs = "-" if dz is None else " / ".join(_fmt(dz.get(k), ".2f") for k in ("forward", "reverse"))
-        L.append(f"| {r['axis']} | {s} | {o} | {_fmt(r['freq_hz'])} | {_fmt(r['board_hz'])} | {dzs} | "
+        ch = (f"none (nearest {_fmt(r['freq_hz'])})" if r.get("kind") == "nearest" else _fmt(r["freq_hz"]))
+        L.append(f"| {r['axis']} | {s} | {o} | {ch} | {_fmt(r['board_hz'])} | {dzs} | "
                  f"{conv}/{len(r['readings'])} | {r['readings'][-1]['theta_end_K']:.1f} | {r['cpu_s']:.0f} |")
-    L.append("")
+    L += [""] + pivot(rows) + [""]
     for a, v in ver.items():
         if v["median_hz"] is None:
             L.append(f"- Axis {a}: no protocol gave a step-5 carrier.")
@@ -265,6 +275,33 @@ def markdown(rows: Sequence[dict[str, Any]], ver: dict[str, Any]) -> list[str]:
                     f"It does not survive them: the bench protocol decides it, and this study names no carrier "
                     f"for axis {a}."))
     return L + [""]
+
+
+def pivot(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """The chosen carrier against the settle (rows) and the sweep order
+    (columns), both axes: "none" where step 5 found no crossing or
+    on-target point (its "nearest" point is no choice)."""
+    orders = [o for o in ORDERS if any(r["order"] == o for r in rows)]
+    settles: list[Any] = []
+    for r in rows:
+        if r["settle_s"] not in settles:
+            settles.append(r["settle_s"])
+    L = ["Chosen carrier (Hz) against the settle and the sweep order:", "",
+         "| axis | settle | " + " | ".join(orders) + " |", "|---|---|" + "---|" * len(orders)]
+    for a in sorted({r["axis"] for r in rows}):
+        for s in settles:
+            cells = []
+            for o in orders:
+                rr = [r for r in rows if r["axis"] == a and r["settle_s"] == s and r["order"] == o]
+                if not rr:
+                    cells.append("not run")
+                elif rr[0]["freq_hz"] is None or rr[0].get("kind") == "nearest":
+                    cells.append("none")
+                else:
+                    cells.append(format(rr[0]["freq_hz"], ".4g"))
+            lab = s if s == "converged" else f"{s:g} s"
+            L.append(f"| {a} | {lab} | " + " | ".join(cells) + " |")
+    return L
 
 
 def _fmt(v: float | None, spec: str = ".4g") -> str:
@@ -281,7 +318,7 @@ class StabilityPlan:
     orders: tuple[str, ...] = ORDERS
     freqs_hz: tuple[float, ...] = FREQS_HZ
     seed: int = 0
-    converged_orders: tuple[str, ...] = ("up",)
+    converged_orders: tuple[str, ...] = ("up", "down")
     quick: bool = False
 
     def key(self, plant: PlantSpec) -> str:
