@@ -43,12 +43,19 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire        flush_w;         // W redirects: trap, mret, CSR, fence.i
     wire [31:0] redirect_w_pc;
     wire        redirect_e;      // E redirects: taken branch, jal, jalr
-    wire [31:0] redirect_e_pc;
     wire        redirect    = flush_w || redirect_e;   // kills D (and E, M for flush_w)
     wire        redirect_d;      // D predicts a jump taken: jal, or a branch backwards
-    wire [31:0] redirect_d_pc;
-    wire        refetch     = redirect || redirect_d;
-    wire [31:0] refetch_pc  = flush_w ? redirect_w_pc : (redirect_e ? redirect_e_pc : redirect_d_pc);
+    wire        refetch     = redirect || redirect_d;  // the queue and the answer awaited are stale
+    // W's redirect writes f_pc in its own cycle; D's and E's are requested
+    // in the next cycle from registers (pend_*), which keeps the instruction
+    // word (D) and the branch comparator (E) off the fetch address: the
+    // request comes a cycle after the decision, as it did when the decision
+    // wrote f_pc, so no cycle is lost.
+    reg         pend_d;          // D predicted a jump last cycle: its target is E's pc + imm now
+    reg         pend_e;          // E redirected last cycle: to pend_e_pc
+    reg  [31:0] pend_e_pc;
+    wire        pend = pend_d || pend_e;
+    wire [31:0] pend_pc;
 
     // ==== F: instruction fetch =================================================================
     reg         f_out;           // a request is outstanding (presented before, not answered yet)
@@ -65,7 +72,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire f_room = q_n == 2'd0 || (q_n == 2'd1 && !resp);
     wire f_new  = !f_hold && f_room;
     assign ibus_req  = !rst && (f_hold || f_new);
-    assign ibus_addr = f_hold ? f_out_addr : f_pc;
+    assign ibus_addr = f_hold ? f_out_addr : (pend ? pend_pc : f_pc);
 
     // ==== D: decode ================================================================================
     wire        d_valid = q_n != 2'd0 || resp;
@@ -106,7 +113,6 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire e_load;                                // E takes a new instruction (or a bubble) this edge
     wire d_go = d_valid && !d_hazard && e_load;    // D moves on (unless a redirect kills it)
     assign redirect_d    = d_go && d_pred && !redirect;
-    assign redirect_d_pc = d_pc + d_imm;
 
     // ==== register file =====================================================================
     wire        rf_we;
@@ -222,7 +228,11 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     // (and keeps the trap logic out of the fetch address).
     assign redirect_e    = e_valid && !gs &&
                            (e_jalr || (e_jal && !e_pred) || (e_branch && e_taken != e_pred));
-    assign redirect_e_pc = (e_branch && !e_taken) ? e_pc4 : e_jtarget;
+    // where to: known without the comparator (a branch redirects only
+    // against its prediction: predicted taken, it falls through)
+    wire [31:0] redirect_e_pc = (e_branch && e_pred) ? e_pc4 : e_jtarget;
+    // D's prediction moved its jump into E (nothing can hold E in that edge)
+    assign pend_pc = pend_e ? pend_e_pc : e_pc_imm;
 
     reg [31:0] e_result;
     always @(*) begin
@@ -314,6 +324,8 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             f_out     <= 1'b0;
             f_discard <= 1'b0;
             f_pc      <= RESET_PC;
+            pend_d    <= 1'b0;
+            pend_e    <= 1'b0;
             q_n       <= 2'd0;
             e_valid   <= 1'b0;
             m_valid   <= 1'b0;
@@ -324,15 +336,19 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             // ---- F ----
             f_out      <= ibus_req;
             f_out_addr <= ibus_addr;
-            if (refetch) begin
-                f_pc      <= refetch_pc;
+            pend_d    <= redirect_d;
+            pend_e    <= redirect_e && !flush_w;
+            pend_e_pc <= redirect_e_pc;
+            if (flush_w)
+                f_pc <= redirect_w_pc;
+            else if (pend)
+                f_pc <= f_new ? pend_pc + 32'd4 : pend_pc;
+            else if (f_new)
+                f_pc <= f_pc + 32'd4;
+            if (refetch)
                 f_discard <= ibus_req;
-            end else begin
-                if (f_new)
-                    f_pc <= f_pc + 32'd4;
-                if (ibus_ack)
-                    f_discard <= 1'b0;
-            end
+            else if (ibus_ack)
+                f_discard <= 1'b0;
             // ---- instruction queue: D takes the head (or the answer itself when empty) ----
             // The words load whatever a redirect does (it only empties the queue).
             if (q_n == 2'd0 || (q_n == 2'd1 && d_go)) begin
