@@ -235,7 +235,7 @@ module tl_cpu #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     /* verilator lint_off PINCONNECTEMPTY */
     tl_cpu_muldiv u_muldiv (
         .clk(clk), .rst(rst), .start(exec_md && !rst), .abort(in_md && trap_early), .funct3(funct3),
-        .a(rs1_val), .b(rs2_val), .busy(), .done(md_done), .result(md_result)
+        .a(rs1_val), .b(rs2_val), .busy(), .done(md_done), .result(md_result), .mul_last(), .mul_word()
     );
     /* verilator lint_on PINCONNECTEMPTY */
     assign md_fin = md_done || md_done_q;

@@ -205,10 +205,11 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
         end
     end
 
-    // multiply / divide: started in E's first cycle, E waits for the result;
-    // an interrupt abandons it (re-executed after mret)
-    wire        md_done;
-    wire [31:0] md_result;
+    // multiply / divide: started in E's first cycle, E waits for the result
+    // (a multiply leaves E in the unit's last cycle, with the result from its
+    // adders); an interrupt abandons it (re-executed after mret)
+    wire        md_done, md_last;
+    wire [31:0] md_result, md_word;
     wire        in_md    = e_valid && e_md && e_md_started;   // a multiply/divide in progress
     // the exceptions a multiply/divide can have (no address, no target): kept
     // apart from e_trap, so that the pipeline's enables do not wait for E's adders
@@ -217,10 +218,14 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     /* verilator lint_off PINCONNECTEMPTY */
     tl_cpu_muldiv u_muldiv (
         .clk(clk), .rst(rst), .start(md_start), .abort(flush_w || (in_md && md_trap && !gs)),
-        .funct3(e_funct3), .a(rs1v), .b(rs2v), .busy(), .done(md_done), .result(md_result)
+        .funct3(e_funct3), .a(rs1v), .b(rs2v), .busy(), .done(md_done), .result(md_result),
+        .mul_last(md_last), .mul_word(md_word)
     );
     /* verilator lint_on PINCONNECTEMPTY */
-    wire e_done = !e_md || md_trap || md_done || e_md_fin;
+    // (the unit's done pulse after a multiply that left in its last cycle
+    // belongs to no instruction: only a started operation's counts)
+    wire md_fin = in_md && (md_done || md_last);
+    wire e_done = !e_md || md_trap || md_fin || e_md_fin;
     wire e_adv  = e_valid && e_done && !gs && !flush_w;   // E moves to M
     assign e_load = !gs && (!e_valid || e_done);
     // a jump or taken branch D did not predict, or a predicted branch not
@@ -241,7 +246,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
         else if (e_auipc)
             e_result = e_pc_imm;
         else if (e_md)
-            e_result = md_result;
+            e_result = md_last ? md_word : md_result;
         else if (e_jal || e_jalr || e_csr || e_mret || e_fencei)
             e_result = e_pc4;               // the link, or where W refetches from
         else
@@ -380,7 +385,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             end else begin
                 if (md_start)
                     e_md_started <= 1'b1;
-                if (md_done)
+                if (in_md && md_done)
                     e_md_fin <= 1'b1;
             end
             if (e_load) begin
