@@ -65,6 +65,23 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     reg  [1:0]  q_n;             // instruction queue: entries 0 (head) and 1
     reg  [31:0] q_insn0, q_insn1, q_pc0, q_pc1;
     reg         q_err0, q_err1;
+    reg         f_out_btb, q_btb0, q_btb1;   // the word's successor was fetched from the BTB's target
+
+    // Branch target buffer: the jumps D predicted (jal, backward branches),
+    // BTB_N entries indexed by pc[BTB_IB+1:2], looked up on f_pc when a
+    // sequential request goes out, so the request after a predicted jump
+    // already goes to its target (no cycle lost; D would lose one).  The
+    // lookup starts from registers and ends in f_pc: nothing is added in
+    // front of the fetch address.  An entry is a function of the word at its
+    // pc: a store that retires to that word drops it, fence.i and reset drop
+    // all.  Direction is still checked in E (a loop's exit is a wrong guess).
+    localparam integer BTB_IB = 3;
+    localparam integer BTB_N  = 1 << BTB_IB;
+    reg  [BTB_N-1:0]  btb_v;
+    reg  [31:BTB_IB+2] btb_tag [0:BTB_N-1];
+    reg  [31:2]       btb_tgt [0:BTB_N-1];
+    wire [BTB_IB-1:0] f_bi   = f_pc[BTB_IB+1:2];
+    wire              f_bhit = btb_v[f_bi] && btb_tag[f_bi] == f_pc[31:BTB_IB+2];
 
     wire resp   = f_out && ibus_ack && !f_discard;     // an answer for the current path
     wire f_hold = f_out && !ibus_ack;
@@ -79,6 +96,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire [31:0] d_insn  = q_n != 2'd0 ? q_insn0 : ibus_rdata;
     wire [31:0] d_pc    = q_n != 2'd0 ? q_pc0 : f_out_addr;
     wire        d_ferr  = q_n != 2'd0 ? q_err0 : ibus_err;
+    wire        d_btb   = q_n != 2'd0 ? q_btb0 : f_out_btb;
 
     wire [4:0]  d_rd, d_rs1;
     wire [2:0]  d_funct3;
@@ -112,7 +130,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
 
     wire e_load;                                // E takes a new instruction (or a bubble) this edge
     wire d_go = d_valid && !d_hazard && e_load;    // D moves on (unless a redirect kills it)
-    assign redirect_d    = d_go && d_pred && !redirect;
+    assign redirect_d    = d_go && d_pred && !d_btb && !redirect;
 
     // ==== register file =====================================================================
     wire        rf_we;
@@ -321,6 +339,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
 
     // ==== pipeline registers =====================================================================
     wire e_writes_nz = e_writes && e_rd != 5'd0;
+    wire btb_we = pend_d && !e_ferr;       // (a word that faulted predicts nothing)
     // E's result can be forwarded from M (the trap check is left out: a
     // trapping instruction's readers never retire)
     wire e_early = e_writes_nz && !e_is_load && !e_csr;
@@ -331,6 +350,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             f_pc      <= RESET_PC;
             pend_d    <= 1'b0;
             pend_e    <= 1'b0;
+            btb_v     <= {BTB_N{1'b0}};
             q_n       <= 2'd0;
             e_valid   <= 1'b0;
             m_valid   <= 1'b0;
@@ -349,7 +369,16 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             else if (pend)
                 f_pc <= f_new ? pend_pc + 32'd4 : pend_pc;
             else if (f_new)
-                f_pc <= f_pc + 32'd4;
+                f_pc <= f_bhit ? {btb_tgt[f_bi], 2'b00} : f_pc + 32'd4;
+            if (!f_hold)
+                f_out_btb <= !pend && f_bhit;
+            // ---- BTB: D's prediction is written when its target is known (E's pc + imm) ----
+            if (btb_we)
+                btb_v[e_pc[BTB_IB+1:2]] <= 1'b1;
+            if (retire && w_fencei)
+                btb_v <= {BTB_N{1'b0}};
+            else if (retire && w_store && btb_tag[w_addr[BTB_IB+1:2]] == w_addr[31:BTB_IB+2])
+                btb_v[w_addr[BTB_IB+1:2]] <= 1'b0;
             if (refetch)
                 f_discard <= ibus_req;
             else if (ibus_ack)
@@ -358,14 +387,14 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             // The words load whatever a redirect does (it only empties the queue).
             if (q_n == 2'd0 || (q_n == 2'd1 && d_go)) begin
                 if (resp) begin
-                    q_insn0 <= ibus_rdata; q_pc0 <= f_out_addr; q_err0 <= ibus_err;
+                    q_insn0 <= ibus_rdata; q_pc0 <= f_out_addr; q_err0 <= ibus_err; q_btb0 <= f_out_btb;
                 end
             end else if (q_n == 2'd1) begin
                 if (resp) begin
-                    q_insn1 <= ibus_rdata; q_pc1 <= f_out_addr; q_err1 <= ibus_err;
+                    q_insn1 <= ibus_rdata; q_pc1 <= f_out_addr; q_err1 <= ibus_err; q_btb1 <= f_out_btb;
                 end
             end else if (d_go) begin   // two entries: no request was outstanding
-                q_insn0 <= q_insn1; q_pc0 <= q_pc1; q_err0 <= q_err1;
+                q_insn0 <= q_insn1; q_pc0 <= q_pc1; q_err0 <= q_err1; q_btb0 <= q_btb1;
             end
             if (refetch)
                 q_n <= 2'd0;
@@ -425,6 +454,13 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
                 w_csr <= m_csr; w_csr_writes <= m_csr_writes; w_mret <= m_mret; w_fencei <= m_fencei;
                 w_csr_src <= m_csr_src;
             end
+        end
+    end
+
+    always @(posedge clk) begin
+        if (btb_we) begin
+            btb_tag[e_pc[BTB_IB+1:2]] <= e_pc[31:BTB_IB+2];
+            btb_tgt[e_pc[BTB_IB+1:2]] <= e_pc_imm[31:2];
         end
     end
 endmodule
