@@ -75,6 +75,9 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     // front of the fetch address.  An entry is a function of the word at its
     // pc: a store that retires to that word drops it, fence.i and reset drop
     // all.  Direction is still checked in E (a loop's exit is a wrong guess).
+    // Intel template: none for block RAM - its tables have an asynchronous
+    // read, which goes to MLAB or registers (Quartus Prime Recommended HDL
+    // Coding Styles, "Use Synchronous Memory Blocks"), fine at 8 entries.
     localparam integer BTB_IB = 3;
     localparam integer BTB_N  = 1 << BTB_IB;
     reg  [BTB_N-1:0]  btb_v;
@@ -82,6 +85,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     reg  [31:2]       btb_tgt [0:BTB_N-1];
     wire [BTB_IB-1:0] f_bi   = f_pc[BTB_IB+1:2];
     wire              f_bhit = btb_v[f_bi] && btb_tag[f_bi] == f_pc[31:BTB_IB+2];
+    wire [31:2]       f_btgt = btb_tgt[f_bi];
 
     wire resp   = f_out && ibus_ack && !f_discard;     // an answer for the current path
     wire f_hold = f_out && !ibus_ack;
@@ -107,26 +111,40 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     );
     wire [4:0] d_rs2      = d_insn[24:20];
     wire [6:0] d_opcode   = d_insn[6:0];
-    // which source registers the instruction reads (a needless hazard costs a cycle)
-    wire d_uses_rs1 = d_opcode != 7'b0110111 && d_opcode != 7'b0010111 && d_opcode != 7'b1101111;
-    wire d_uses_rs2 = d_opcode == 7'b1100011 || d_opcode == 7'b0100011 || d_opcode == 7'b0110011;
     wire d_fencei   = d_opcode == 7'b0001111 && d_funct3 == 3'b001;
-    // Static prediction: jal always, a conditional branch when it jumps
-    // backwards (a loop); not a target that would trap as misaligned (E
-    // raises that).  E checks every prediction and corrects a wrong one.
-    wire d_pred = (d_opcode == 7'b1101111 || (d_opcode == 7'b1100011 && d_insn[31])) && !d_imm[1];
 
     // Load-use hazard: a load's word (or a CSR's old value) reaches rd only
     // in W, and is not forwarded from there (that would put a block RAM's
     // output in front of the ALU); a reader waits in D until the load is in
     // W, then reads the register file in the edge the load writes it
-    // (forwarded inside the register file).
+    // (forwarded inside the register file).  Only the registers an
+    // instruction reads count (a needless hazard costs a cycle).
     reg        e_valid, m_valid, w_valid;
     reg        e_late, m_late;                 // a load or CSR instruction that writes rd
     reg  [4:0] e_rd, m_rd;
-    wire hz_e = e_valid && e_late && ((d_uses_rs1 && d_rs1 == e_rd) || (d_uses_rs2 && d_rs2 == e_rd));
-    wire hz_m = m_valid && m_late && ((d_uses_rs1 && d_rs1 == m_rd) || (d_uses_rs2 && d_rs2 == m_rd));
-    wire d_hazard = hz_e || hz_m;
+    /* verilator lint_off UNUSEDSIGNAL */  // w: the fields each function reads
+    function hazard_of(input [31:0] w);
+        reg u1, u2;
+        begin
+            u1 = w[6:0] != 7'b0110111 && w[6:0] != 7'b0010111 && w[6:0] != 7'b1101111;
+            u2 = w[6:0] == 7'b1100011 || w[6:0] == 7'b0100011 || w[6:0] == 7'b0110011;
+            hazard_of = (e_valid && e_late && ((u1 && w[19:15] == e_rd) || (u2 && w[24:20] == e_rd))) ||
+                        (m_valid && m_late && ((u1 && w[19:15] == m_rd) || (u2 && w[24:20] == m_rd)));
+        end
+    endfunction
+    // Static prediction: jal always, a conditional branch when it jumps
+    // backwards (a loop); not a target that would trap as misaligned (E
+    // raises that; immediate bit 1 is insn[21] for jal, insn[8] for a
+    // branch).  E checks every prediction and corrects a wrong one.
+    function pred_of(input [31:0] w);
+        pred_of = (w[6:0] == 7'b1101111 && !w[21]) || (w[6:0] == 7'b1100011 && w[31] && !w[8]);
+    endfunction
+    /* verilator lint_on UNUSEDSIGNAL */
+    // Both for the queue's head and for the bus word, the choice last: the
+    // queue's select and the decode are then side by side, not in series
+    // (D's hazard and prediction steer the queue, E's inputs and the fetch)
+    wire d_hazard = q_n != 2'd0 ? hazard_of(q_insn0) : hazard_of(ibus_rdata);
+    wire d_pred   = q_n != 2'd0 ? pred_of(q_insn0) : pred_of(ibus_rdata);
 
     wire e_load;                                // E takes a new instruction (or a bubble) this edge
     wire d_go = d_valid && !d_hazard && e_load;    // D moves on (unless a redirect kills it)
@@ -136,41 +154,53 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire        rf_we;
     wire [4:0]  rf_waddr;
     reg  [31:0] rf_wdata;
-    wire [31:0] rf_rdata1, rf_rdata2;
+    wire [31:0] rf_word1, rf_word2;
+    /* verilator lint_off PINCONNECTEMPTY */
     tl_cpu_regfile u_regfile (
         .clk(clk), .we(rf_we), .waddr(rf_waddr), .wdata(rf_wdata),
         .re(e_load), .raddr1(d_rs1), .raddr2(d_rs2),
-        .rdata1(rf_rdata1), .rdata2(rf_rdata2)
+        .rdata1(), .rdata2(), .word1(rf_word1), .word2(rf_word2)
     );
+    /* verilator lint_on PINCONNECTEMPTY */
 
     // ==== E: execute ==============================================================================
     reg  [31:0] e_pc, e_insn, e_imm;
     reg  [4:0]  e_rs1;
     reg  [2:0]  e_funct3;
     reg         e_ferr, e_fencei;
-    reg         e_lui, e_auipc, e_jal, e_jalr, e_branch, e_is_load, e_is_store, e_use_imm, e_alt;
+    reg         e_lui, e_auipc, e_jal, e_jalr, e_branch, e_is_load, e_is_store, e_alt;
+    /* verilator lint_off UNUSEDSIGNAL */
+    reg         e_use_imm;       // the decode's flag, kept with the others: D chose the operand (ob_sel)
+    /* verilator lint_on UNUSEDSIGNAL */
     reg         e_md, e_csr, e_csr_writes, e_ecall, e_ebreak, e_mret, e_writes, e_illegal;
     reg         e_md_started, e_md_fin;
     reg         e_pred;          // D predicted it taken and fetched its target
 
     // Forwarding: M's and W's early results (ALU, jumps, lui/auipc,
     // multiply/divide).  The choice is made in D, beside the register file
-    // read, and registered (f1m.. below): the instruction in E moves to M
-    // and the one in M to W in the edge D moves to E, so D compares with
-    // them; E then starts from flip-flops.  (E stays longer only for a
+    // read, and registered (below): the instruction in E moves to M and the
+    // one in M to W in the edge D moves to E, so D compares with them; E
+    // then starts from flip-flops.  What D knows in that edge is chosen
+    // there into o*_pre: M's result (W's in E), the register file's write
+    // in that edge, x0, and for the ALU's second operand the immediate; E
+    // has one choice left in front of its adders and comparator (M's
+    // result, o*_pre or the bank's word).  (E stays longer only for a
     // multiply/divide, which takes its operands in its first cycle, or when
     // the whole pipeline waits, which keeps M and W as they are.)
     reg         m_early;
     reg  [31:0] m_result, w_result;
     reg  [4:0]  w_rd;
-    reg         f1m, f1w, f2m, f2w;
-    wire [31:0] rs1v = f1m ? m_result : (f1w ? w_result : rf_rdata1);
-    wire [31:0] rs2v = f2m ? m_result : (f2w ? w_result : rf_rdata2);
+    reg         f1m, f2m, fbm;              // M's result
+    reg         o1_sel, o2_sel, ob_sel;     // else o*_pre, else the bank's word
+    reg  [31:0] o1_pre, o2_pre, ob_pre;
+    wire [31:0] rs1v  = f1m ? m_result : (o1_sel ? o1_pre : rf_word1);
+    wire [31:0] rs2v  = f2m ? m_result : (o2_sel ? o2_pre : rf_word2);
+    wire [31:0] alu_b = fbm ? m_result : (ob_sel ? ob_pre : rf_word2);   // rs2 or the immediate
 
     wire [31:0] alu_result;
     wire        branch_taken;
     tl_cpu_alu u_alu (
-        .funct3(e_funct3), .alt(e_alt), .a(rs1v), .b(e_use_imm ? e_imm : rs2v),
+        .funct3(e_funct3), .alt(e_alt), .a(rs1v), .b(alu_b),
         .result(alu_result), .cmp_a(rs1v), .cmp_b(rs2v), .branch_taken(branch_taken)
     );
     wire [31:0] e_pc4    = e_pc + 32'd4;
@@ -340,6 +370,13 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     // ==== pipeline registers =====================================================================
     wire e_writes_nz = e_writes && e_rd != 5'd0;
     wire btb_we = pend_d && !e_ferr;       // (a word that faulted predicts nothing)
+    // D's operand choices (see Forwarding): M's result, the register file's write in this edge
+    wire        d_w1 = m_valid && m_early && m_rd == d_rs1;
+    wire        d_w2 = m_valid && m_early && m_rd == d_rs2;
+    wire        d_rf1 = rf_we && rf_waddr == d_rs1;
+    wire        d_rf2 = rf_we && rf_waddr == d_rs2;
+    wire [31:0] d_o2 = d_w2 ? m_result : (d_rs2 == 5'd0 ? 32'd0 : rf_wdata);
+    wire w_btb_same = btb_tag[w_addr[BTB_IB+1:2]] == w_addr[31:BTB_IB+2];   // W's store hits an entry's word
     // E's result can be forwarded from M (the trap check is left out: a
     // trapping instruction's readers never retire)
     wire e_early = e_writes_nz && !e_is_load && !e_csr;
@@ -369,7 +406,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             else if (pend)
                 f_pc <= f_new ? pend_pc + 32'd4 : pend_pc;
             else if (f_new)
-                f_pc <= f_bhit ? {btb_tgt[f_bi], 2'b00} : f_pc + 32'd4;
+                f_pc <= f_bhit ? {f_btgt, 2'b00} : f_pc + 32'd4;
             if (!f_hold)
                 f_out_btb <= !pend && f_bhit;
             // ---- BTB: D's prediction is written when its target is known (E's pc + imm) ----
@@ -377,7 +414,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
                 btb_v[e_pc[BTB_IB+1:2]] <= 1'b1;
             if (retire && w_fencei)
                 btb_v <= {BTB_N{1'b0}};
-            else if (retire && w_store && btb_tag[w_addr[BTB_IB+1:2]] == w_addr[31:BTB_IB+2])
+            else if (retire && w_store && w_btb_same)
                 btb_v[w_addr[BTB_IB+1:2]] <= 1'b0;
             if (refetch)
                 f_discard <= ibus_req;
@@ -425,8 +462,13 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
                 e_late <= (d_flags[5] || d_flags[10]) && d_flags[15] && d_rd != 5'd0;
                 f1m <= e_valid && e_early && e_rd == d_rs1;
                 f2m <= e_valid && e_early && e_rd == d_rs2;
-                f1w <= m_valid && m_early && m_rd == d_rs1;
-                f2w <= m_valid && m_early && m_rd == d_rs2;
+                fbm <= e_valid && e_early && e_rd == d_rs2 && !d_flags[7];
+                o1_sel <= d_w1 || d_rs1 == 5'd0 || d_rf1;
+                o2_sel <= d_w2 || d_rs2 == 5'd0 || d_rf2;
+                ob_sel <= d_flags[7] || d_w2 || d_rs2 == 5'd0 || d_rf2;
+                o1_pre <= d_w1 ? m_result : (d_rs1 == 5'd0 ? 32'd0 : rf_wdata);
+                o2_pre <= d_o2;
+                ob_pre <= d_flags[7] ? d_imm : d_o2;
             end
             // ---- E -> M ----
             if (!gs) begin

@@ -70,6 +70,7 @@ DIRECTED = {
     "muldiv_corners": (["muldiv_corners.S"], False),
     "bench": (["bench.c"], True),
     "cstress": (["cstress.c"], True),
+    "selfmod": (["selfmod.S"], False),
 }
 
 
