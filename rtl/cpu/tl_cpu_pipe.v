@@ -113,25 +113,13 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire [6:0] d_opcode   = d_insn[6:0];
     wire d_fencei   = d_opcode == 7'b0001111 && d_funct3 == 3'b001;
 
-    // Load-use hazard: a load's word (or a CSR's old value) reaches rd only
-    // in W, and is not forwarded from there (that would put a block RAM's
-    // output in front of the ALU); a reader waits in D until the load is in
-    // W, then reads the register file in the edge the load writes it
-    // (forwarded inside the register file).  Only the registers an
-    // instruction reads count (a needless hazard costs a cycle).
     reg        e_valid, m_valid, w_valid;
-    reg        e_late, m_late;                 // a load or CSR instruction that writes rd
+    reg        e_late, m_late, w_late;         // a load or CSR instruction that writes rd
     reg  [4:0] e_rd, m_rd;
-    /* verilator lint_off UNUSEDSIGNAL */  // w: the fields each function reads
-    function hazard_of(input [31:0] w);
-        reg u1, u2;
-        begin
-            u1 = w[6:0] != 7'b0110111 && w[6:0] != 7'b0010111 && w[6:0] != 7'b1101111;
-            u2 = w[6:0] == 7'b1100011 || w[6:0] == 7'b0100011 || w[6:0] == 7'b0110011;
-            hazard_of = (e_valid && e_late && ((u1 && w[19:15] == e_rd) || (u2 && w[24:20] == e_rd))) ||
-                        (m_valid && m_late && ((u1 && w[19:15] == m_rd) || (u2 && w[24:20] == m_rd)));
-        end
-    endfunction
+    // which source registers the instruction reads (a needless hazard costs a cycle)
+    wire d_uses_rs1 = d_opcode != 7'b0110111 && d_opcode != 7'b0010111 && d_opcode != 7'b1101111;
+    wire d_uses_rs2 = d_opcode == 7'b1100011 || d_opcode == 7'b0100011 || d_opcode == 7'b0110011;
+    /* verilator lint_off UNUSEDSIGNAL */  // w: the fields the function reads
     // Static prediction: jal always, a conditional branch when it jumps
     // backwards (a loop); not a target that would trap as misaligned (E
     // raises that; immediate bit 1 is insn[21] for jal, insn[8] for a
@@ -140,14 +128,15 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
         pred_of = (w[6:0] == 7'b1101111 && !w[21]) || (w[6:0] == 7'b1100011 && w[31] && !w[8]);
     endfunction
     /* verilator lint_on UNUSEDSIGNAL */
-    // Both for the queue's head and for the bus word, the choice last: the
+    // For the queue's head and for the bus word apart, the choice last: the
     // queue's select and the decode are then side by side, not in series
-    // (D's hazard and prediction steer the queue, E's inputs and the fetch)
-    wire d_hazard = q_n != 2'd0 ? hazard_of(q_insn0) : hazard_of(ibus_rdata);
+    // (the prediction steers the queue and the fetch)
     wire d_pred   = q_n != 2'd0 ? pred_of(q_insn0) : pred_of(ibus_rdata);
 
+    // D never waits: whatever the word is, it moves on when E takes it, so
+    // no decision of D's depends on the instruction word but the prediction
     wire e_load;                                // E takes a new instruction (or a bubble) this edge
-    wire d_go = d_valid && !d_hazard && e_load;    // D moves on (unless a redirect kills it)
+    wire d_go = d_valid && e_load;              // D moves on (unless a redirect kills it)
     assign redirect_d    = d_go && d_pred && !d_btb && !redirect;
 
     // ==== register file =====================================================================
@@ -165,13 +154,12 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
 
     // ==== E: execute ==============================================================================
     reg  [31:0] e_pc, e_insn, e_imm;
-    reg  [4:0]  e_rs1;
+    reg  [4:0]  e_rs1, e_rs2;
+    reg         e_use1, e_use2;  // it reads rs1, rs2
     reg  [2:0]  e_funct3;
     reg         e_ferr, e_fencei;
     reg         e_lui, e_auipc, e_jal, e_jalr, e_branch, e_is_load, e_is_store, e_alt;
-    /* verilator lint_off UNUSEDSIGNAL */
-    reg         e_use_imm;       // the decode's flag, kept with the others: D chose the operand (ob_sel)
-    /* verilator lint_on UNUSEDSIGNAL */
+    reg         e_use_imm;       // the ALU's second operand is the immediate (D chose it: ob_sel)
     reg         e_md, e_csr, e_csr_writes, e_ecall, e_ebreak, e_mret, e_writes, e_illegal;
     reg         e_md_started, e_md_fin;
     reg         e_pred;          // D predicted it taken and fetched its target
@@ -196,6 +184,16 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire [31:0] rs1v  = f1m ? m_result : (o1_sel ? o1_pre : rf_word1);
     wire [31:0] rs2v  = f2m ? m_result : (o2_sel ? o2_pre : rf_word2);
     wire [31:0] alu_b = fbm ? m_result : (ob_sel ? ob_pre : rf_word2);   // rs2 or the immediate
+
+    // Load-use hazard: a load's word (or a CSR's old value) reaches rd only
+    // in W, and is not forwarded from there into E (that would put a block
+    // RAM's output in front of the ALU).  Its reader waits in E (not in D,
+    // whose decisions would then wait for the word's register numbers) while
+    // the load is in M or W; in the edge W writes the register, the
+    // reader's operand register takes the word (o*_pre, below), so a load
+    // and its use cost 2 cycles more, with one instruction between 1.
+    wire e_hz = (e_use1 && ((m_valid && m_late && m_rd == e_rs1) || (w_valid && w_late && w_rd == e_rs1))) ||
+                (e_use2 && ((m_valid && m_late && m_rd == e_rs2) || (w_valid && w_late && w_rd == e_rs2)));
 
     wire [31:0] alu_result;
     wire        branch_taken;
@@ -262,7 +260,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     // the exceptions a multiply/divide can have (no address, no target): kept
     // apart from e_trap, so that the pipeline's enables do not wait for E's adders
     wire        md_trap  = e_ferr || irq_pending;
-    wire        md_start = e_valid && e_md && !e_md_started && !md_trap && !flush_w;
+    wire        md_start = e_valid && e_md && !e_md_started && !md_trap && !flush_w && !e_hz;
     /* verilator lint_off PINCONNECTEMPTY */
     tl_cpu_muldiv u_muldiv (
         .clk(clk), .rst(rst), .start(md_start), .abort(flush_w || (in_md && md_trap && !gs)),
@@ -273,13 +271,13 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     // (the unit's done pulse after a multiply that left in its last cycle
     // belongs to no instruction: only a started operation's counts)
     wire md_fin = in_md && (md_done || md_last);
-    wire e_done = !e_md || md_trap || md_fin || e_md_fin;
+    wire e_done = !e_hz && (!e_md || md_trap || md_fin || e_md_fin);
     wire e_adv  = e_valid && e_done && !gs && !flush_w;   // E moves to M
     assign e_load = !gs && (!e_valid || e_done);
     // a jump or taken branch D did not predict, or a predicted branch not
     // taken.  Also for an instruction that traps: W's trap redirects again
     // (and keeps the trap logic out of the fetch address).
-    assign redirect_e    = e_valid && !gs &&
+    assign redirect_e    = e_valid && !gs && !e_hz &&
                            (e_jalr || (e_jal && !e_pred) || (e_branch && e_taken != e_pred));
     // where to: known without the comparator (a branch redirects only
     // against its prediction: predicted taken, it falls through)
@@ -456,6 +454,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             end
             if (e_load) begin
                 e_pc <= d_pc; e_insn <= d_insn; e_imm <= d_imm; e_rs1 <= d_rs1; e_rd <= d_rd;
+                e_rs2 <= d_rs2; e_use1 <= d_uses_rs1; e_use2 <= d_uses_rs2;
                 e_funct3 <= d_funct3; e_ferr <= d_ferr; e_fencei <= d_fencei; e_pred <= d_pred;
                 {e_illegal, e_writes, e_mret, e_ebreak, e_ecall, e_csr_writes, e_csr, e_md, e_alt,
                  e_use_imm, e_is_store, e_is_load, e_branch, e_jalr, e_jal, e_auipc, e_lui} <= d_flags;
@@ -469,6 +468,27 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
                 o1_pre <= d_w1 ? m_result : (d_rs1 == 5'd0 ? 32'd0 : rf_wdata);
                 o2_pre <= d_o2;
                 ob_pre <= d_flags[7] ? d_imm : d_o2;
+            end else if (!gs) begin
+                // E holds (a hazard, a multiply/divide): M's result moves to
+                // W and W writes the register file, so the operands follow
+                f1m <= 1'b0;
+                f2m <= 1'b0;
+                fbm <= 1'b0;
+                if (m_valid && m_early && m_rd == e_rs1) begin
+                    o1_sel <= 1'b1; o1_pre <= m_result;
+                end else if (rf_we && rf_waddr == e_rs1) begin
+                    o1_sel <= 1'b1; o1_pre <= rf_wdata;
+                end
+                if (m_valid && m_early && m_rd == e_rs2) begin
+                    o2_sel <= 1'b1; o2_pre <= m_result;
+                end else if (rf_we && rf_waddr == e_rs2) begin
+                    o2_sel <= 1'b1; o2_pre <= rf_wdata;
+                end
+                if (!e_use_imm && m_valid && m_early && m_rd == e_rs2) begin
+                    ob_sel <= 1'b1; ob_pre <= m_result;
+                end else if (!e_use_imm && rf_we && rf_waddr == e_rs2) begin
+                    ob_sel <= 1'b1; ob_pre <= rf_wdata;
+                end
             end
             // ---- E -> M ----
             if (!gs) begin
@@ -487,7 +507,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             // ---- M -> W ----
             if (!gs) begin
                 w_valid <= m_valid && !flush_w;
-                w_pc <= m_pc; w_insn <= m_insn; w_rd <= m_rd; w_funct3 <= m_funct3;
+                w_pc <= m_pc; w_insn <= m_insn; w_rd <= m_rd; w_funct3 <= m_funct3; w_late <= m_late;
                 w_result <= m_result;
                 w_addr <= m_addr; w_be <= m_be; w_wdata <= m_wdata;
                 w_load <= m_load; w_store <= m_store; w_acc <= m_acc;
