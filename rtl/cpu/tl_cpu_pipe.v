@@ -7,18 +7,21 @@
 //
 //   F  fetch   : ibus request (address f_pc, or the held address of a request
 //                not yet answered); answers go straight to D, or into a
-//                two-entry queue when D is stalled.
+//                two-entry queue when E holds.  A branch target buffer
+//                sends the request after a jump it knows to the jump's
+//                target (no cycle lost).
 //   D  decode  : the answered word (bus or queue): decoded, register file
-//                read (block RAM, registered read) at the edge into E;
-//                a load-use hazard holds it here.  jal and backward
-//                branches are predicted taken: D redirects the fetch to
-//                their target (1 cycle lost).
-//   E  execute : operands forwarded from M and W, ALU, branch comparator,
-//                jump/branch targets (jalr, a taken forward branch or a
-//                mispredicted branch redirects the fetch: 2 cycles lost),
-//                effective address, multiply/divide (E waits for the unit),
-//                every exception but a data bus error, and interrupts,
-//                taken before the instruction in E executes.
+//                read (block RAM, registered read) and operand choices at
+//                the edge into E.  jal and backward branches the BTB did
+//                not know are predicted taken: the fetch requests their
+//                target in the next cycle (1 cycle lost).
+//   E  execute : operands forwarded from M and W, a load's reader waits
+//                here, ALU, branch comparator, jump/branch targets (jalr,
+//                a taken forward branch or a mispredicted branch redirects
+//                the fetch: 2 cycles lost), effective address,
+//                multiply/divide (E waits for the unit), every exception
+//                but a data bus error, and interrupts, taken before the
+//                instruction in E executes.
 //   M  memory  : the data bus request, from registers.
 //   W  write   : the data bus answer (a wait state stalls the pipeline),
 //                CSR instructions, mret and fence.i, trap entry; the one
