@@ -98,11 +98,13 @@ module tl_cpu #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire [31:0] rs1_val, rs2_val;
     // Read with the register numbers of the word entering the instruction
     // register, so rs1/rs2 are ready in EXEC (block RAM, registered read).
+    /* verilator lint_off PINCONNECTEMPTY */
     tl_cpu_regfile u_regfile (
         .clk(clk), .we(rf_we), .waddr(rd), .wdata(rf_wdata),
         .re(insn_load), .raddr1(next_rs1), .raddr2(next_rs2),
-        .rdata1(rs1_val), .rdata2(rs2_val)
+        .rdata1(rs1_val), .rdata2(rs2_val), .word1(), .word2()
     );
+    /* verilator lint_on PINCONNECTEMPTY */
 
     // ---- execute -------------------------------------------------------------
     wire [31:0] alu_result;
@@ -235,7 +237,7 @@ module tl_cpu #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     /* verilator lint_off PINCONNECTEMPTY */
     tl_cpu_muldiv u_muldiv (
         .clk(clk), .rst(rst), .start(exec_md && !rst), .abort(in_md && trap_early), .funct3(funct3),
-        .a(rs1_val), .b(rs2_val), .busy(), .done(md_done), .result(md_result)
+        .a(rs1_val), .b(rs2_val), .busy(), .done(md_done), .result(md_result), .mul_last(), .mul_word()
     );
     /* verilator lint_on PINCONNECTEMPTY */
     assign md_fin = md_done || md_done_q;

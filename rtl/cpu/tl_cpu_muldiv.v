@@ -30,7 +30,11 @@ module tl_cpu_muldiv (
     input  wire [31:0] b,          // rs2
     output wire        busy,
     output reg         done,       // one-cycle pulse, result valid
-    output reg  [31:0] result
+    output reg  [31:0] result,
+    // A multiply's result one cycle before `done`, from MUL2's adders (a
+    // core that can take it then saves a cycle; tl_cpu_pipe does)
+    output wire        mul_last,   // MUL2: mul_word is the result
+    output wire [31:0] mul_word
 );
     localparam [2:0] IDLE = 3'd0, MUL1 = 3'd1, MUL2 = 3'd2, DIV = 3'd3, FIN = 3'd4;
     reg [2:0]  state;
@@ -51,6 +55,7 @@ module tl_cpu_muldiv (
     wire [31:0] mid_hi  = {{13{p_mid[34]}}, p_mid[34:16]};
     wire [31:0] hi_c0   = p_hh + mid_hi;
     wire [31:0] hi_c1   = p_hh + mid_hi + 32'd1;
+    assign mul_word = op == 2'b00 ? {lo_hi16[15:0], p_ll[15:0]} : (lo_hi16[16] ? hi_c1 : hi_c0);
     reg [31:0] quo, rem, divisor;
     reg [5:0]  count;
     reg        neg_q, neg_r;
@@ -65,6 +70,7 @@ module tl_cpu_muldiv (
     wire [32:0] trial     = rem_shift - {1'b0, divisor};
 
     assign busy = state != IDLE;
+    assign mul_last = state == MUL2;
 
     always @(posedge clk) begin
         done <= 1'b0;
@@ -95,10 +101,7 @@ module tl_cpu_muldiv (
                     state <= MUL2;
                 end
                 MUL2: begin
-                    if (op == 2'b00)
-                        result <= {lo_hi16[15:0], p_ll[15:0]};
-                    else
-                        result <= lo_hi16[16] ? hi_c1 : hi_c0;
+                    result <= mul_word;
                     done  <= 1'b1;
                     state <= IDLE;
                 end

@@ -7,18 +7,21 @@
 //
 //   F  fetch   : ibus request (address f_pc, or the held address of a request
 //                not yet answered); answers go straight to D, or into a
-//                two-entry queue when D is stalled.
+//                two-entry queue when E holds.  A branch target buffer
+//                sends the request after a jump it knows to the jump's
+//                target (no cycle lost).
 //   D  decode  : the answered word (bus or queue): decoded, register file
-//                read (block RAM, registered read) at the edge into E;
-//                a load-use hazard holds it here.  jal and backward
-//                branches are predicted taken: D redirects the fetch to
-//                their target (1 cycle lost).
-//   E  execute : operands forwarded from M and W, ALU, branch comparator,
-//                jump/branch targets (jalr, a taken forward branch or a
-//                mispredicted branch redirects the fetch: 2 cycles lost),
-//                effective address, multiply/divide (E waits for the unit),
-//                every exception but a data bus error, and interrupts,
-//                taken before the instruction in E executes.
+//                read (block RAM, registered read) and operand choices at
+//                the edge into E.  jal and backward branches the BTB did
+//                not know are predicted taken: the fetch requests their
+//                target in the next cycle (1 cycle lost).
+//   E  execute : operands forwarded from M and W, a load's reader waits
+//                here, ALU, branch comparator, jump/branch targets (jalr,
+//                a taken forward branch or a mispredicted branch redirects
+//                the fetch: 2 cycles lost), effective address,
+//                multiply/divide (E waits for the unit), every exception
+//                but a data bus error, and interrupts, taken before the
+//                instruction in E executes.
 //   M  memory  : the data bus request, from registers.
 //   W  write   : the data bus answer (a wait state stalls the pipeline),
 //                CSR instructions, mret and fence.i, trap entry; the one
@@ -43,12 +46,19 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire        flush_w;         // W redirects: trap, mret, CSR, fence.i
     wire [31:0] redirect_w_pc;
     wire        redirect_e;      // E redirects: taken branch, jal, jalr
-    wire [31:0] redirect_e_pc;
     wire        redirect    = flush_w || redirect_e;   // kills D (and E, M for flush_w)
     wire        redirect_d;      // D predicts a jump taken: jal, or a branch backwards
-    wire [31:0] redirect_d_pc;
-    wire        refetch     = redirect || redirect_d;
-    wire [31:0] refetch_pc  = flush_w ? redirect_w_pc : (redirect_e ? redirect_e_pc : redirect_d_pc);
+    wire        refetch     = redirect || redirect_d;  // the queue and the answer awaited are stale
+    // W's redirect writes f_pc in its own cycle; D's and E's are requested
+    // in the next cycle from registers (pend_*), which keeps the instruction
+    // word (D) and the branch comparator (E) off the fetch address: the
+    // request comes a cycle after the decision, as it did when the decision
+    // wrote f_pc, so no cycle is lost.
+    reg         pend_d;          // D predicted a jump last cycle: its target is E's pc + imm now
+    reg         pend_e;          // E redirected last cycle: to pend_e_pc
+    reg  [31:0] pend_e_pc;
+    wire        pend = pend_d || pend_e;
+    wire [31:0] pend_pc;
 
     // ==== F: instruction fetch =================================================================
     reg         f_out;           // a request is outstanding (presented before, not answered yet)
@@ -58,6 +68,27 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     reg  [1:0]  q_n;             // instruction queue: entries 0 (head) and 1
     reg  [31:0] q_insn0, q_insn1, q_pc0, q_pc1;
     reg         q_err0, q_err1;
+    reg         f_out_btb, q_btb0, q_btb1;   // the word's successor was fetched from the BTB's target
+
+    // Branch target buffer: the jumps D predicted (jal, backward branches),
+    // BTB_N entries indexed by pc[BTB_IB+1:2], looked up on f_pc when a
+    // sequential request goes out, so the request after a predicted jump
+    // already goes to its target (no cycle lost; D would lose one).  The
+    // lookup starts from registers and ends in f_pc: nothing is added in
+    // front of the fetch address.  An entry is a function of the word at its
+    // pc: a store that retires to that word drops it, fence.i and reset drop
+    // all.  Direction is still checked in E (a loop's exit is a wrong guess).
+    // Intel template: none for block RAM - its tables have an asynchronous
+    // read, which goes to MLAB or registers (Quartus Prime Recommended HDL
+    // Coding Styles, "Use Synchronous Memory Blocks"), fine at 8 entries.
+    localparam integer BTB_IB = 3;
+    localparam integer BTB_N  = 1 << BTB_IB;
+    reg  [BTB_N-1:0]  btb_v;
+    reg  [31:BTB_IB+2] btb_tag [0:BTB_N-1];
+    reg  [31:2]       btb_tgt [0:BTB_N-1];
+    wire [BTB_IB-1:0] f_bi   = f_pc[BTB_IB+1:2];
+    wire              f_bhit = btb_v[f_bi] && btb_tag[f_bi] == f_pc[31:BTB_IB+2];
+    wire [31:2]       f_btgt = btb_tgt[f_bi];
 
     wire resp   = f_out && ibus_ack && !f_discard;     // an answer for the current path
     wire f_hold = f_out && !ibus_ack;
@@ -65,13 +96,14 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire f_room = q_n == 2'd0 || (q_n == 2'd1 && !resp);
     wire f_new  = !f_hold && f_room;
     assign ibus_req  = !rst && (f_hold || f_new);
-    assign ibus_addr = f_hold ? f_out_addr : f_pc;
+    assign ibus_addr = f_hold ? f_out_addr : (pend ? pend_pc : f_pc);
 
     // ==== D: decode ================================================================================
     wire        d_valid = q_n != 2'd0 || resp;
     wire [31:0] d_insn  = q_n != 2'd0 ? q_insn0 : ibus_rdata;
     wire [31:0] d_pc    = q_n != 2'd0 ? q_pc0 : f_out_addr;
     wire        d_ferr  = q_n != 2'd0 ? q_err0 : ibus_err;
+    wire        d_btb   = q_n != 2'd0 ? q_btb0 : f_out_btb;
 
     wire [4:0]  d_rd, d_rs1;
     wire [2:0]  d_funct3;
@@ -82,71 +114,94 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     );
     wire [4:0] d_rs2      = d_insn[24:20];
     wire [6:0] d_opcode   = d_insn[6:0];
+    wire d_fencei   = d_opcode == 7'b0001111 && d_funct3 == 3'b001;
+
+    reg        e_valid, m_valid, w_valid;
+    reg        e_late, m_late, w_late;         // a load or CSR instruction that writes rd
+    reg  [4:0] e_rd, m_rd;
     // which source registers the instruction reads (a needless hazard costs a cycle)
     wire d_uses_rs1 = d_opcode != 7'b0110111 && d_opcode != 7'b0010111 && d_opcode != 7'b1101111;
     wire d_uses_rs2 = d_opcode == 7'b1100011 || d_opcode == 7'b0100011 || d_opcode == 7'b0110011;
-    wire d_fencei   = d_opcode == 7'b0001111 && d_funct3 == 3'b001;
+    /* verilator lint_off UNUSEDSIGNAL */  // w: the fields the function reads
     // Static prediction: jal always, a conditional branch when it jumps
     // backwards (a loop); not a target that would trap as misaligned (E
-    // raises that).  E checks every prediction and corrects a wrong one.
-    wire d_pred = (d_opcode == 7'b1101111 || (d_opcode == 7'b1100011 && d_insn[31])) && !d_imm[1];
+    // raises that; immediate bit 1 is insn[21] for jal, insn[8] for a
+    // branch).  E checks every prediction and corrects a wrong one.
+    function pred_of(input [31:0] w);
+        pred_of = (w[6:0] == 7'b1101111 && !w[21]) || (w[6:0] == 7'b1100011 && w[31] && !w[8]);
+    endfunction
+    /* verilator lint_on UNUSEDSIGNAL */
+    // For the queue's head and for the bus word apart, the choice last: the
+    // queue's select and the decode are then side by side, not in series
+    // (the prediction steers the queue and the fetch)
+    wire d_pred   = q_n != 2'd0 ? pred_of(q_insn0) : pred_of(ibus_rdata);
 
-    // Load-use hazard: a load's word (or a CSR's old value) reaches rd only
-    // in W, and is not forwarded from there (that would put a block RAM's
-    // output in front of the ALU); a reader waits in D until the load is in
-    // W, then reads the register file in the edge the load writes it
-    // (forwarded inside the register file).
-    reg        e_valid, m_valid, w_valid;
-    reg        e_late, m_late;                 // a load or CSR instruction that writes rd
-    reg  [4:0] e_rd, m_rd;
-    wire hz_e = e_valid && e_late && ((d_uses_rs1 && d_rs1 == e_rd) || (d_uses_rs2 && d_rs2 == e_rd));
-    wire hz_m = m_valid && m_late && ((d_uses_rs1 && d_rs1 == m_rd) || (d_uses_rs2 && d_rs2 == m_rd));
-    wire d_hazard = hz_e || hz_m;
-
+    // D never waits: whatever the word is, it moves on when E takes it, so
+    // no decision of D's depends on the instruction word but the prediction
     wire e_load;                                // E takes a new instruction (or a bubble) this edge
-    wire d_go = d_valid && !d_hazard && e_load;    // D moves on (unless a redirect kills it)
-    assign redirect_d    = d_go && d_pred && !redirect;
-    assign redirect_d_pc = d_pc + d_imm;
+    wire d_go = d_valid && e_load;              // D moves on (unless a redirect kills it)
+    assign redirect_d    = d_go && d_pred && !d_btb && !redirect;
 
     // ==== register file =====================================================================
     wire        rf_we;
     wire [4:0]  rf_waddr;
     reg  [31:0] rf_wdata;
-    wire [31:0] rf_rdata1, rf_rdata2;
+    wire [31:0] rf_word1, rf_word2;
+    /* verilator lint_off PINCONNECTEMPTY */
     tl_cpu_regfile u_regfile (
         .clk(clk), .we(rf_we), .waddr(rf_waddr), .wdata(rf_wdata),
         .re(e_load), .raddr1(d_rs1), .raddr2(d_rs2),
-        .rdata1(rf_rdata1), .rdata2(rf_rdata2)
+        .rdata1(), .rdata2(), .word1(rf_word1), .word2(rf_word2)
     );
+    /* verilator lint_on PINCONNECTEMPTY */
 
     // ==== E: execute ==============================================================================
     reg  [31:0] e_pc, e_insn, e_imm;
-    reg  [4:0]  e_rs1;
+    reg  [4:0]  e_rs1, e_rs2;
+    reg         e_use1, e_use2;  // it reads rs1, rs2
     reg  [2:0]  e_funct3;
     reg         e_ferr, e_fencei;
-    reg         e_lui, e_auipc, e_jal, e_jalr, e_branch, e_is_load, e_is_store, e_use_imm, e_alt;
+    reg         e_lui, e_auipc, e_jal, e_jalr, e_branch, e_is_load, e_is_store, e_alt;
+    reg         e_use_imm;       // the ALU's second operand is the immediate (D chose it: ob_sel)
     reg         e_md, e_csr, e_csr_writes, e_ecall, e_ebreak, e_mret, e_writes, e_illegal;
     reg         e_md_started, e_md_fin;
     reg         e_pred;          // D predicted it taken and fetched its target
 
     // Forwarding: M's and W's early results (ALU, jumps, lui/auipc,
     // multiply/divide).  The choice is made in D, beside the register file
-    // read, and registered (f1m.. below): the instruction in E moves to M
-    // and the one in M to W in the edge D moves to E, so D compares with
-    // them; E then starts from flip-flops.  (E stays longer only for a
+    // read, and registered (below): the instruction in E moves to M and the
+    // one in M to W in the edge D moves to E, so D compares with them; E
+    // then starts from flip-flops.  What D knows in that edge is chosen
+    // there into o*_pre: M's result (W's in E), the register file's write
+    // in that edge, x0, and for the ALU's second operand the immediate; E
+    // has one choice left in front of its adders and comparator (M's
+    // result, o*_pre or the bank's word).  (E stays longer only for a
     // multiply/divide, which takes its operands in its first cycle, or when
     // the whole pipeline waits, which keeps M and W as they are.)
     reg         m_early;
     reg  [31:0] m_result, w_result;
     reg  [4:0]  w_rd;
-    reg         f1m, f1w, f2m, f2w;
-    wire [31:0] rs1v = f1m ? m_result : (f1w ? w_result : rf_rdata1);
-    wire [31:0] rs2v = f2m ? m_result : (f2w ? w_result : rf_rdata2);
+    reg         f1m, f2m, fbm;              // M's result
+    reg         o1_sel, o2_sel, ob_sel;     // else o*_pre, else the bank's word
+    reg  [31:0] o1_pre, o2_pre, ob_pre;
+    wire [31:0] rs1v  = f1m ? m_result : (o1_sel ? o1_pre : rf_word1);
+    wire [31:0] rs2v  = f2m ? m_result : (o2_sel ? o2_pre : rf_word2);
+    wire [31:0] alu_b = fbm ? m_result : (ob_sel ? ob_pre : rf_word2);   // rs2 or the immediate
+
+    // Load-use hazard: a load's word (or a CSR's old value) reaches rd only
+    // in W, and is not forwarded from there into E (that would put a block
+    // RAM's output in front of the ALU).  Its reader waits in E (not in D,
+    // whose decisions would then wait for the word's register numbers) while
+    // the load is in M or W; in the edge W writes the register, the
+    // reader's operand register takes the word (o*_pre, below), so a load
+    // and its use cost 2 cycles more, with one instruction between 1.
+    wire e_hz = (e_use1 && ((m_valid && m_late && m_rd == e_rs1) || (w_valid && w_late && w_rd == e_rs1))) ||
+                (e_use2 && ((m_valid && m_late && m_rd == e_rs2) || (w_valid && w_late && w_rd == e_rs2)));
 
     wire [31:0] alu_result;
     wire        branch_taken;
     tl_cpu_alu u_alu (
-        .funct3(e_funct3), .alt(e_alt), .a(rs1v), .b(e_use_imm ? e_imm : rs2v),
+        .funct3(e_funct3), .alt(e_alt), .a(rs1v), .b(alu_b),
         .result(alu_result), .cmp_a(rs1v), .cmp_b(rs2v), .branch_taken(branch_taken)
     );
     wire [31:0] e_pc4    = e_pc + 32'd4;
@@ -199,30 +254,39 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
         end
     end
 
-    // multiply / divide: started in E's first cycle, E waits for the result;
-    // an interrupt abandons it (re-executed after mret)
-    wire        md_done;
-    wire [31:0] md_result;
+    // multiply / divide: started in E's first cycle, E waits for the result
+    // (a multiply leaves E in the unit's last cycle, with the result from its
+    // adders); an interrupt abandons it (re-executed after mret)
+    wire        md_done, md_last;
+    wire [31:0] md_result, md_word;
     wire        in_md    = e_valid && e_md && e_md_started;   // a multiply/divide in progress
     // the exceptions a multiply/divide can have (no address, no target): kept
     // apart from e_trap, so that the pipeline's enables do not wait for E's adders
     wire        md_trap  = e_ferr || irq_pending;
-    wire        md_start = e_valid && e_md && !e_md_started && !md_trap && !flush_w;
+    wire        md_start = e_valid && e_md && !e_md_started && !md_trap && !flush_w && !e_hz;
     /* verilator lint_off PINCONNECTEMPTY */
     tl_cpu_muldiv u_muldiv (
         .clk(clk), .rst(rst), .start(md_start), .abort(flush_w || (in_md && md_trap && !gs)),
-        .funct3(e_funct3), .a(rs1v), .b(rs2v), .busy(), .done(md_done), .result(md_result)
+        .funct3(e_funct3), .a(rs1v), .b(rs2v), .busy(), .done(md_done), .result(md_result),
+        .mul_last(md_last), .mul_word(md_word)
     );
     /* verilator lint_on PINCONNECTEMPTY */
-    wire e_done = !e_md || md_trap || md_done || e_md_fin;
+    // (the unit's done pulse after a multiply that left in its last cycle
+    // belongs to no instruction: only a started operation's counts)
+    wire md_fin = in_md && (md_done || md_last);
+    wire e_done = !e_hz && (!e_md || md_trap || md_fin || e_md_fin);
     wire e_adv  = e_valid && e_done && !gs && !flush_w;   // E moves to M
     assign e_load = !gs && (!e_valid || e_done);
     // a jump or taken branch D did not predict, or a predicted branch not
     // taken.  Also for an instruction that traps: W's trap redirects again
     // (and keeps the trap logic out of the fetch address).
-    assign redirect_e    = e_valid && !gs &&
+    assign redirect_e    = e_valid && !gs && !e_hz &&
                            (e_jalr || (e_jal && !e_pred) || (e_branch && e_taken != e_pred));
-    assign redirect_e_pc = (e_branch && !e_taken) ? e_pc4 : e_jtarget;
+    // where to: known without the comparator (a branch redirects only
+    // against its prediction: predicted taken, it falls through)
+    wire [31:0] redirect_e_pc = (e_branch && e_pred) ? e_pc4 : e_jtarget;
+    // D's prediction moved its jump into E (nothing can hold E in that edge)
+    assign pend_pc = pend_e ? pend_e_pc : e_pc_imm;
 
     reg [31:0] e_result;
     always @(*) begin
@@ -231,7 +295,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
         else if (e_auipc)
             e_result = e_pc_imm;
         else if (e_md)
-            e_result = md_result;
+            e_result = md_last ? md_word : md_result;
         else if (e_jal || e_jalr || e_csr || e_mret || e_fencei)
             e_result = e_pc4;               // the link, or where W refetches from
         else
@@ -306,6 +370,14 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
 
     // ==== pipeline registers =====================================================================
     wire e_writes_nz = e_writes && e_rd != 5'd0;
+    wire btb_we = pend_d && !e_ferr;       // (a word that faulted predicts nothing)
+    // D's operand choices (see Forwarding): M's result, the register file's write in this edge
+    wire        d_w1 = m_valid && m_early && m_rd == d_rs1;
+    wire        d_w2 = m_valid && m_early && m_rd == d_rs2;
+    wire        d_rf1 = rf_we && rf_waddr == d_rs1;
+    wire        d_rf2 = rf_we && rf_waddr == d_rs2;
+    wire [31:0] d_o2 = d_w2 ? m_result : (d_rs2 == 5'd0 ? 32'd0 : rf_wdata);
+    wire w_btb_same = btb_tag[w_addr[BTB_IB+1:2]] == w_addr[31:BTB_IB+2];   // W's store hits an entry's word
     // E's result can be forwarded from M (the trap check is left out: a
     // trapping instruction's readers never retire)
     wire e_early = e_writes_nz && !e_is_load && !e_csr;
@@ -314,6 +386,9 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             f_out     <= 1'b0;
             f_discard <= 1'b0;
             f_pc      <= RESET_PC;
+            pend_d    <= 1'b0;
+            pend_e    <= 1'b0;
+            btb_v     <= {BTB_N{1'b0}};
             q_n       <= 2'd0;
             e_valid   <= 1'b0;
             m_valid   <= 1'b0;
@@ -324,27 +399,40 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             // ---- F ----
             f_out      <= ibus_req;
             f_out_addr <= ibus_addr;
-            if (refetch) begin
-                f_pc      <= refetch_pc;
+            pend_d    <= redirect_d;
+            pend_e    <= redirect_e && !flush_w;
+            pend_e_pc <= redirect_e_pc;
+            if (flush_w)
+                f_pc <= redirect_w_pc;
+            else if (pend)
+                f_pc <= f_new ? pend_pc + 32'd4 : pend_pc;
+            else if (f_new)
+                f_pc <= f_bhit ? {f_btgt, 2'b00} : f_pc + 32'd4;
+            if (!f_hold)
+                f_out_btb <= !pend && f_bhit;
+            // ---- BTB: D's prediction is written when its target is known (E's pc + imm) ----
+            if (btb_we)
+                btb_v[e_pc[BTB_IB+1:2]] <= 1'b1;
+            if (retire && w_fencei)
+                btb_v <= {BTB_N{1'b0}};
+            else if (retire && w_store && w_btb_same)
+                btb_v[w_addr[BTB_IB+1:2]] <= 1'b0;
+            if (refetch)
                 f_discard <= ibus_req;
-            end else begin
-                if (f_new)
-                    f_pc <= f_pc + 32'd4;
-                if (ibus_ack)
-                    f_discard <= 1'b0;
-            end
+            else if (ibus_ack)
+                f_discard <= 1'b0;
             // ---- instruction queue: D takes the head (or the answer itself when empty) ----
             // The words load whatever a redirect does (it only empties the queue).
             if (q_n == 2'd0 || (q_n == 2'd1 && d_go)) begin
                 if (resp) begin
-                    q_insn0 <= ibus_rdata; q_pc0 <= f_out_addr; q_err0 <= ibus_err;
+                    q_insn0 <= ibus_rdata; q_pc0 <= f_out_addr; q_err0 <= ibus_err; q_btb0 <= f_out_btb;
                 end
             end else if (q_n == 2'd1) begin
                 if (resp) begin
-                    q_insn1 <= ibus_rdata; q_pc1 <= f_out_addr; q_err1 <= ibus_err;
+                    q_insn1 <= ibus_rdata; q_pc1 <= f_out_addr; q_err1 <= ibus_err; q_btb1 <= f_out_btb;
                 end
             end else if (d_go) begin   // two entries: no request was outstanding
-                q_insn0 <= q_insn1; q_pc0 <= q_pc1; q_err0 <= q_err1;
+                q_insn0 <= q_insn1; q_pc0 <= q_pc1; q_err0 <= q_err1; q_btb0 <= q_btb1;
             end
             if (refetch)
                 q_n <= 2'd0;
@@ -364,19 +452,46 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             end else begin
                 if (md_start)
                     e_md_started <= 1'b1;
-                if (md_done)
+                if (in_md && md_done)
                     e_md_fin <= 1'b1;
             end
             if (e_load) begin
                 e_pc <= d_pc; e_insn <= d_insn; e_imm <= d_imm; e_rs1 <= d_rs1; e_rd <= d_rd;
+                e_rs2 <= d_rs2; e_use1 <= d_uses_rs1; e_use2 <= d_uses_rs2;
                 e_funct3 <= d_funct3; e_ferr <= d_ferr; e_fencei <= d_fencei; e_pred <= d_pred;
                 {e_illegal, e_writes, e_mret, e_ebreak, e_ecall, e_csr_writes, e_csr, e_md, e_alt,
                  e_use_imm, e_is_store, e_is_load, e_branch, e_jalr, e_jal, e_auipc, e_lui} <= d_flags;
                 e_late <= (d_flags[5] || d_flags[10]) && d_flags[15] && d_rd != 5'd0;
                 f1m <= e_valid && e_early && e_rd == d_rs1;
                 f2m <= e_valid && e_early && e_rd == d_rs2;
-                f1w <= m_valid && m_early && m_rd == d_rs1;
-                f2w <= m_valid && m_early && m_rd == d_rs2;
+                fbm <= e_valid && e_early && e_rd == d_rs2 && !d_flags[7];
+                o1_sel <= d_w1 || d_rs1 == 5'd0 || d_rf1;
+                o2_sel <= d_w2 || d_rs2 == 5'd0 || d_rf2;
+                ob_sel <= d_flags[7] || d_w2 || d_rs2 == 5'd0 || d_rf2;
+                o1_pre <= d_w1 ? m_result : (d_rs1 == 5'd0 ? 32'd0 : rf_wdata);
+                o2_pre <= d_o2;
+                ob_pre <= d_flags[7] ? d_imm : d_o2;
+            end else if (!gs) begin
+                // E holds (a hazard, a multiply/divide): M's result moves to
+                // W and W writes the register file, so the operands follow
+                f1m <= 1'b0;
+                f2m <= 1'b0;
+                fbm <= 1'b0;
+                if (m_valid && m_early && m_rd == e_rs1) begin
+                    o1_sel <= 1'b1; o1_pre <= m_result;
+                end else if (rf_we && rf_waddr == e_rs1) begin
+                    o1_sel <= 1'b1; o1_pre <= rf_wdata;
+                end
+                if (m_valid && m_early && m_rd == e_rs2) begin
+                    o2_sel <= 1'b1; o2_pre <= m_result;
+                end else if (rf_we && rf_waddr == e_rs2) begin
+                    o2_sel <= 1'b1; o2_pre <= rf_wdata;
+                end
+                if (!e_use_imm && m_valid && m_early && m_rd == e_rs2) begin
+                    ob_sel <= 1'b1; ob_pre <= m_result;
+                end else if (!e_use_imm && rf_we && rf_waddr == e_rs2) begin
+                    ob_sel <= 1'b1; ob_pre <= rf_wdata;
+                end
             end
             // ---- E -> M ----
             if (!gs) begin
@@ -395,7 +510,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             // ---- M -> W ----
             if (!gs) begin
                 w_valid <= m_valid && !flush_w;
-                w_pc <= m_pc; w_insn <= m_insn; w_rd <= m_rd; w_funct3 <= m_funct3;
+                w_pc <= m_pc; w_insn <= m_insn; w_rd <= m_rd; w_funct3 <= m_funct3; w_late <= m_late;
                 w_result <= m_result;
                 w_addr <= m_addr; w_be <= m_be; w_wdata <= m_wdata;
                 w_load <= m_load; w_store <= m_store; w_acc <= m_acc;
@@ -404,6 +519,13 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
                 w_csr <= m_csr; w_csr_writes <= m_csr_writes; w_mret <= m_mret; w_fencei <= m_fencei;
                 w_csr_src <= m_csr_src;
             end
+        end
+    end
+
+    always @(posedge clk) begin
+        if (btb_we) begin
+            btb_tag[e_pc[BTB_IB+1:2]] <= e_pc[31:BTB_IB+2];
+            btb_tgt[e_pc[BTB_IB+1:2]] <= e_pc_imm[31:2];
         end
     end
 endmodule

@@ -24,7 +24,11 @@ module tl_cpu_regfile (
     input  wire [4:0]  raddr1,
     input  wire [4:0]  raddr2,
     output wire [31:0] rdata1,
-    output wire [31:0] rdata2
+    output wire [31:0] rdata2,
+    // the banks' registered words alone (no x0, no write forwarding), for a
+    // core that makes those choices itself (tl_cpu_pipe)
+    output wire [31:0] word1,
+    output wire [31:0] word2
 );
 `ifdef FORMAL
     // Yosys sat cannot take memory cells: the proofs see plain registers.
@@ -73,5 +77,7 @@ module tl_cpu_regfile (
 
     assign rdata1 = zero1 ? 32'd0 : (use_fwd1 ? fwd : q1);
     assign rdata2 = zero2 ? 32'd0 : (use_fwd2 ? fwd : q2);
+    assign word1  = q1;
+    assign word2  = q2;
 endmodule
 `default_nettype wire
