@@ -8,6 +8,7 @@ squares, no scipy)."""
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import shutil
@@ -23,16 +24,27 @@ from torqueloop.spec.repo import REPO_ROOT
 
 @pytest.fixture(scope="module")
 def host_env(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A fresh venv with `pip install <repo>[host]` (non-editable: only what the package ships)."""
-    d = tmp_path_factory.mktemp("hostenv")
-    venv.EnvBuilder(with_pip=True, clear=True).create(d)
-    py = d / "bin" / "python"
-    src = d / "src"   # a copy, so the build leaves nothing in the checkout
-    shutil.copytree(REPO_ROOT, src, ignore=shutil.ignore_patterns(
-        ".git", ".venv", "build", "*.egg-info", "__pycache__", ".pytest_cache", "tb", "rtl", "docs"))
-    r = subprocess.run([str(py), "-m", "pip", "install", "--quiet", "--disable-pip-version-check",
-                        f"{src}[host]"], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr[-3000:]
+    """A fresh venv with `pip install <repo>[host]` (non-editable: only what the package ships).
+    Made once per test run: pytest-xdist workers share their run's temporary root, and the
+    first worker to need the venv builds it there while the other waits for it (a pip
+    install costs about 20 s; the module's tests are spread over both workers)."""
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent                  # the run's root, above each worker's own folder
+    d = root / "hostenv"
+    with open(root / "hostenv.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (d / "installed").exists():
+            shutil.rmtree(d, ignore_errors=True)
+            venv.EnvBuilder(with_pip=True, clear=True).create(d)
+            py = d / "bin" / "python"
+            src = d / "src"   # a copy, so the build leaves nothing in the checkout
+            shutil.copytree(REPO_ROOT, src, ignore=shutil.ignore_patterns(
+                ".git", ".venv", "build", "*.egg-info", "__pycache__", ".pytest_cache", "tb", "rtl", "docs"))
+            r = subprocess.run([str(py), "-m", "pip", "install", "--quiet", "--disable-pip-version-check",
+                                f"{src}[host]"], capture_output=True, text=True)
+            assert r.returncode == 0, r.stderr[-3000:]
+            (d / "installed").write_text("")
     return d
 
 
@@ -52,12 +64,11 @@ def test_the_host_install_has_no_simulation_stack(host_env: Path) -> None:
     assert r.returncode == 0 and "move" in r.stdout
 
 
-def test_the_host_only_client_drives_a_simulated_board(host_env: Path) -> None:
+def test_the_host_only_client_drives_a_simulated_board(host_env: Path, tmp_path: Path) -> None:
     from torqueloop.spec import auth
 
-    key = host_env / "link.key"       # one key file for the board and the client (docs/security.md)
-    if not key.exists():
-        auth.write_key_file(key, auth.new_key())
+    key = tmp_path / "link.key"       # one key file for the board and the client (docs/security.md)
+    auth.write_key_file(key, auth.new_key())
     with sim_board("-k", str(key), "sim", "--port", "0") as url:
         tl = str(host_env / "bin" / "torqueloop")
 

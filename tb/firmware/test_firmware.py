@@ -14,7 +14,7 @@ The stub ROM's key slot holds auth.TEST_KEY; the bench opens a session after
 boot and sends every command but the reads with its MAC, as the host tool
 does (docs/security.md).  ``authentication_at_the_pins`` checks who may
 drive the pins; ``no_key_board_refuses_motion`` runs on the same model with
-the ROM rewritten without a key.
+the key slot blanked in the model's ROM.
 
 Verilator only: the firmware needs a few hundred thousand clocks per test,
 which Icarus runs ~30x slower (minutes per test).
@@ -36,6 +36,7 @@ from cocotb.utils import get_sim_time
 from torqueloop.spec import auth
 from torqueloop.spec import protocol as P
 from torqueloop.oracles import servo as ref
+from torqueloop.flow import firmware
 from torqueloop.flow.tb_images import SERVO_TB_BAUD_DIV, SERVO_TB_PERIOD_US, TB_KEY, servo_tb_image
 
 import tbutil
@@ -661,38 +662,64 @@ async def authentication_at_the_pins(dut):
     await tb.assert_quiet(3 * PERIOD_US, "disabled without the key")
 
 
-@cocotb.test(skip="TB_NO_KEY" not in os.environ)
+@cocotb.test()
 async def no_key_board_refuses_motion(dut):
-    """The same image with a stub ROM whose key slot is blank: a board
-    without a key says NO_KEY to a session and to motion, even with a MAC,
-    and its pins stay quiet; reading and disabling work."""
-    tb = TB(dut)
-    await tb.start(session=False)
-    await tb.open_session(P.STATUS["NO_KEY"])
-    await tb.cmd("ENABLE", P.STATUS["NO_KEY"], tagged=False, mask=1, enable=1)
-    tb.sess = auth.Session(KEY, bytes(16), bytes(16))
-    await tb.cmd("ENABLE", P.STATUS["NO_KEY"], mask=1, enable=1)
-    await tb.cmd("MOVE", P.STATUS["NO_KEY"], axis=0, mode=U, target=500)
-    await tb.cmd("ENABLE", tagged=False, mask=3, enable=0)
-    await tb.assert_quiet(3 * PERIOD_US, "a board without a key")
-    assert not (await tb.status(0))["enabled"]
+    """The same image with the stub ROM's key slot blank (written into the
+    model's ROM before reset, put back after): a board without a key says
+    NO_KEY to a session and to motion, even with a MAC, and its pins stay
+    quiet; reading and disabling work."""
+    rom = dut.u_fabric.u_rom.mem
+    with_key, blank = firmware.rom_words(KEY), firmware.rom_words(None)
+    slot = [i for i, (a, b) in enumerate(zip(with_key, blank)) if a != b]
+    assert slot and [int(rom[i].value) for i in slot] == [with_key[i] for i in slot], "the ROM holds the test key"
+    for i in slot:
+        rom[i].value = blank[i]
+    try:
+        tb = TB(dut)
+        await tb.start(session=False)
+        await tb.open_session(P.STATUS["NO_KEY"])
+        await tb.cmd("ENABLE", P.STATUS["NO_KEY"], tagged=False, mask=1, enable=1)
+        tb.sess = auth.Session(KEY, bytes(16), bytes(16))
+        await tb.cmd("ENABLE", P.STATUS["NO_KEY"], mask=1, enable=1)
+        await tb.cmd("MOVE", P.STATUS["NO_KEY"], axis=0, mode=U, target=500)
+        await tb.cmd("ENABLE", tagged=False, mask=3, enable=0)
+        await tb.assert_quiet(3 * PERIOD_US, "a board without a key")
+        assert not (await tb.status(0))["enabled"]
+    finally:
+        for i in slot:
+            rom[i].value = with_key[i]
 
 
+#: The bench in parts that share one build and simulate at once (pytest-xdist
+#: puts them on both cores), of about equal length.  A test named in no part
+#: runs in the last; the measurements (skipped unless a benchmark asks) in none:
+#: a test named in cocotb's filter runs even when marked skip.
+PARTS: dict[str, list[str]] = {
+    "watchdog": ["lengthening_the_period_with_frames_queued_keeps_the_watchdog_fed"],
+    "runaway": ["runaway_with_a_frozen_and_a_reversed_encoder"],
+    "link": ["link_watchdog_stops_a_silent_link"],
+    "faults": ["estop_bridge_fault_following_soft_limit_and_encoder_faults", "each_law_drives_both_axes_as_the_reference"],
+    "frames": ["corrupted_random_and_replayed_frames_change_nothing", "telemetry_trapezoid_and_bootloader_jump"],
+}
+
+
+def _part(name: str) -> list[str]:
+    if name != "rest":
+        return PARTS[name]
+    kind = type(no_key_board_refuses_motion)      # what @cocotb.test() makes of a function
+    named = {t for ts in PARTS.values() for t in ts}
+    return [n for n, v in globals().items() if type(v) is kind and n not in named and not v.skip]
+
+
+@pytest.mark.parametrize("part", [*PARTS, "rest"])
 @pytest.mark.parametrize("sim", ["verilator"])
-def test_firmware(sim):
+def test_firmware(sim, part):
     from torqueloop.flow.simrun import run, sims_for
     if sim not in sims_for("soc"):
         pytest.skip(f"{sim} not selected")
     img = servo_tb_image()
-    params = {"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'}
-    run("soc", sim, "test_firmware", parameters=params)
-    # the same model, its stub ROM rewritten with a blank key slot
-    servo_tb_image(key=None)
-    try:
-        run("soc", sim, "test_firmware", parameters=params, testcase="no_key_board_refuses_motion",
-            extra_env={"TB_NO_KEY": "1"})
-    finally:
-        servo_tb_image()
+    run("soc", sim, "test_firmware", parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'},
+        testcase=_part(part))
 
 
 @cocotb.test(skip=os.environ.get("TL_FW_MEASURE") != "1")

@@ -121,12 +121,18 @@ async def power_loss_in_a_save_keeps_the_old_copy_or_the_whole_new_one(dut):
             await tb.cmd("SAVE", op=1)
 
 
+#: every cocotb test of this module (what @cocotb.test() makes of a function has one type)
+CASES = [n for n, v in list(globals().items()) if type(v) is type(save_comes_back_after_a_reset)]
+
+
+@pytest.mark.parametrize("case", CASES)
 @pytest.mark.parametrize("sim", ["verilator"])
-def test_firmware_store(sim):
+def test_firmware_store(sim, case):
+    """One cocotb test per pytest test: they share test_firmware's build and run at once."""
     from torqueloop.flow.simrun import run, sims_for
     from torqueloop.flow.tb_images import servo_tb_image
     if sim not in sims_for("soc"):
         pytest.skip(f"{sim} not selected")
     img = servo_tb_image(KEY)
     run("soc", sim, "test_firmware_store",
-        parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'})
+        parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"'}, testcase=case)

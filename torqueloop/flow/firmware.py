@@ -100,6 +100,14 @@ def boot_stub_words(entry: int, wdog_cycles: int | None = None) -> list[int]:
     return words + [_lui(t0, entry), (t0 << 15) | 0x67]
 
 
+def rom_words(key: bytes | None) -> list[int]:
+    """The boot ROM's words: the stub that jumps to RAM, and the key slot at its top."""
+    rom = boot_stub_words(regs.RAM_BASE)
+    slot = auth.key_slot(key)
+    rom += [0] * ((regs.BOOT_ROM_SIZE - len(slot)) // 4 - len(rom))
+    return rom + [int.from_bytes(slot[i:i + 4], "little") for i in range(0, len(slot), 4)]
+
+
 def build(name: str = "servo", defines: dict[str, str] | None = None, out: Path | None = None,
           ram_bytes: int = regs.RAM_SIZE, key: bytes | None = None) -> Image:
     """``key``: the link key the stub ROM's key slot holds (None: a board without a key)."""
@@ -129,11 +137,7 @@ def build(name: str = "servo", defines: dict[str, str] | None = None, out: Path 
     data += bytes(ram_bytes - len(data))
     words = [int.from_bytes(data[i:i + 4], "little") for i in range(0, len(data), 4)]
     tmp[ram_hex].write_text("".join(f"{w:08x}\n" for w in words))
-    rom = boot_stub_words(regs.RAM_BASE)
-    slot = auth.key_slot(key)
-    rom += [0] * ((regs.BOOT_ROM_SIZE - len(slot)) // 4 - len(rom))
-    rom += [int.from_bytes(slot[i:i + 4], "little") for i in range(0, len(slot), 4)]
-    tmp[rom_hex].write_text("".join(f"{w:08x}\n" for w in rom))
+    tmp[rom_hex].write_text("".join(f"{w:08x}\n" for w in rom_words(key)))
     for final, t in tmp.items():
         os.replace(t, final)
     return Image(elf, binf, ram_hex, rom_hex, sec.get(".text", 0) + sec.get(".rodata", 0),

@@ -86,6 +86,25 @@ def _tag(parameters: Mapping[str, object], extra: str) -> str:
     return hashlib.sha1(text.encode()).hexdigest()[:10]
 
 
+def _reads(path: Path) -> str:
+    try:
+        return path.read_text()
+    except OSError:
+        return ""
+
+
+def _inputs_digest(sim: str, top: str, build_kwargs: Mapping[str, object]) -> str:
+    """What a build depends on: the simulator, top and arguments, and the
+    contents of every source and of every file in the include folders."""
+    h = hashlib.sha1(repr((sim, top, sorted((k, str(v)) for k, v in build_kwargs.items()))).encode())
+    files = [Path(f) for f in build_kwargs.get("sources", [])]       # type: ignore[union-attr]
+    for d in build_kwargs.get("includes", []):                       # type: ignore[union-attr]
+        files += sorted(p for p in Path(d).iterdir() if p.is_file())
+    for f in files:
+        h.update(str(f).encode() + b"\0" + f.read_bytes())
+    return h.hexdigest()
+
+
 def run(
     core_name: str,
     sim: str,
@@ -142,18 +161,43 @@ def run(
         del build_kwargs["timescale"]
 
     build_dir.mkdir(parents=True, exist_ok=True)
-    # Two runs of the same build (e.g. make test in two shells on one tree)
-    # must not rebuild a folder the other is simulating from: lock it.
-    with open(build_dir.parent / f".{build_dir.name}.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
+    # A Verilator run simulates in a folder of its own (results, log, waves),
+    # named by what it runs, so runs of one build can go at once: the parts of
+    # a bench split for pytest-xdist, two benches on one model.  A build is
+    # made under an exclusive lock; a Verilator run whose build is up to date
+    # (its inputs' digest is the one the last build recorded) simulates under
+    # a shared lock, so no run rebuilds a model another is simulating (make
+    # test in two shells on one tree).  Icarus and GHDL runs hold the lock
+    # exclusively throughout and simulate in the build folder (GHDL finds its
+    # library there; their runners may write it on every call).  The same run
+    # twice at once waits on its folder's lock.
+    what = f"{test_module}|{testcase or ''}|{sorted((extra_env or {}).items())}"
+    run_dir = build_dir / "run" / f"{test_module}-{hashlib.sha1(what.encode()).hexdigest()[:8]}"
+    run_dir.mkdir(parents=True, exist_ok=True)
+    stamp = build_dir / ".inputs"
+    digest = _inputs_digest(sim, top, build_kwargs)
+    with open(build_dir.parent / f".{build_dir.name}.lock", "w") as lock, \
+            open(run_dir.parent / f".{run_dir.name}.lock", "w") as run_lock:
+        fcntl.flock(run_lock, fcntl.LOCK_EX)
+        vlt = sim == "verilator"
+        fcntl.flock(lock, fcntl.LOCK_SH if vlt else fcntl.LOCK_EX)     # SH: waits out a build under way
+        exclusive = not (vlt and _reads(stamp) == digest)
+        if exclusive:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if _reads(stamp) != digest:          # (another run may have built it while this one waited)
+                stamp.unlink(missing_ok=True)
+        # when up to date, Verilator skips the generation and make finds nothing to do
         runner.build(**build_kwargs)
+        if exclusive:
+            stamp.write_text(digest)
+            if vlt:
+                fcntl.flock(lock, fcntl.LOCK_SH)
         results = runner.test(
             test_module=test_module,
             hdl_toplevel=top,
             hdl_toplevel_lang=lang,
-            # Results, logs and waves stay in the build folder; the test module
-            # is found through PYTHONPATH (the runner passes pytest's sys.path on).
-            test_dir=build_dir,
+            # the test module is found through PYTHONPATH (the runner passes pytest's sys.path on)
+            test_dir=run_dir if sim == "verilator" else build_dir,
             build_dir=build_dir,
             testcase=testcase,
             extra_env=dict(extra_env or {}),
