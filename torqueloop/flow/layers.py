@@ -28,6 +28,7 @@ bench's measurement hands its folder to ``flow.simrun.run(bench=...)``).
 from __future__ import annotations
 
 import ast
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -87,9 +88,21 @@ def _module_name(path: Path, root: Path) -> str:
     return ".".join(parts)
 
 
-def _imports(tree: ast.AST, module: str, is_pkg: bool) -> list[tuple[int, str]]:
+#: the nodes the checks look at
+_CHECKED = (ast.Import, ast.ImportFrom, ast.Attribute, ast.Assign, ast.AugAssign)
+
+
+@functools.lru_cache(maxsize=None)
+def _nodes(text: str, filename: str) -> tuple[ast.AST, ...]:
+    """The checked nodes of one file's text, parsed and walked once per text
+    (the walk is most of a check's time, and the planted-mistake tests check
+    the same tree a dozen times)."""
+    return tuple(n for n in ast.walk(ast.parse(text, filename=filename)) if isinstance(n, _CHECKED))
+
+
+def _imports(nodes: tuple[ast.AST, ...], module: str, is_pkg: bool) -> list[tuple[int, str]]:
     out = []
-    for node in ast.walk(tree):
+    for node in nodes:
         if isinstance(node, ast.Import):
             out += [(node.lineno, a.name) for a in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -107,9 +120,9 @@ def _imports(tree: ast.AST, module: str, is_pkg: bool) -> list[tuple[int, str]]:
     return out
 
 
-def _path_tricks(tree: ast.AST) -> list[tuple[int, str]]:
+def _path_tricks(nodes: tuple[ast.AST, ...]) -> list[tuple[int, str]]:
     out = []
-    for node in ast.walk(tree):
+    for node in nodes:
         if isinstance(node, ast.Attribute) and node.attr in ("spec_from_file_location", "run_path"):
             out.append((node.lineno, f"loads a file by path ({node.attr})"))
         elif isinstance(node, ast.Attribute) and node.attr in ("insert", "append", "extend") \
@@ -132,9 +145,9 @@ def tb_modules(root: Path = REPO_ROOT) -> frozenset[str]:
     return frozenset({TB} | {p.stem for p in (root / TB).rglob("*.py") if p.stem != "conftest"})
 
 
-def _tb_imports(tree: ast.AST, tb: frozenset[str]) -> list[tuple[int, str]]:
+def _tb_imports(nodes: tuple[ast.AST, ...], tb: frozenset[str]) -> list[tuple[int, str]]:
     out = []
-    for node in ast.walk(tree):
+    for node in nodes:
         if isinstance(node, ast.Import):
             out += [(node.lineno, a.name) for a in node.names if a.name.split(".")[0] in tb]
         elif isinstance(node, ast.ImportFrom) and not node.level and node.module \
@@ -150,9 +163,9 @@ def leaf_violations(root: Path = REPO_ROOT, leaves: tuple[str, ...] = LEAVES) ->
     for leaf in leaves:
         for path in sorted((root / leaf).rglob("*.py")):
             rel = str(path.relative_to(root))
-            tree = ast.parse(path.read_text(), filename=rel)
-            found += [Violation(rel, line, what) for line, what in _path_tricks(tree)]
-            for line, target in _tb_imports(tree, tb):
+            nodes = _nodes(path.read_text(), rel)
+            found += [Violation(rel, line, what) for line, what in _path_tricks(nodes)]
+            for line, target in _tb_imports(nodes, tb):
                 if leaf == "tests" and target.split(".")[0] in TB_FOR_TESTS:
                     continue
                 found.append(Violation(rel, line, f"{leaf}/ imports {target} from tb/ (tb/ belongs to the test "
@@ -171,15 +184,15 @@ def violations(root: Path = REPO_ROOT, packages: tuple[str, ...] = PACKAGES,
             module = _module_name(path, root)
             mine = layer_of(module)
             rel = str(path.relative_to(root))
-            tree = ast.parse(path.read_text(), filename=rel)
-            for line, what in _path_tricks(tree):
+            nodes = _nodes(path.read_text(), rel)
+            for line, what in _path_tricks(nodes):
                 found.append(Violation(rel, line, what))
-            for line, target in _tb_imports(tree, tb):
+            for line, target in _tb_imports(nodes, tb):
                 found.append(Violation(rel, line, f"imports {target} from tb/ (the package needs no test bench)"))
             if mine is None:
                 continue   # torqueloop/__init__.py
             allowed = ALLOWED[mine] | {mine} | SHARED
-            for line, target in _imports(tree, module, path.name == "__init__.py"):
+            for line, target in _imports(nodes, module, path.name == "__init__.py"):
                 if not target.split(".")[0] in packages:
                     continue
                 theirs = layer_of(target)
