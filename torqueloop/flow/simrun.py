@@ -161,15 +161,16 @@ def run(
         del build_kwargs["timescale"]
 
     build_dir.mkdir(parents=True, exist_ok=True)
-    # Each run simulates in a folder of its own (results, log, waves), named by
-    # what it runs, so runs of one Verilator build can go at once: the parts
-    # of a bench split for pytest-xdist, two benches on one model.  A build is
+    # A Verilator run simulates in a folder of its own (results, log, waves),
+    # named by what it runs, so runs of one build can go at once: the parts of
+    # a bench split for pytest-xdist, two benches on one model.  A build is
     # made under an exclusive lock; a Verilator run whose build is up to date
     # (its inputs' digest is the one the last build recorded) simulates under
     # a shared lock, so no run rebuilds a model another is simulating (make
     # test in two shells on one tree).  Icarus and GHDL runs hold the lock
-    # exclusively throughout (their runners may write the build folder on
-    # every call).  The same run twice at once waits on its folder's lock.
+    # exclusively throughout and simulate in the build folder (GHDL finds its
+    # library there; their runners may write it on every call).  The same run
+    # twice at once waits on its folder's lock.
     what = f"{test_module}|{testcase or ''}|{sorted((extra_env or {}).items())}"
     run_dir = build_dir / "run" / f"{test_module}-{hashlib.sha1(what.encode()).hexdigest()[:8]}"
     run_dir.mkdir(parents=True, exist_ok=True)
@@ -196,7 +197,7 @@ def run(
             hdl_toplevel=top,
             hdl_toplevel_lang=lang,
             # the test module is found through PYTHONPATH (the runner passes pytest's sys.path on)
-            test_dir=run_dir,
+            test_dir=run_dir if sim == "verilator" else build_dir,
             build_dir=build_dir,
             testcase=testcase,
             extra_env=dict(extra_env or {}),
