@@ -203,10 +203,10 @@ def markdown(summary: Sequence[dict[str, Any]], t_end_s: float | None) -> list[s
          f"range over the {n} start positions and step sizes of the point - the spread of one deterministic plant "
          f"over its set-up, not a confidence interval. Errors are |steady-state error| in encoder counts, at the "
          f"encoder and at the screw (beyond the gearbox's backlash). Carriers marked * are audible (below 20 kHz).",
-         "", "| law | axis | carrier (Hz) | PW0 (counts) | error at the encoder | error at the screw | overshoot (%) | "
+         "", "| law | axis | carrier | PW0 (counts) | error at the encoder | error at the screw | overshoot (%) | "
          "copper loss (J) | current ripple (A rms) |", "|---|---|---|---|---|---|---|---|---|"]
     for r in summary:
-        L.append(f"| {r['law']} | {r['axis']} | {r['freq_hz']:.4g}{' *' if r['audible'] else ''} | "
+        L.append(f"| {r['law']} | {r['axis']} | {hz(r['freq_hz'])}{' *' if r['audible'] else ''} | "
                  f"{r['pw0_counts'] if r['pw0'] else 'off'} | {_cell(r['steady_state_error_counts'], '.1f')} | "
                  f"{_cell(r['screw_steady_state_error_counts'], '.1f')} | {_cell(r['overshoot_pct'], '.1f')} | "
                  f"{_cell(r['copper_loss_J'], '.2f')} | {_cell(r['current_ripple_A_rms'], '.3f')} |")
