@@ -35,6 +35,10 @@ CAPTIONS = {
 }
 
 
+#: below one encoder count apart two steady states are not told apart (the law's deadband is half a count)
+ONE_COUNT = 1.0
+
+
 def _axis_answer(summary: list[dict[str, Any]], law: str, axis: str, key: str) -> dict[str, Any] | None:
     rows = [r for r in summary if r["law"] == law and r["axis"] == axis and r["pw0"] and r.get(key)]
     if not rows:
@@ -46,7 +50,7 @@ def _axis_answer(summary: list[dict[str, Any]], law: str, axis: str, key: str) -
     off = [r for r in summary if r["law"] == law and r["axis"] == axis and not r["pw0"] and r.get(key)]
     return {"law": law, "axis": axis, "best_hz": best["freq_hz"], "best": best[key], "worst_hz": worst["freq_hz"],
             "worst": worst[key], "between_carriers": spread_between, "within_point_max": spread_within,
-            "carrier_decides": spread_between > spread_within,
+            "carrier_decides": spread_between > max(spread_within, ONE_COUNT),
             "pw0_off_median_range": None if not off else [min(r[key]["median"] for r in off),
                                                           max(r[key]["median"] for r in off)],
             "copper_best_J": None if not best.get("copper_loss_J") else best["copper_loss_J"]["median"],
@@ -131,11 +135,14 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]],
             if q["pw0_off_median_range"] is not None:
                 lo, hi = q["pw0_off_median_range"]
                 txt += f"; with PW0 off the medians span {lo:.1f}-{hi:.1f} counts"
-            txt += (". The carrier " + ("moves the error by more than the set-up does: on this plant it matters."
+            txt += (". The carrier " + ("moves the error by more than the start position, the step size and one "
+                                        f"encoder count do ({q['between_carriers']:.1f} against up to "
+                                        f"{q['within_point_max']:.1f} counts)."
                                         if q["carrier_decides"] else
-                                        "moves the error by less than the start position and step size do "
-                                        f"({q['between_carriers']:.1f} against up to {q['within_point_max']:.1f} "
-                                        "counts): the sweep cannot rank the carriers by accuracy."))
+                                        "moves the error by no more than the start position and step size or one "
+                                        f"encoder count do ({q['between_carriers']:.1f} against up to "
+                                        f"{q['within_point_max']:.1f} counts): the sweep cannot rank the carriers "
+                                        "by accuracy."))
             parts.append(txt)
     if t_check and t_check["rows"]:
         tc = [r for r in t_check["rows"] if r["pw0"]]
