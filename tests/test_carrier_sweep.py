@@ -164,7 +164,11 @@ def test_t_check_says_when_the_shorter_t_ranks_the_carriers_otherwise() -> None:
     assert [r["same_ranking"] for r in tc["rows"]] == [True, True]
     tc = t_check(long, flip, 40.0, 10.0)
     on = next(r for r in tc["rows"] if r["pw0"])
-    assert not on["same_ranking"] and on["best_hz_short"] == 24_400.0 and on["best_hz_long"] == 50.0
+    assert not on["same_ranking"] and on["best_hz_short"] == [24_400.0] and on["best_hz_long"] == [50.0]
+    assert on["best_moved"]
+    tie = t_check([_err(50.0, True, 0.0), _err(24_400.0, True, 0.0)],
+                  [_err(50.0, True, 175.5), _err(24_400.0, True, 157.1)], 40.0, 10.0)["rows"][0]
+    assert tie["same_ranking"] and not tie["best_moved"] and tie["best_hz_long"] == [50.0, 24_400.0]
     md = "\n".join(carrier_sweep.t_check_markdown(tc))
     assert "| PID | x | at the carrier | 20.0 -> 2.0 | 4.0 -> 5.0 | 24.4 kHz -> 50 Hz | no |" in md, md
 

@@ -43,8 +43,8 @@ def _axis_answer(summary: list[dict[str, Any]], law: str, axis: str, key: str) -
     rows = [r for r in summary if r["law"] == law and r["axis"] == axis and r["pw0"] and r.get(key)]
     if not rows:
         return None
-    best = min(rows, key=lambda r: r[key]["median"])
-    worst = max(rows, key=lambda r: r[key]["median"])
+    best = min(rows, key=lambda r: (r[key]["median"], r["freq_hz"]))      # on a tie: the lowest carrier,
+    worst = max(rows, key=lambda r: (r[key]["median"], r["freq_hz"]))     # against the highest
     spread_between = worst[key]["median"] - best[key]["median"]
     spread_within = max(r[key]["max"] - r[key]["min"] for r in rows)
     off = [r for r in summary if r["law"] == law and r["axis"] == axis and not r["pw0"] and r.get(key)]
@@ -114,8 +114,8 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]],
             numbers["sweep"].append(q)
             b, w = q["best"], q["worst"]
             txt = (f"Under {law}, axis {a}, with each carrier's own dead zone: |steady-state error| "
-                   f"{b['median']:.1f} counts [{b['min']:.1f}, {b['max']:.1f}] at {q['best_hz']:.4g} Hz against "
-                   f"{w['median']:.1f} [{w['min']:.1f}, {w['max']:.1f}] at {q['worst_hz']:.4g} Hz "
+                   f"{b['median']:.1f} counts [{b['min']:.1f}, {b['max']:.1f}] at {carrier_sweep.hz(q['best_hz'])} "
+                   f"against {w['median']:.1f} [{w['min']:.1f}, {w['max']:.1f}] at {carrier_sweep.hz(q['worst_hz'])} "
                    f"(median [range over start positions and step sizes])")
             sc = [r for r in summary if r["law"] == law and r["axis"] == a and r["pw0"]
                   and r.get("screw_steady_state_error_counts")]
@@ -147,9 +147,10 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]],
     if t_check and t_check["rows"]:
         tc = [r for r in t_check["rows"] if r["pw0"]]
         differ = [f"{r['law']} axis {r['axis']}" for r in tc if not r["same_ranking"]]
-        moved = [f"{r['law']} axis {r['axis']} ({carrier_sweep.hz(r['best_hz_short'])} at "
-                 f"{t_check['t_short_s']:g} s, {carrier_sweep.hz(r['best_hz_long'])} at {t_check['t_long_s']:g} s)"
-                 for r in tc if r["best_hz_short"] != r["best_hz_long"]]
+        names = lambda fs: " / ".join(carrier_sweep.hz(f) for f in fs)
+        moved = [f"{r['law']} axis {r['axis']} ({names(r['best_hz_short'])} at "
+                 f"{t_check['t_short_s']:g} s, {names(r['best_hz_long'])} at {t_check['t_long_s']:g} s)"
+                 for r in tc if r["best_moved"]]
         numbers["t_check"] = {"ranking_differs": differ, "best_moved": moved}
         parts.append(f"Scored as if each run had ended at T = {t_check['t_short_s']:g} s instead of "
                      f"{t_check['t_long_s']:g} s, with each carrier's own dead zone the carriers rank "
