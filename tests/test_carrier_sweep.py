@@ -164,7 +164,11 @@ def test_t_check_says_when_the_shorter_t_ranks_the_carriers_otherwise() -> None:
     assert [r["same_ranking"] for r in tc["rows"]] == [True, True]
     tc = t_check(long, flip, 40.0, 10.0)
     on = next(r for r in tc["rows"] if r["pw0"])
-    assert not on["same_ranking"] and on["best_hz_short"] == 24_400.0 and on["best_hz_long"] == 50.0
+    assert not on["same_ranking"] and on["best_hz_short"] == [24_400.0] and on["best_hz_long"] == [50.0]
+    assert on["best_moved"]
+    tie = t_check([_err(50.0, True, 0.0), _err(24_400.0, True, 0.0)],
+                  [_err(50.0, True, 175.5), _err(24_400.0, True, 157.1)], 40.0, 10.0)["rows"][0]
+    assert tie["same_ranking"] and not tie["best_moved"] and tie["best_hz_long"] == [50.0, 24_400.0]
     md = "\n".join(carrier_sweep.t_check_markdown(tc))
     assert "| PID | x | at the carrier | 20.0 -> 2.0 | 4.0 -> 5.0 | 24.4 kHz -> 50 Hz | no |" in md, md
 
@@ -188,3 +192,13 @@ def test_the_opening_gives_the_error_at_the_screw_and_at_the_inaudible_carrier()
                             summarise(rows))[0]
     assert "at the screw, beyond the gear's backlash that the motor-side encoder cannot see, 14.0 against 41.0" in text
     assert "at 24.4 kHz, above the audible band, 9.0" in text
+
+
+def test_carriers_less_than_one_count_apart_are_not_ranked_even_when_the_starts_agree() -> None:
+    rep = {"meta": {"experiment_plant": "lab", "sweep_T_s": 40.0}, "characterization": {}}
+    close = [_row(50.0, True, s, 2.0) for s in (0, 4200)] + [_row(24_400.0, True, s, 1.2) for s in (0, 4200)]
+    text, numbers = answer.paragraph(rep, summarise(close))
+    assert "cannot rank the carriers" in text and not numbers["sweep"][0]["carrier_decides"]
+    apart = [_row(50.0, True, s, 2.0) for s in (0, 4200)] + [_row(24_400.0, True, s, 0.5) for s in (0, 4200)]
+    text, numbers = answer.paragraph(rep, summarise(apart))
+    assert "(1.5 against up to 0.0 counts)." in text and numbers["sweep"][0]["carrier_decides"]

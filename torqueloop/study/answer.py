@@ -35,18 +35,22 @@ CAPTIONS = {
 }
 
 
+#: below one encoder count apart two steady states are not told apart (the law's deadband is half a count)
+ONE_COUNT = 1.0
+
+
 def _axis_answer(summary: list[dict[str, Any]], law: str, axis: str, key: str) -> dict[str, Any] | None:
     rows = [r for r in summary if r["law"] == law and r["axis"] == axis and r["pw0"] and r.get(key)]
     if not rows:
         return None
-    best = min(rows, key=lambda r: r[key]["median"])
-    worst = max(rows, key=lambda r: r[key]["median"])
+    best = min(rows, key=lambda r: (r[key]["median"], r["freq_hz"]))      # on a tie: the lowest carrier,
+    worst = max(rows, key=lambda r: (r[key]["median"], r["freq_hz"]))     # against the highest
     spread_between = worst[key]["median"] - best[key]["median"]
     spread_within = max(r[key]["max"] - r[key]["min"] for r in rows)
     off = [r for r in summary if r["law"] == law and r["axis"] == axis and not r["pw0"] and r.get(key)]
     return {"law": law, "axis": axis, "best_hz": best["freq_hz"], "best": best[key], "worst_hz": worst["freq_hz"],
             "worst": worst[key], "between_carriers": spread_between, "within_point_max": spread_within,
-            "carrier_decides": spread_between > spread_within,
+            "carrier_decides": spread_between > max(spread_within, ONE_COUNT),
             "pw0_off_median_range": None if not off else [min(r[key]["median"] for r in off),
                                                           max(r[key]["median"] for r in off)],
             "copper_best_J": None if not best.get("copper_loss_J") else best["copper_loss_J"]["median"],
@@ -110,8 +114,8 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]],
             numbers["sweep"].append(q)
             b, w = q["best"], q["worst"]
             txt = (f"Under {law}, axis {a}, with each carrier's own dead zone: |steady-state error| "
-                   f"{b['median']:.1f} counts [{b['min']:.1f}, {b['max']:.1f}] at {q['best_hz']:.4g} Hz against "
-                   f"{w['median']:.1f} [{w['min']:.1f}, {w['max']:.1f}] at {q['worst_hz']:.4g} Hz "
+                   f"{b['median']:.1f} counts [{b['min']:.1f}, {b['max']:.1f}] at {carrier_sweep.hz(q['best_hz'])} "
+                   f"against {w['median']:.1f} [{w['min']:.1f}, {w['max']:.1f}] at {carrier_sweep.hz(q['worst_hz'])} "
                    f"(median [range over start positions and step sizes])")
             sc = [r for r in summary if r["law"] == law and r["axis"] == a and r["pw0"]
                   and r.get("screw_steady_state_error_counts")]
@@ -131,18 +135,22 @@ def paragraph(rep: dict[str, Any], summary: list[dict[str, Any]],
             if q["pw0_off_median_range"] is not None:
                 lo, hi = q["pw0_off_median_range"]
                 txt += f"; with PW0 off the medians span {lo:.1f}-{hi:.1f} counts"
-            txt += (". The carrier " + ("moves the error by more than the set-up does: on this plant it matters."
+            txt += (". The carrier " + ("moves the error by more than the start position, the step size and one "
+                                        f"encoder count do ({q['between_carriers']:.1f} against up to "
+                                        f"{q['within_point_max']:.1f} counts)."
                                         if q["carrier_decides"] else
-                                        "moves the error by less than the start position and step size do "
-                                        f"({q['between_carriers']:.1f} against up to {q['within_point_max']:.1f} "
-                                        "counts): the sweep cannot rank the carriers by accuracy."))
+                                        "moves the error by no more than the start position and step size or one "
+                                        f"encoder count do ({q['between_carriers']:.1f} against up to "
+                                        f"{q['within_point_max']:.1f} counts): the sweep cannot rank the carriers "
+                                        "by accuracy."))
             parts.append(txt)
     if t_check and t_check["rows"]:
         tc = [r for r in t_check["rows"] if r["pw0"]]
         differ = [f"{r['law']} axis {r['axis']}" for r in tc if not r["same_ranking"]]
-        moved = [f"{r['law']} axis {r['axis']} ({carrier_sweep.hz(r['best_hz_short'])} at "
-                 f"{t_check['t_short_s']:g} s, {carrier_sweep.hz(r['best_hz_long'])} at {t_check['t_long_s']:g} s)"
-                 for r in tc if r["best_hz_short"] != r["best_hz_long"]]
+        names = lambda fs: " / ".join(carrier_sweep.hz(f) for f in fs)
+        moved = [f"{r['law']} axis {r['axis']} ({names(r['best_hz_short'])} at "
+                 f"{t_check['t_short_s']:g} s, {names(r['best_hz_long'])} at {t_check['t_long_s']:g} s)"
+                 for r in tc if r["best_moved"]]
         numbers["t_check"] = {"ranking_differs": differ, "best_moved": moved}
         parts.append(f"Scored as if each run had ended at T = {t_check['t_short_s']:g} s instead of "
                      f"{t_check['t_long_s']:g} s, with each carrier's own dead zone the carriers rank "

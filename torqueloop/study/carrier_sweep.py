@@ -113,11 +113,17 @@ def short_rows(sweep: Sequence[tuple], t_end_s: float, target_rad: float) -> lis
     return out
 
 
+#: two medians this close are a tie: one encoder count (the law's deadband is half a count)
+TIE_COUNTS = 1.0
+
+
 def t_check(long_rows: Sequence[dict[str, Any]], short_rows_: Sequence[dict[str, Any]], t_long: float,
             t_short: float) -> dict[str, Any]:
-    """Per (law, axis, PW0): the carrier with the lowest median |error at the
-    encoder| at each T, and the medians side by side; ``same_ranking``: the
-    carriers ordered by that median are in the same order at both T."""
+    """Per (law, axis, PW0): the carriers with the lowest median |error at the
+    encoder| at each T (every carrier within :data:`TIE_COUNTS` of the
+    lowest), and the medians side by side; ``same_ranking``: no two carriers
+    are ordered one way at one T and the other way at the other, beyond a
+    tie; ``best_moved``: the best carriers at the two T have none in common."""
     a, b = summarise(long_rows), summarise(short_rows_)
     rows = []
     for law in sorted({r["law"] for r in a}):
@@ -129,11 +135,14 @@ def t_check(long_rows: Sequence[dict[str, Any]], short_rows_: Sequence[dict[str,
                     continue
                 med = lambda rr: {r["freq_hz"]: r["steady_state_error_counts"]["median"] for r in rr}
                 ma, mb = med(la), med(lb)
-                rank = lambda m: sorted(m, key=lambda f: (m[f], f))
+                fs = sorted(set(ma) & set(mb))
+                best = lambda m: [f for f in fs if m[f] <= min(m[g] for g in fs) + TIE_COUNTS]
+                order = lambda m, f, g: 0 if abs(m[f] - m[g]) <= TIE_COUNTS else (1 if m[f] > m[g] else -1)
+                opposite = any(order(ma, f, g) * order(mb, f, g) < 0 for f in fs for g in fs)
                 rows.append({"law": law, "axis": axis, "pw0": pw0, "t_long_s": t_long, "t_short_s": t_short,
                              "median_error_long": ma, "median_error_short": mb,
-                             "best_hz_long": rank(ma)[0], "best_hz_short": rank(mb)[0],
-                             "same_ranking": rank(ma) == rank(mb)})
+                             "best_hz_long": best(ma), "best_hz_short": best(mb),
+                             "best_moved": not set(best(ma)) & set(best(mb)), "same_ranking": not opposite})
     return {"rows": rows, "t_long_s": t_long, "t_short_s": t_short,
             "how": f"each T = {t_long:g} s run's first {t_short:g} s, scored as a T = {t_short:g} s run"}
 
@@ -155,8 +164,9 @@ def t_check_markdown(tc: dict[str, Any]) -> list[str]:
     for r in tc["rows"]:
         cells = [f"{r['median_error_short'][f]:.1f} -> {r['median_error_long'][f]:.1f}"
                  if f in r["median_error_long"] and f in r["median_error_short"] else "-" for f in fs]
-        best = (hz(r["best_hz_long"]) if r["best_hz_long"] == r["best_hz_short"] else
-                f"{hz(r['best_hz_short'])} -> {hz(r['best_hz_long'])}")
+        names = lambda fs: " / ".join(hz(f) for f in fs)
+        best = (names(r["best_hz_long"]) if r["best_hz_long"] == r["best_hz_short"] else
+                f"{names(r['best_hz_short'])} -> {names(r['best_hz_long'])}")
         L.append(f"| {r['law']} | {r['axis']} | {'at the carrier' if r['pw0'] else 'off'} | " + " | ".join(cells)
                  + f" | {best} | {'yes' if r['same_ranking'] else 'no'} |")
     return L + [""]
@@ -203,10 +213,10 @@ def markdown(summary: Sequence[dict[str, Any]], t_end_s: float | None) -> list[s
          f"range over the {n} start positions and step sizes of the point - the spread of one deterministic plant "
          f"over its set-up, not a confidence interval. Errors are |steady-state error| in encoder counts, at the "
          f"encoder and at the screw (beyond the gearbox's backlash). Carriers marked * are audible (below 20 kHz).",
-         "", "| law | axis | carrier (Hz) | PW0 (counts) | error at the encoder | error at the screw | overshoot (%) | "
+         "", "| law | axis | carrier | PW0 (counts) | error at the encoder | error at the screw | overshoot (%) | "
          "copper loss (J) | current ripple (A rms) |", "|---|---|---|---|---|---|---|---|---|"]
     for r in summary:
-        L.append(f"| {r['law']} | {r['axis']} | {r['freq_hz']:.4g}{' *' if r['audible'] else ''} | "
+        L.append(f"| {r['law']} | {r['axis']} | {hz(r['freq_hz'])}{' *' if r['audible'] else ''} | "
                  f"{r['pw0_counts'] if r['pw0'] else 'off'} | {_cell(r['steady_state_error_counts'], '.1f')} | "
                  f"{_cell(r['screw_steady_state_error_counts'], '.1f')} | {_cell(r['overshoot_pct'], '.1f')} | "
                  f"{_cell(r['copper_loss_J'], '.2f')} | {_cell(r['current_ripple_A_rms'], '.3f')} |")
