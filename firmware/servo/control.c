@@ -59,12 +59,7 @@ uint32_t tl_div64_32(uint64_t n, uint32_t d)
 
 void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now)
 {
-    c->sp_q16 = (int64_t)pos * 65536;
-    c->target_q16 = c->sp_q16;
-    c->prof_v_q16 = 0;
-    c->prof_m = 0;
-    c->prof_a_q16 = 0;
-    c->moving = false;
+    tl_ctl_hold(c, pos);
     c->integ_q32 = 0;
     c->saturated = false;
     c->sat_sign = 0;
