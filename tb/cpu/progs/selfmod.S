@@ -7,6 +7,20 @@
 # fence.i (the core sees a store in every fetch issued after the store
 # retired: the nops keep the rewritten words out of the prefetch queue);
 # pass 3 has one.  The sum of each pass goes into the signature.
+# one pass: the kernel run twice from a zero sum, the sum stored at results + off
+    .macro run_pass off
+    li      x10, 0
+    jal     ra, kernel
+    jal     ra, kernel
+    sw      x10, \off(x31)
+    .endm
+# four nops: keep the rewritten words out of the prefetch queue
+    .macro nops4
+    nop
+    nop
+    nop
+    nop
+    .endm
     .section .text.init, "ax"
     .globl _start
 _start:
@@ -17,21 +31,12 @@ _start:
     lw      x23, 0(x21)
     li      x24, 0x00000013     # nop
     # pass 1: as assembled (5 loop turns, then the jal to k_a), twice
-    li      x10, 0
-    jal     ra, kernel
-    jal     ra, kernel
-    sw      x10, 0(x31)
+    run_pass 0
     # pass 2: the branch and the jal become nops (one turn, then k_b)
     sw      x24, 0(x20)
     sw      x24, 0(x21)
-    nop
-    nop
-    nop
-    nop
-    li      x10, 0
-    jal     ra, kernel
-    jal     ra, kernel
-    sw      x10, 4(x31)
+    nops4
+    run_pass 4
     # pass 3: the branch restored byte by byte, the jal by halves, then fence.i
     mv      x5, x22
     sb      x5, 0(x20)
@@ -45,22 +50,13 @@ _start:
     srli    x5, x23, 16
     sh      x5, 2(x21)
     .word   0x0000100f          # fence.i (Zifencei not in -march)
-    li      x10, 0
-    jal     ra, kernel
-    jal     ra, kernel
-    sw      x10, 8(x31)
+    run_pass 8
     # pass 4: the branch a nop again, by one halfword (its low half), no fence.i
     sh      x24, 0(x20)
     srli    x5, x24, 16
     sh      x5, 2(x20)
-    nop
-    nop
-    nop
-    nop
-    li      x10, 0
-    jal     ra, kernel
-    jal     ra, kernel
-    sw      x10, 12(x31)
+    nops4
+    run_pass 12
     li      x1, 1
     la      x2, tohost
     sw      x1, 0(x2)
