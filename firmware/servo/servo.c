@@ -27,6 +27,7 @@ TL_FOR_SIZE void tl_servo_init(tl_servo_t *s)
     s->baud_div_pending = 0;
     s->loop_cycles_max = 0;
     s->jitter_cycles_max = 0;
+    s->overruns = 0;
     for (uint32_t i = 0; i < TL_AXES; i++) {
         tl_axis_t *a = &s->ax[i];
         tl_enc_sample_t e;

@@ -77,6 +77,7 @@ typedef struct {
     uint32_t baud_div_pending;    /* set the UART divisor once the reply is out (0 = none) */
     uint32_t loop_cycles_max;     /* worst control iteration (set by main.c) */
     uint32_t jitter_cycles_max;   /* worst lateness of the interrupt (set by main.c) */
+    uint32_t overruns;            /* control periods whose next deadline had passed when the iteration ended (main.c) */
     uint32_t clk_hz;
     uint32_t period_cycles;       /* derived: PERIOD_US in clock cycles */
     uint32_t link_timeout_ticks;  /* derived: LINK_TIMEOUT_MS in control periods */
