@@ -108,6 +108,8 @@ TL_HOT_LAYOUT void tl_servo_tick(tl_servo_t *s)
     t.all = (t.safety & TL_HAL_SAFE_ESTOP_IN) ? TLP_FAULT_ESTOP : 0u;
     t.enabled = latch_enabled(t.safety);
     t.link = s->link_idle_ticks > s->link_timeout_ticks;
+    t.ticks = s->ticks;
+    t.odd = s->runaway_odd;
     _Static_assert(TL_AXES == 2, "the control iteration is written out for two axes");
     axis_tick(s, 0u, &t);
     axis_tick(s, 1u, &t);
