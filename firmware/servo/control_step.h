@@ -62,14 +62,21 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
     int32_t v = (c->prof_v_q16 ^ s) - s;             /* speed toward the target (|v| < 2^31), accelerated: */
     int32_t vs = v + (int32_t)a;
     uint32_t m = v >= 0 ? c->prof_m + 1u : (c->prof_m ? c->prof_m - 1u : 0u);
+    /* One product for both tests below: D(v + a) = D(v) + v + a and D(v - a) = D(v) - v
+     * (the sum's first or last term), with m(v) = prof_m for v >= 0. */
+    uint64_t dv = v >= 0 ? stop_distance((uint32_t)v, c->prof_m, a) : 0u;
+    uint64_t dvs = dv + (uint32_t)vs;
     if (vs > c->d.vmax_q16) {
         vs = c->d.vmax_q16;
         m = c->d.m_vmax;
+        dvs = stop_distance((uint32_t)vs, m, a);
+    } else if (TL_UNLIKELY(v < 0)) {
+        dvs = vs > 0 ? stop_distance((uint32_t)vs, m, a) : 0u;
     }
-    if (vs > 0 && stop_distance((uint32_t)vs, m, a) > ad) {
+    if (vs > 0 && dvs > ad) {
         uint32_t lo = v > (int32_t)a ? (uint32_t)v - a : 0u;   /* v_allow(d) >= lo when on the curve */
         uint32_t mlo = v > (int32_t)a ? c->prof_m - 1u : 0u;
-        if (lo > 0u && stop_distance(lo, mlo, a) > ad) {
+        if (lo > 0u && dv - (uint32_t)v > ad) {
             vs = (int32_t)lo;                        /* cannot stop in time: brake by a */
             m = mlo;
         } else {
