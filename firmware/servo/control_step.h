@@ -70,7 +70,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
     if (vs > c->d.vmax_q16) {
         vs = c->d.vmax_q16;
         m = c->d.m_vmax;
-        dvs = stop_distance((uint32_t)vs, m, a);
+        dvs = vs == v ? dv : stop_distance((uint32_t)vs, m, a);   /* cruising: D(vmax) is D(v) */
     } else if (TL_UNLIKELY(v < 0)) {
         dvs = vs > 0 ? stop_distance((uint32_t)vs, m, a) : 0u;
     }
