@@ -105,6 +105,7 @@ def test_move_is_followed_by_the_plant(url, capsys) -> None:
     assert res["settled"] and abs(res["error_counts"]) <= 40, res
     st, _ = run(url, capsys, "status", "--axis", "0")
     assert abs(st["0"]["position"] - 4200) <= 40
+    assert st["0"]["overruns"] == 0, st        # decoded from STATUS; no period missed
     run(url, capsys, "disable", "--all")
 
 

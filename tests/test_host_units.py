@@ -191,3 +191,13 @@ def test_the_terminal_plot_puts_each_series_where_it_belongs() -> None:
     assert chart[4][0] == "*" and chart[0][10] == "*"        # from the bottom-left to the top-right
     assert set(chart[0][:9]) == {"-"}                        # the set-point on the top row
     assert "* position 1000" in lines[1] and "- set-point 1000" in lines[1]
+
+
+def test_status_names_overruns() -> None:
+    """`torqueloop status` prints the board's timing: the overrun count is named
+    (with what to do) only when there is one."""
+    from torqueloop.cli import _timing_text
+    st = {"loop_cycles_max": 1077, "jitter_cycles_max": 139, "overruns": 0}
+    assert _timing_text(st).endswith("no control period overrun") and "1077 cycles" in _timing_text(st)
+    text = _timing_text({**st, "overruns": 7})
+    assert "7 control periods OVERRUN" in text and "PERIOD_US" in text

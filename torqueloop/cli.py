@@ -209,6 +209,15 @@ def _status_text(a: int, s: dict[str, int], mech: units.Mechanics, unit: str) ->
             f"faults: {describe_faults(s['faults'])}; link errors seen by the board: {s['rx_errors']}")
 
 
+def _timing_text(s: dict[str, int]) -> str:
+    """The board's control timing since power-up (the same in every axis's STATUS)."""
+    over = s["overruns"]
+    return (f"control timing since power-up: worst iteration {s['loop_cycles_max']} cycles, worst interrupt "
+            f"lateness {s['jitter_cycles_max']} cycles, "
+            + (f"{over} control periods OVERRUN (skipped: the iteration needs more than PERIOD_US; lengthen it)"
+               if over else "no control period overrun"))
+
+
 def _store_text(r: dict[str, int] | None) -> str:
     """What the board's parameter store says about the running parameters (SAVE op 0)."""
     if r is None:
@@ -238,6 +247,8 @@ def cmd_status(ctx: Ctx) -> int:
         s["saved_parameters"] = store
         res[a] = s
         lines.append(_status_text(a, s, ctx.mech(a), ctx.args.unit))
+    if res:
+        lines.append(_timing_text(s))
     lines.append(_store_text(report))
     ctx.out(res, "\n".join(lines))
     return 0

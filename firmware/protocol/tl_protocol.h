@@ -5,7 +5,7 @@
 
 #include <stdint.h>
 
-#define TLP_VERSION 0x3u
+#define TLP_VERSION 0x4u
 #define TLP_MAX_PAYLOAD 0x40u
 #define TLP_HEADER_BYTES 0x4u
 #define TLP_CRC_BYTES 0x2u
@@ -133,7 +133,7 @@ static inline uint8_t tlp_why_status(uint8_t why)
 #define TLP_CMD_STOP_REP_LEN 1u
 #define TLP_CMD_STATUS 0x07u
 #define TLP_CMD_STATUS_REQ_LEN 1u
-#define TLP_CMD_STATUS_REP_LEN 33u
+#define TLP_CMD_STATUS_REP_LEN 37u
 #define TLP_CMD_TELEMETRY 0x08u
 #define TLP_CMD_TELEMETRY_REQ_LEN 2u
 #define TLP_CMD_TELEMETRY_REP_LEN 1u
@@ -240,6 +240,7 @@ static inline uint8_t tlp_why_status(uint8_t why)
 #define TLP_STATUS_REP_RX_ERRORS 23u
 #define TLP_STATUS_REP_LOOP_CYCLES_MAX 25u
 #define TLP_STATUS_REP_JITTER_CYCLES_MAX 29u
+#define TLP_STATUS_REP_OVERRUNS 33u
 #define TLP_TELEMETRY_REQ_EVERY 0u
 #define TLP_TELEMETRY_REP_STATUS 0u
 #define TLP_CLEAR_FAULT_REQ_MASK 0u

@@ -159,6 +159,7 @@ TL_FOR_SIZE static uint8_t cmd_status(tl_servo_t *s, const uint8_t *q, uint8_t *
     tl_put_u16(&rep[TLP_STATUS_REP_RX_ERRORS], (uint16_t)(errs > 0xFFFFu ? 0xFFFFu : errs));
     tl_put_u32(&rep[TLP_STATUS_REP_LOOP_CYCLES_MAX], s->loop_cycles_max);
     tl_put_u32(&rep[TLP_STATUS_REP_JITTER_CYCLES_MAX], s->jitter_cycles_max);
+    tl_put_u32(&rep[TLP_STATUS_REP_OVERRUNS], s->overruns);
     return TLP_ST_OK;
 }
 

@@ -34,8 +34,9 @@ static inline uint32_t opaque(uint32_t x)
  * (v + a has m + 1, vmax has m_vmax, v_allow has n), so no sample divides by a.  When
  * braking, v_allow(d) = floor((d + a n (n + 1) / 2) / (n + 1)) with n = m(v_allow);
  * because D(v - a) = D(v) - v, the last speed v was on or inside the braking curve and
- * v_allow lies in [v - a, v + a): n is m(v + a) or one or two less, and the quotient is
- * v - a plus a remainder over n + 1 that fits 32 bits.  If a new target or a lower vmax
+ * v_allow lies in [v - a, v + a): n is m(v - a) or one or two more, found by walking D up
+ * from D(v - a) segment by segment, and the quotient is a remainder over n + 1 that fits
+ * 32 bits.  If a new target or a lower vmax
  * leaves the axis unable to stop in time (D(v - a) > d), it brakes by a and comes back. */
 static inline uint64_t stop_distance(uint32_t v, uint32_t m, uint32_t a)
 {
@@ -62,25 +63,43 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
     int32_t v = (c->prof_v_q16 ^ s) - s;             /* speed toward the target (|v| < 2^31), accelerated: */
     int32_t vs = v + (int32_t)a;
     uint32_t m = v >= 0 ? c->prof_m + 1u : (c->prof_m ? c->prof_m - 1u : 0u);
+    /* One product for both tests below: D(v + a) = D(v) + v + a and D(v - a) = D(v) - v
+     * (the sum's first or last term), with m(v) = prof_m for v >= 0. */
+    uint64_t dv = v >= 0 ? stop_distance((uint32_t)v, c->prof_m, a) : 0u;
+    uint64_t dvs = dv + (uint32_t)vs;
     if (vs > c->d.vmax_q16) {
         vs = c->d.vmax_q16;
         m = c->d.m_vmax;
+        dvs = vs == v ? dv : stop_distance((uint32_t)vs, m, a);   /* cruising: D(vmax) is D(v) */
+    } else if (TL_UNLIKELY(v < 0)) {
+        dvs = vs > 0 ? stop_distance((uint32_t)vs, m, a) : 0u;
     }
-    if (vs > 0 && stop_distance((uint32_t)vs, m, a) > ad) {
+    if (vs > 0 && dvs > ad) {
         uint32_t lo = v > (int32_t)a ? (uint32_t)v - a : 0u;   /* v_allow(d) >= lo when on the curve */
         uint32_t mlo = v > (int32_t)a ? c->prof_m - 1u : 0u;
-        if (lo > 0u && stop_distance(lo, mlo, a) > ad) {
+        if (lo > 0u && dv - (uint32_t)v > ad) {
             vs = (int32_t)lo;                        /* cannot stop in time: brake by a */
             m = mlo;
         } else {
-            uint32_t n = m;
-            uint64_t tn = ((uint64_t)(a * n) * (n + 1u)) >> 1;
-            while (n > 0u && tn > ad) {
-                n--;
-                tn -= a * (n + 1u);   /* a (n + 1) <= v + a < 2^31: a 32-bit product */
+            /* v_allow in [lo, vs): D grows by m + 1 per q16 count of speed inside a segment
+             * [a m, a (m + 1)) of constant m, from D(lo) in lo's segment mlo, and vs <= a (mlo + 3):
+             * at most three segments, then one quotient.  r = d - D(lo) < D(vs) - D(lo) <= 2v + a
+             * < 2^32 (speeds <= 2^30, a < 2^29): 32-bit, so the low words give it exactly. */
+            uint32_t r = (uint32_t)ad - (lo ? (uint32_t)dv - (uint32_t)v : 0u);
+            uint32_t n = mlo, b = a * (n + 1u), base = lo;   /* b: the segment's end (< 2^31) */
+            uint32_t span = (n + 1u) * (b - lo);             /* D over the rest of lo's segment */
+            if (r >= span) {
+                r -= span;
+                n++;
+                base = b;
+                span = (n + 1u) * a;                         /* a (mlo + 2) < 2^32 */
+                if (r >= span) {
+                    r -= span;
+                    n++;
+                    base += a;
+                }
             }
-            uint64_t x = ad + tn - (uint64_t)(n + 1u) * lo;   /* >= 0: v_allow >= lo */
-            vs = (int32_t)(lo + ((x >> 32) ? tl_div64_32(x, n + 1u) : div_small((uint32_t)x, n + 1u)));
+            vs = (int32_t)(base + div_small(r, n + 1u));
             m = n;
         }
     }

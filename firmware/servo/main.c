@@ -4,8 +4,9 @@
  * loop moves bytes between the UART and the link layer and sends telemetry.
  *
  * Measured here and reported over the link (STATUS): the worst cycles of one
- * control iteration (mcycle around tl_servo_tick) and the worst lateness of
- * the interrupt against its mtimecmp deadline (the jitter of the period).
+ * control iteration (mcycle around tl_servo_tick), the worst lateness of
+ * the interrupt against its mtimecmp deadline (the jitter of the period) and
+ * the periods overrun (the next deadline already past when an iteration ended).
  * The SoC's hardware watchdog was armed by the boot ROM before this image
  * started (its timeout cannot be changed from here); every control
  * iteration feeds it with the kick sequence.  If the interrupt stops, the
@@ -28,7 +29,6 @@ static volatile uint32_t tx_head, tx_tail;
 static uint8_t rx_ring[RX_RING];
 static volatile uint32_t rx_head, rx_tail;
 static volatile uint32_t rx_lost;
-static volatile uint32_t overruns;
 
 static uint32_t mcycle(void)
 {
@@ -79,7 +79,8 @@ __attribute__((interrupt("machine"))) static void trap_handler(void)
             /* Overrun: the iteration (plus the link interrupts) took more than a period.
              * Re-anchor instead of firing back-to-back to catch up, which would starve
              * the main loop and the link for good. */
-            overruns++;
+            if (servo.overruns != 0xFFFFFFFFu)
+                servo.overruns++;
             next = mtime() + period;
         }
         deadline = next;

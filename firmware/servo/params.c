@@ -54,13 +54,14 @@ TL_FOR_SIZE static void axis_cfg(const int32_t *p, uint32_t period_us, uint32_t 
     out->ctl.dither_half = p[PI(TLP_P_DITHER_HALF)];
     out->ctl.kaff_q16 = p[PI(TLP_P_KAFF_Q16)];
     tl_ctl_derived(&out->d, &out->ctl, period_us, clk_hz);
-    out->stall_limit_ticks = ((uint32_t)p[PI(TLP_P_STALL_MS)] * 1000u + period_us - 1u) / period_us;
+    uint32_t check_us = period_us * tl_runaway_every(period_us);   /* from one runaway check to the next */
+    out->stall_limit_ticks = ((uint32_t)p[PI(TLP_P_STALL_MS)] * 1000u + check_us - 1u) / check_us;
     /* counts/s * us * 2^16 / 1e6 = x * 1024 / 15625, as control.c's vmax; HOME_VEL >= 1, so
      * unsigned (the image then needs no signed 64-bit division from libgcc) */
     out->home_step_q16 = (int64_t)((uint64_t)(uint32_t)p[PI(TLP_P_HOME_VEL)] * period_us * 1024u / 15625u);
     if (out->home_step_q16 < (1 << HOME_SLOW_SHIFT))
         out->home_step_q16 = 1 << HOME_SLOW_SHIFT;
-    enc_check_derive(&out->enc, p[PI(TLP_P_ENC_CPS)], p[PI(TLP_P_ENC_TAU_MS)], period_us);
+    enc_check_derive(&out->enc, p[PI(TLP_P_ENC_CPS)], p[PI(TLP_P_ENC_TAU_MS)], check_us);
 }
 
 /* Hand a configuration to the control iteration: copies, for a critical section. */
@@ -94,6 +95,7 @@ TL_FOR_SIZE void tl_params_sync(tl_servo_t *s)
         commit_axis(s, i, &cfg);
     }
     global_cfg(s->g, s->clk_hz, &s->period_cycles, &s->link_timeout_ticks);
+    s->runaway_odd = tl_runaway_every((uint32_t)gv(s, TLP_P_PERIOD_US)) - 1u;
 }
 
 /* The parameter's index, if id names one and axis addresses it (a global one with TLP_GLOBAL_AXIS). */
@@ -217,6 +219,7 @@ static void set_global(tl_servo_t *s, uint8_t id, int k, int32_t v)
         commit_axis(s, i, &cfg[i]);
     s->period_cycles = period_cycles;
     s->link_timeout_ticks = timeout_ticks;
+    s->runaway_odd = tl_runaway_every((uint32_t)g[PI(TLP_P_PERIOD_US)]) - 1u;
     hal_irq_on();
 }
 

@@ -85,6 +85,8 @@ typedef struct {
     uint16_t all;        /* faults of every axis: the e-stop input */
     uint16_t enabled;    /* faults of an enabled axis: the latched e-stop and watchdog bits */
     bool link;           /* the link watchdog expired (enabled axes) */
+    uint32_t ticks;      /* this period's number ... */
+    uint32_t odd;        /* ... and tl_servo_t.runaway_odd: axis i's runaway checks skip periods with (ticks + i) & odd */
 } tick_faults_t;
 
 /* Every check of one axis for this period; returns the faults that tripped.
@@ -132,6 +134,20 @@ static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, 
         a->recover &= o;
         if (o & (uint8_t)~a->recover)
             f |= TLP_FAULT_SOFT_LIMIT;
+    }
+    if (t->odd & (t->ticks + i)) {
+        /* The runaway checks' off period (below TL_RUNAWAY_EVERY_OTHER_BELOW_US they run every
+         * other period, the axes in turn).  A command against the direction a check follows
+         * (of the other sign, or 0 after a negative one) restarts that check at its next run,
+         * as the reversal would have here; one that only dipped below the check's threshold
+         * in this period does not (docs/safety.md, "Runaway at 20 kHz"). */
+        int32_t c = a->cmd;
+        int8_t sd = a->stall_dir, ed = a->enc_dir;
+        if (TL_UNLIKELY(sd != 0 && (c ^ sd) < 0))
+            a->stall_dir = 0;
+        if (TL_UNLIKELY(ed != 0 && (c ^ ed) < 0))
+            a->enc_dir = 0;
+        return f;
     }
     return f | stall_check(a) | enc_check(a, pv(a, TLP_P_ENC_CMD0), pv(a, TLP_P_ENC_SLACK));
 }

@@ -27,6 +27,7 @@ TL_FOR_SIZE void tl_servo_init(tl_servo_t *s)
     s->baud_div_pending = 0;
     s->loop_cycles_max = 0;
     s->jitter_cycles_max = 0;
+    s->overruns = 0;
     for (uint32_t i = 0; i < TL_AXES; i++) {
         tl_axis_t *a = &s->ax[i];
         tl_enc_sample_t e;
@@ -107,6 +108,8 @@ TL_HOT_LAYOUT void tl_servo_tick(tl_servo_t *s)
     t.all = (t.safety & TL_HAL_SAFE_ESTOP_IN) ? TLP_FAULT_ESTOP : 0u;
     t.enabled = latch_enabled(t.safety);
     t.link = s->link_idle_ticks > s->link_timeout_ticks;
+    t.ticks = s->ticks;
+    t.odd = s->runaway_odd;
     _Static_assert(TL_AXES == 2, "the control iteration is written out for two axes");
     axis_tick(s, 0u, &t);
     axis_tick(s, 1u, &t);

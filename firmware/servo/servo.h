@@ -20,8 +20,8 @@
 /* Encoder plausibility constants (enc_check.h), derived from the parameters. */
 typedef struct {
     int32_t k_q8;                 /* half the model's speed per command step above ENC_CMD0, counts/s q8 */
-    int32_t alpha_q16;            /* period / ENC_TAU_MS, q16, at most 1 */
-    int32_t dt_q16;               /* the period, s q16 */
+    int32_t alpha_q16;            /* that time / ENC_TAU_MS, q16, at most 1 */
+    int32_t dt_q16;               /* the time between two checks (tl_runaway_every periods), s q16 */
 } tl_enc_cfg_t;
 
 typedef struct {
@@ -44,8 +44,8 @@ typedef struct {
     int8_t stall_dir;             /* runaway check: sign of a command >= STALL_CMD, 0 none */
     int32_t stall_ref;            /* position the axis must pass in stall_dir */
     int32_t stall_vel_q8;         /* velocity (counts/s q8) it must exceed in stall_dir */
-    uint32_t stall_ticks;         /* periods without passing it */
-    uint32_t stall_limit_ticks;   /* derived: STALL_MS in periods */
+    uint32_t stall_ticks;         /* runaway checks without passing it */
+    uint32_t stall_limit_ticks;   /* derived: STALL_MS in runaway checks (one every tl_runaway_every periods) */
     int64_t home_step_q16;        /* derived: HOME_VEL per period, counts q16 */
     int8_t enc_dir;               /* encoder plausibility: sign of a command above ENC_CMD0, 0 none */
     int32_t enc_ref;              /* position at the last period */
@@ -77,9 +77,11 @@ typedef struct {
     uint32_t baud_div_pending;    /* set the UART divisor once the reply is out (0 = none) */
     uint32_t loop_cycles_max;     /* worst control iteration (set by main.c) */
     uint32_t jitter_cycles_max;   /* worst lateness of the interrupt (set by main.c) */
+    uint32_t overruns;            /* control periods whose next deadline had passed when the iteration ended (main.c) */
     uint32_t clk_hz;
     uint32_t period_cycles;       /* derived: PERIOD_US in clock cycles */
     uint32_t link_timeout_ticks;  /* derived: LINK_TIMEOUT_MS in control periods */
+    uint32_t runaway_odd;         /* derived: tl_runaway_every(PERIOD_US) - 1 (1: an axis's runaway checks skip every other period) */
 } tl_servo_t;
 
 /* Transmit hook: a complete wire frame (delimiter included).  Returns false if dropped. */

@@ -67,6 +67,15 @@ uint8_t tl_axes_clear(tl_servo_t *s, uint8_t mask, uint8_t *why);
 
 /* The final approach runs at HOME_VEL >> HOME_SLOW_SHIFT (homing.c). */
 #define HOME_SLOW_SHIFT 4
+
+/* Periods shorter than this run each axis's runaway checks (stall_check and
+ * enc_check, safety.h) every other period, the two axes in turn, with their
+ * constants derived for two periods: what keeps the control iteration within
+ * its cycle budget at 20 kHz (docs/firmware.md, "Timing"); the reaction time
+ * this costs is at most one period more (docs/safety.md, "Runaway at 20 kHz"). */
+#define TL_RUNAWAY_EVERY_OTHER_BELOW_US 100u
+/* Control periods from one runaway check of an axis to its next. */
+static inline uint32_t tl_runaway_every(uint32_t period_us) { return period_us < TL_RUNAWAY_EVERY_OTHER_BELOW_US ? 2u : 1u; }
 void tl_home_tick(tl_axis_t *a, uint32_t i, uint32_t now);
 uint8_t tl_home_start(tl_servo_t *s, uint8_t axis, uint8_t mode, uint8_t index, uint8_t *why);
 

@@ -410,12 +410,16 @@ static void test_fault_race(void)
 }
 
 /* Encoder loss and runaway: a frozen, a reversed and a flickering encoder
- * trip RUNAWAY within STALL_MS (+ a period or two); an axis that follows does not. */
+ * trip RUNAWAY within STALL_MS (+ a few periods); an axis that follows does not.
+ * At 1 ms the check runs every period; at 50 us every other period (servo_internal.h,
+ * TL_RUNAWAY_EVERY_OTHER_BELOW_US): at most 2 periods later. */
 static void test_runaway(void)
 {
-    enum { PERIOD = 1000, STALL_MS = 50 };
+    enum { STALL_MS = 50 };
     const char *kinds[] = {"frozen", "reversed", "flickering", "following"};
-    for (int kind = 0; kind < 4; kind++) {
+    static const int periods[] = {1000, 50};
+    for (int run = 0; run < 8; run++) {
+        const int kind = run % 4, PERIOD = periods[run / 4];
         fresh();
         CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_PERIOD_US, PERIOD) == TLP_ST_OK, "period");
         CHECK(set_param(0, TLP_P_STALL_MS, STALL_MS) == TLP_ST_OK, "stall ms");
@@ -425,7 +429,7 @@ static void test_runaway(void)
         CHECK(enable(1, 1) == TLP_ST_OK, "enable");
         CHECK(move(0, U, 400) == TLP_ST_OK, "move 400 counts: command 400 > STALL_CMD 300");
         int n = 0;
-        for (; n < 200 && sv.ax[0].enabled; n++) {
+        for (; n < STALL_MS * 1000 / PERIOD * 4 && sv.ax[0].enabled; n++) {
             if (n % 10 == 0)
                 CHECK(send_cmd(TLP_CMD_HEARTBEAT, NULL, 0) == TLP_ST_OK, "heartbeat");
             int32_t c = hal_fake.pwm_cmd[0], before = hal_fake.enc[0].pos;
@@ -449,7 +453,8 @@ static void test_runaway(void)
             CHECK(!sv.ax[0].enabled && !hal_fake.pwm_on[0] && sv.ax[0].faults == TLP_FAULT_RUNAWAY,
                   "%s encoder: faults 0x%x", kinds[kind], sv.ax[0].faults);
             CHECK(n >= STALL_MS * 1000 / PERIOD && n <= STALL_MS * 1000 / PERIOD + 8,
-                  "%s encoder tripped after %d periods, STALL_MS is %d", kinds[kind], n, STALL_MS * 1000 / PERIOD);
+                  "%s encoder tripped after %d periods of %d us, STALL_MS is %d", kinds[kind], n, PERIOD,
+                  STALL_MS * 1000 / PERIOD);
         }
     }
 }
@@ -462,9 +467,10 @@ static void test_runaway(void)
  * healthy encoder through a move, a reversal and a stop never does. */
 static void test_encoder_plausibility(void)
 {
-    enum { PERIOD = 1000 };
     const char *kinds[] = {"healthy", "frozen", "undercounting", "reversed", "chattering"};
-    for (int kind = 0; kind < 5; kind++) {
+    static const int periods[] = {1000, 50};   /* 50 us: the check runs every other period */
+    for (int run = 0; run < 10; run++) {
+        const int kind = run % 5, PERIOD = periods[run / 5], per_ms = 1000 / PERIOD;
         fresh();
         CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_PERIOD_US, PERIOD) == TLP_ST_OK, "period");
         CHECK(set_param(TLP_GLOBAL_AXIS, TLP_P_LINK_TIMEOUT_MS, 60000) == TLP_ST_OK, "timeout");
@@ -477,9 +483,9 @@ static void test_encoder_plausibility(void)
         double x = 0.0, v = 0.0;   /* the plant: counts, counts/s */
         int32_t target = 85, tripped_at = -1, max_travel = 0;
         CHECK(move(0, U, target) == TLP_ST_OK, "hold a command of 85 < STALL_CMD");
-        for (int n = 0; n < 6000 && sv.ax[0].enabled; n++) {
-            if (kind == 0 && (n == 2000 || n == 3000 || n == 4000)) {
-                target = n == 2000 ? -300 : (n == 3000 ? 800 : (int32_t)x);   /* reverse, go on, stop */
+        for (int n = 0; n < 6000 * per_ms && sv.ax[0].enabled; n++) {
+            if (kind == 0 && (n == 2000 * per_ms || n == 3000 * per_ms || n == 4000 * per_ms)) {
+                target = n == 2000 * per_ms ? -300 : (n == 3000 * per_ms ? 800 : (int32_t)x);   /* reverse, go on, stop */
                 CHECK(move(0, U, target) == TLP_ST_OK, "healthy: move to %" PRId32, target);
             }
             int32_t u = hal_fake.pwm_cmd[0];
@@ -500,23 +506,25 @@ static void test_encoder_plausibility(void)
                 hal_fake.enc[0].interval = hal_fake.enc[0].now - hal_fake.enc[0].edge_time;
                 hal_fake.enc[0].edge_time = hal_fake.enc[0].now;
             }
-            if (n == 5 && kind == 1)
+            if (n == 5 * per_ms && kind == 1)
                 CHECK(u > 30 && u < 100, "the command is held below STALL_CMD: %" PRId32, u);
             ticks(1);
             if (!sv.ax[0].enabled)
-                tripped_at = n;
+                tripped_at = n / per_ms;
             int32_t travel = truth < 0 ? -truth : truth;
             if (travel > max_travel && kind != 0)
                 max_travel = travel;
         }
         if (kind == 0) {
-            CHECK(sv.ax[0].enabled && sv.ax[0].faults == 0, "healthy encoder: faults 0x%x", sv.ax[0].faults);
+            CHECK(sv.ax[0].enabled && sv.ax[0].faults == 0, "healthy encoder at %d us: faults 0x%x", PERIOD,
+                  sv.ax[0].faults);
         } else {
             CHECK(sv.ax[0].faults == TLP_FAULT_RUNAWAY && !hal_fake.pwm_on[0], "%s encoder: faults 0x%x",
                   kinds[kind], sv.ax[0].faults);
             /* ENC_SLACK 64 counts at least half the model's speed behind: the travel is bounded */
-            CHECK(tripped_at >= 0 && max_travel < 600, "%s encoder: tripped after %d ms, %" PRId32 " counts of travel",
-                  kinds[kind], tripped_at, max_travel);
+            CHECK(tripped_at >= 0 && max_travel < 600,
+                  "%s encoder at %d us: tripped after %d ms, %" PRId32 " counts of travel", kinds[kind], PERIOD,
+                  tripped_at, max_travel);
         }
     }
 }

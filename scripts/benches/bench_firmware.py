@@ -26,18 +26,22 @@ FUZZ_SECONDS = int(os.environ.get("TL_FUZZ_BENCH_SECONDS", "120"))
 BUDGET_CYCLES = 1250
 
 
-def _measure(period_us: int, move_mode: int = 1, short: bool = False, cpu_pipelined: int = 0) -> dict:
+def _measure(period_us: int, move_mode: int = 1, short: bool = False, cpu_pipelined: int = 0,
+             kvff_q16: int = 0, kaff_q16: int = 0) -> dict:
     """The firmware test bench's worst-case measurement on the SoC (tl_soc's
-    CPU_PIPELINED picks the core: scripts/benches/bench_cpu.py runs it on both)."""
+    CPU_PIPELINED picks the core: scripts/benches/bench_cpu.py runs it on both),
+    with the velocity and acceleration feed-forwards off (0) or at these gains."""
     img = servo_tb_image()
     out = REPO / "build" / "firmware" / (f"measure_{period_us}_{move_mode}{'_short' if short else ''}"
-                                         f"{'_pipe' if cpu_pipelined else ''}.json")
+                                         f"{'_pipe' if cpu_pipelined else ''}"
+                                         f"{f'_ff{kvff_q16}_{kaff_q16}' if kvff_q16 or kaff_q16 else ''}.json")
     run("soc", "verilator", "test_firmware", bench="firmware",
         parameters={"RAM_INIT": f'"{img.ram_hex}"', "ROM_INIT": f'"{img.rom_hex}"',
                     **({"CPU_PIPELINED": 1} if cpu_pipelined else {})},
         testcase="measure_control_iteration",
         extra_env={"TL_FW_MEASURE": "1", "TL_FW_PERIOD_US": str(period_us), "TL_FW_MOVE_MODE": str(move_mode),
-                   "TL_FW_SHORT_MOVE": "1" if short else "0", "TL_FW_MEASURE_OUT": str(out)})
+                   "TL_FW_SHORT_MOVE": "1" if short else "0", "TL_FW_MEASURE_OUT": str(out),
+                   "TL_FW_KVFF_Q16": str(kvff_q16), "TL_FW_KAFF_Q16": str(kaff_q16)})
     return json.loads(out.read_text())
 
 

@@ -146,6 +146,18 @@ class TB:
             self._set_bit(self.dut.enc_b, axis, b)
             await Timer(step_ns, unit="ns")
 
+    async def move_encoders(self, targets: tuple[int, int], step_ns: int = STEP_NS) -> None:
+        """Both axes a count per step toward their targets, one write per pin: two
+        move_encoder tasks in the same time step would each write back the other's old bit."""
+        while list(self.enc) != list(targets):
+            for ax in (0, 1):
+                if self.enc[ax] != targets[ax]:
+                    self.enc[ax] += 1 if targets[ax] > self.enc[ax] else -1
+            (a0, b0), (a1, b1) = QUAD[self.enc[0] % 4], QUAD[self.enc[1] % 4]
+            self.dut.enc_a.value = (int(self.dut.enc_a.value) & ~3) | a0 | a1 << 1
+            self.dut.enc_b.value = (int(self.dut.enc_b.value) & ~3) | b0 | b1 << 1
+            await Timer(step_ns, unit="ns")
+
     @staticmethod
     def _set_bit(sig, bit: int, v: int) -> None:
         cur = int(sig.value)
@@ -433,26 +445,38 @@ async def estop_bridge_fault_following_soft_limit_and_encoder_faults(dut):
 @cocotb.test()
 async def runaway_with_a_frozen_and_a_reversed_encoder(dut):
     """Encoder loss at the pins: a step the encoder never follows (frozen), then
-    one it follows the wrong way (reversed wiring), each stop the bridge pins
-    within STALL_MS plus a period or two and latch RUNAWAY."""
+    one it follows the wrong way (reversed wiring), each stops the bridge pins
+    and latches RUNAWAY.  Frozen: the runaway check, STALL_MS plus a period or
+    two after the move (the plausibility check's lower bound needs far longer to
+    build up ENC_SLACK counts).  Reversed: the encoder counts only once the
+    bridge drives (a motor at rest moves when driven), and the plausibility
+    check trips once it is ENC_SLACK counts behind - long before STALL_MS,
+    whatever the core's speed (docs/safety.md)."""
     tb = TB(dut)
     await tb.start()
     await tb.fast_pwm()
     stall_ms = 20
+    step_us = 20                                    # the reversed encoder: 50 000 counts/s
     await tb.set(0, "STALL_MS", stall_ms)
     await tb.set(P.GLOBAL_AXIS, "LINK_TIMEOUT_MS", 1000)
     await tb.set(0, "KP_Q16", 65536)                # 1 step per count: 300 counts -> 300 >= STALL_CMD
     await tb.set(0, "LAW", 1)
+    slack = await tb.get(0, "ENC_SLACK")
+
+    async def reversed_once_driven() -> None:
+        while not int(dut.rpwm.value) & 1:          # axis 0 driven toward the target
+            await Edge(dut.rpwm)
+        await tb.move_encoder(0, tb.enc[0] - 2000, step_ns=step_us * 1000)
+
     for kind in ("frozen", "reversed"):
         await _enable(tb, 1)
+        mover = cocotb.start_soon(reversed_once_driven()) if kind == "reversed" else None
         target = tb.enc[0] + 300
         await tb.cmd("MOVE", axis=0, mode=U, target=target)
         t_move = now_ns() / 1000
-        mover = None
-        if kind == "reversed":   # the motor runs toward the target, the encoder counts the other way
-            mover = cocotb.start_soon(tb.move_encoder(0, tb.enc[0] - 2000, step_ns=20_000))
         await Timer(2 * PERIOD_US, unit="us")
-        assert await tb.duty(0, "rpwm", 2 * PWM_PERIOD_US) > 0.1, f"{kind}: not driving toward the target"
+        if kind == "frozen":   # reversed: the encoder moves only once driven, and trips within the bound below
+            assert await tb.duty(0, "rpwm", 2 * PWM_PERIOD_US) > 0.1, f"{kind}: not driving toward the target"
         while tb.pins_high() or (await tb.duty(0, "rpwm", PWM_PERIOD_US)) > 0:
             await Timer(100, unit="us")
             assert now_ns() / 1000 - t_move < 3 * stall_ms * 1000, f"{kind} encoder: still driving"
@@ -460,11 +484,59 @@ async def runaway_with_a_frozen_and_a_reversed_encoder(dut):
         if mover is not None:
             mover.kill()
         st = await tb.status(0)
-        cocotb.log.info(f"{kind} encoder: pins off {tripped:.0f} us after the move (STALL_MS {stall_ms} ms)")
+        cocotb.log.info(f"{kind} encoder: pins off {tripped:.0f} us after the move (STALL_MS {stall_ms} ms, "
+                        f"ENC_SLACK {slack} counts)")
         assert st["faults"] == P.FAULT["RUNAWAY"] and not st["enabled"], st
-        assert stall_ms * 1000 <= tripped <= stall_ms * 1000 + 4 * PERIOD_US, f"{kind}: {tripped} us"
+        if kind == "frozen":
+            assert stall_ms * 1000 <= tripped <= stall_ms * 1000 + 4 * PERIOD_US, f"{kind}: {tripped} us"
+        else:   # ENC_SLACK counts the wrong way, then the check's period and the one that references it
+            assert slack * step_us <= tripped <= slack * step_us + 4 * PERIOD_US, f"{kind}: {tripped} us"
         await tb.assert_quiet(200, f"after RUNAWAY ({kind})")
         await tb.cmd("CLEAR_FAULT", mask=1)
+
+
+@cocotb.test()
+async def overruns_counted_when_a_period_is_missed(dut):
+    """STATUS.overruns stays 0 through a normal run (both axes PID on trapezoids,
+    encoders counting, the link busy with authenticated STATUS commands), then
+    counts each missed period: the SoC timer's mtime is moved 3 periods ahead in
+    one clock, as a CPU held that long would find it (no legal PERIOD_US is
+    shorter than the iteration on either core: docs/firmware.md, "Timing").
+    Each jump is one overrun; the loop goes on at its period, no fault."""
+    tb = TB(dut)
+    tb.reply_timeout_us = 50_000
+    await tb.start()
+    await tb.fast_pwm()
+    await tb.set(P.GLOBAL_AXIS, "LINK_TIMEOUT_MS", 1000)
+    for ax in (0, 1):
+        await tb.set(ax, "LAW", 3)
+        await tb.set(ax, "KD_Q16", 655)
+        await tb.set(ax, "KI_Q16", 65536 * 20)
+        await tb.set(ax, "FOLLOW_LIMIT", 1_000_000)
+    await _enable(tb)
+
+    mover = cocotb.start_soon(tb.move_encoders((tb.enc[0] - 200, tb.enc[1] + 200), step_ns=8_000))
+    for ax in (0, 1):
+        await tb.cmd("MOVE", axis=ax, mode=U | P.MOVE_TRAPEZOID, target=tb.enc[ax] + 100 * (1 if ax else -1))
+    while not mover.done():
+        await tb.status(0)
+    st = await tb.status(0)
+    cocotb.log.info(f"normal run: worst iteration {st['loop_cycles_max']} cycles, lateness "
+                    f"{st['jitter_cycles_max']}, overruns {st['overruns']}")
+    assert st["overruns"] == 0 and st["faults"] == 0 and st["enabled"], st
+
+    period = PERIOD_US * 1000 // CLK_NS
+    mtime = dut.u_fabric.u_timer.mtime_q
+    jumps = 3
+    for _ in range(jumps):
+        mtime.value = int(mtime.value) + 3 * period
+        await Timer(5 * PERIOD_US, unit="us")
+    st = await tb.status(1)
+    cocotb.log.info(f"after {jumps} missed periods: overruns {st['overruns']}")
+    assert st["overruns"] == jumps and st["faults"] == 0 and st["enabled"], st
+    await Timer(4 * PERIOD_US, unit="us")
+    st = await tb.status(0)
+    assert st["overruns"] == jumps and st["faults"] == 0, f"overruns counted at a period the iteration fits: {st}"
 
 
 @cocotb.test()
@@ -696,7 +768,7 @@ async def no_key_board_refuses_motion(dut):
 #: a test named in cocotb's filter runs even when marked skip.
 PARTS: dict[str, list[str]] = {
     "watchdog": ["lengthening_the_period_with_frames_queued_keeps_the_watchdog_fed"],
-    "runaway": ["runaway_with_a_frozen_and_a_reversed_encoder"],
+    "runaway": ["runaway_with_a_frozen_and_a_reversed_encoder", "overruns_counted_when_a_period_is_missed"],
     "link": ["link_watchdog_stops_a_silent_link"],
     "faults": ["estop_bridge_fault_following_soft_limit_and_encoder_faults", "each_law_drives_both_axes_as_the_reference"],
     "frames": ["corrupted_random_and_replayed_frames_change_nothing", "telemetry_trapezoid_and_bootloader_jump"],
@@ -742,6 +814,9 @@ async def measure_control_iteration(dut):
         await tb.set(ax, "KD_Q16", 655)
         await tb.set(ax, "KI_Q16", 65536 * 20)
         await tb.set(ax, "FOLLOW_LIMIT", 1_000_000)
+        for name in ("KVFF_Q16", "KAFF_Q16"):   # the feed-forwards (off unless the bench asks)
+            if int(os.environ.get(f"TL_FW_{name}", "0")):
+                await tb.set(ax, name, int(os.environ[f"TL_FW_{name}"]))
     await _enable(tb)
     # a 50-byte telemetry frame takes 500 us at 1 Mbaud: one every 800 us keeps up
     await tb.cmd("TELEMETRY", every=-(-800 // period))
@@ -754,7 +829,7 @@ async def measure_control_iteration(dut):
         for ax in (0, 1):
             await tb.set(ax, "VMAX", 50_000)
             await tb.set(ax, "AMAX", 50_000_000)
-    movers = [cocotb.start_soon(tb.move_encoder(ax, 300 * (1 if ax else -1), step_ns=8_000)) for ax in (0, 1)]
+    movers = [cocotb.start_soon(tb.move_encoders((-300, 300), step_ns=8_000))]
     for ax in (0, 1):
         await tb.cmd("MOVE", axis=ax, mode=U | mode, target=target * (1 if ax else -1))
     n_cmd = 0
@@ -774,6 +849,7 @@ async def measure_control_iteration(dut):
     cocotb.log.info(f"measurement: {out}")
     Path(os.environ.get("TL_FW_MEASURE_OUT", "fw_measure.json")).write_text(json.dumps(out))
     assert out["faults"] == [0, 0] and out["loop_cycles_max"] < period * 50
+    assert [s["position"] for s in st] == [-300, 300], f"both encoders counted: {st}"
 
 
 @cocotb.test(skip=os.environ.get("TL_AUTH_MEASURE") != "1")
