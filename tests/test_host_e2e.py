@@ -36,6 +36,7 @@ from simproc import run_cli as run
 from simproc import sim_board
 from torqueloop import cli
 from torqueloop.spec import auth
+from torqueloop.spec import protocol as P
 
 BUILD_ID = 0x0DDC0DE5
 
@@ -163,6 +164,12 @@ def test_config_save_load_round_trip(url, capsys, tmp_path: Path) -> None:
     assert got["KP_Q16"]["raw"] == kp0
     run(url, capsys, "config", "save", str(b))
     assert a.read_text() == b.read_text()
+    # a file saved under an older protocol whose parameters mean the same loads; one older or newer is refused
+    assert doc["firmware"]["proto_version"] == P.PROTO_VERSION
+    for pv, rc in ((P.CONFIG_SINCE, 0), (P.CONFIG_SINCE - 1, 1), (P.PROTO_VERSION + 1, 1)):
+        a.write_text(json.dumps({**doc, "firmware": {**doc["firmware"], "proto_version": pv}}))
+        _, err = run(url, capsys, "config", "load", str(a), rc=rc)
+        assert rc == 0 or f"saved with protocol {pv}" in err
     # a file from another build is refused unless forced; a broken one names its field
     doc["firmware"]["build_id"] = "0x00000001"
     a.write_text(json.dumps(doc))

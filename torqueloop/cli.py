@@ -799,8 +799,9 @@ def cmd_config(ctx: Ctx) -> int:
     c = ctx.client
     ident = c.identity or c.identify()
     warn = []
-    if cfg.proto_version is not None and cfg.proto_version != ident["proto_version"]:
-        raise ProtocolError(f"{a.file} was saved with protocol {cfg.proto_version}, the board speaks "
+    if cfg.proto_version is not None and not P.CONFIG_SINCE <= cfg.proto_version <= ident["proto_version"]:
+        raise ProtocolError(f"{a.file} was saved with protocol {cfg.proto_version}; the board speaks "
+                            f"{ident['proto_version']} and reads the files of protocols {P.CONFIG_SINCE} to "
                             f"{ident['proto_version']}")
     if cfg.build_id is not None and cfg.build_id != ident["build_id"]:
         warn.append(f"saved from firmware build 0x{cfg.build_id:08x}, the board runs 0x{ident['build_id']:08x}")

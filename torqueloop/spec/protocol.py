@@ -87,6 +87,7 @@ def _load() -> dict:
 SPEC = _load()
 META: dict = SPEC["meta"]
 PROTO_VERSION: int = META["version"]
+CONFIG_SINCE: int = META["config_since"]   # the oldest protocol whose saved configuration files load
 MAX_PAYLOAD: int = META["max_payload"]
 HEADER_BYTES: int = META["header_bytes"]
 CRC_BYTES: int = META["crc_bytes"]
