@@ -50,9 +50,17 @@ lint: $(STAMP) ## Verilator -Wall, GHDL --std=08, Yosys synth check, VHDL/Verilo
 unit: $(STAMP) ## Python unit tests (plant, reference models, tools)
 	$(PY) -m pytest tests $(PYTEST_K) $(XDIST)
 
+# make lint runs beside the tests rather than before them (its Yosys proofs and synth checks would
+# otherwise hold both cores' worth of tests for two minutes); its output follows the tests' and
+# either failing fails make test.
 test: $(STAMP) ## lint + sim + unit: what CI runs
-	$(MAKE) --no-print-directory lint
-	$(PY) -m pytest tb tests $(PYTEST_K) $(XDIST)
+	@mkdir -p build; log=build/lint.$$$$.log; $(MAKE) --no-print-directory lint > $$log 2>&1 & lint=$$!; \
+	$(PY) -m pytest tb tests $(PYTEST_K) $(XDIST); tests=$$?; \
+	wait $$lint; lint=$$?; mv $$log build/lint.log; \
+	echo "---- make lint (ran beside the tests; build/lint.log) ----"; cat build/lint.log; \
+	if [ $$lint -ne 0 ]; then echo "make test: make lint failed"; fi; \
+	if [ $$tests -ne 0 ]; then echo "make test: the tests failed"; fi; \
+	[ $$lint -eq 0 ] && [ $$tests -eq 0 ]
 
 test-durations: $(STAMP) ## fold the last test run's wall times into tests/durations.json (the longest tests start first)
 	$(PY) scripts/test_durations.py

@@ -50,7 +50,7 @@ from pathlib import Path
 import cocotb
 import pytest
 from cocotb.simtime import get_sim_time
-from cocotb.triggers import ClockCycles, FallingEdge, First, Timer
+from cocotb.triggers import FallingEdge, First, RisingEdge, Timer
 
 from torqueloop.spec import regs
 from torqueloop.flow.board_files import CABLE_V, load_pin_table
@@ -138,31 +138,77 @@ async def _power_up(dut, sw: int, baud: int, fault_open: int = 0):
     dut.rnxv_tx.value = 1
     dut.rnxv_rts.value = 0
     source, sink = tbutil.uart_models(dut.rnxv_tx, dut.rnxv_rx, baud)
-    await ClockCycles(dut.clk, 5)
+    await _clocks(dut, 5)
     dut.reset_n.value = 1
     return source, sink
 
 
+BRIDGE = ("rpwm", "lpwm", "r_en", "l_en")
+CLK_NS = tbutil.CLK_NS
+
+# The waits below wake Python on the events that matter (a bridge pin changing, a timer) rather
+# than on every clock: each awaited clock edge costs a trip through the simulator's callbacks
+# and cocotb's scheduler, which on the whole board image was most of this bench's time.
+
+
+async def _clocks(dut, n: int) -> None:
+    """ClockCycles(dut.clk, n) - the n-th rising edge from now - with three
+    wake-ups instead of n: the first edge, a timer to the falling edge before
+    the n-th, that edge."""
+    await RisingEdge(dut.clk)
+    if n > 1:
+        await Timer((2 * n - 3) * CLK_NS // 2, unit="ns")
+        await RisingEdge(dut.clk)
+
+
 def _bridge(dut) -> dict[str, int]:
-    return {n: int(getattr(dut, n).value) for n in ("rpwm", "lpwm", "r_en", "l_en")}
+    return {n: int(getattr(dut, n).value) for n in BRIDGE}
+
+
+def _bridge_changes(dut) -> list:
+    return [getattr(dut, n).value_change for n in BRIDGE]
 
 
 async def _expect_all_low(dut, cycles: int, what: str) -> None:
-    for c in range(cycles):
-        await FallingEdge(dut.clk)
-        b = _bridge(dut)
-        assert not any(b.values()), f"{what}: bridge inputs {b} at cycle {c}"
+    """Every bridge input low at the next ``cycles`` falling clock edges, and
+    in between: low at the first, and none of them changes until the last
+    (so a pulse between two edges fails too)."""
+    await FallingEdge(dut.clk)
+    t0 = get_sim_time("ns")
+    b = _bridge(dut)
+    assert not any(b.values()), f"{what}: bridge inputs {b} at cycle 0"
+    if cycles > 1:
+        end = Timer((cycles - 1) * CLK_NS, unit="ns")
+        if await First(end, *_bridge_changes(dut)) is not end:
+            raw = {n: str(getattr(dut, n).value) for n in BRIDGE}
+            raise AssertionError(f"{what}: bridge inputs {raw} {(get_sim_time('ns') - t0) / CLK_NS:.1f} "
+                                 f"clocks after the first of {cycles}")
 
 
 async def _watch_armed(dut, cycles: int) -> dict[str, int]:
-    """Count the clocks each bridge input is high over ``cycles``."""
-    high = {f"{n}{a}": 0 for n in ("rpwm", "lpwm", "r_en", "l_en") for a in (0, 1)}
-    for _ in range(cycles):
-        await FallingEdge(dut.clk)
-        for n, v in _bridge(dut).items():
+    """How many of the next ``cycles`` falling clock edges find each bridge
+    input high: the pins' levels from one change to the next, each counted
+    over the falling edges it spans."""
+    high = {f"{n}{a}": 0 for n in BRIDGE for a in (0, 1)}
+    await FallingEdge(dut.clk)
+    t0 = get_sim_time("ns")
+    t_end = t0 + (cycles - 1) * CLK_NS                # the last falling edge watched
+
+    def edges_before(t: int) -> int:                 # of the falling edges t0, t0 + CLK_NS, ...
+        return min(cycles, max(0, -(-(t - t0) // CLK_NS)))
+
+    since, levels = t0, _bridge(dut)
+    while True:
+        now = get_sim_time("ns")
+        last = now >= t_end
+        span = edges_before(t_end + 1 if last else now) - edges_before(since)
+        for n, v in levels.items():
             for a in (0, 1):
-                high[f"{n}{a}"] += (v >> a) & 1
-    return high
+                high[f"{n}{a}"] += span * ((v >> a) & 1)
+        if last:
+            return high
+        since, levels = now, _bridge(dut)
+        await First(Timer(t_end - now, unit="ns"), *_bridge_changes(dut))
 
 
 #: Quadrature states (A, B) in the order A leads B; each level is held long
@@ -183,15 +229,15 @@ async def _turn_encoders(dut, steps: list[int]) -> None:
             b |= _QUAD[state[axis]][1] << axis
         dut.enc_a.value = a
         dut.enc_b.value = b
-        await ClockCycles(dut.clk, STEP_CLOCKS)
+        await _clocks(dut, STEP_CLOCKS)
 
 
 async def _arm(dut) -> None:
     sw = int(dut.sw.value)
     dut.sw.value = sw & ~1
-    await ClockCycles(dut.clk, 10)
+    await _clocks(dut, 10)
     dut.sw.value = sw | 1
-    await ClockCycles(dut.clk, STOP_LATENCY)
+    await _clocks(dut, STOP_LATENCY)
 
 
 def _check_driving(high: dict[str, int], cycles: int, what: str) -> None:
@@ -232,7 +278,7 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
     # up), axis 2 3 steps with B leading (counts down); the firmware shows the
     # low nibbles on LEDR[3:0] / LEDR[7:4].
     await _turn_encoders(dut, [6, -3])
-    await ClockCycles(dut.clk, 200)
+    await _clocks(dut, 200)
     assert int(dut.ledr.value) & 0xFF == ((-3 & 0xF) << 4) | 6, f"LEDR shows {int(dut.ledr.value) & 0xFF:#04x}"
 
     # 2. Arm: the firmware's PWM reaches the pins.
@@ -252,7 +298,7 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
     dut.key.value = 0xE
     await Timer(1, unit="ns")
     assert not any(_bridge(dut).values()), f"KEY[0] did not reach the pins without a clock: {_bridge(dut)}"
-    await ClockCycles(dut.clk, STOP_LATENCY)
+    await _clocks(dut, STOP_LATENCY)
     await _expect_all_low(dut, PWM_PERIOD, "e-stop pressed")
     dut.key.value = 0xF
     await _expect_all_low(dut, 3 * PWM_PERIOD, "e-stop released, firmware acknowledged, not re-armed")
@@ -267,21 +313,21 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
     # (the SoC's own, unfiltered fault latch still stops the PWM until the
     # firmware acknowledges and the next period starts); a real fault trips both axes.
     dut.fault.value = 0b01
-    await ClockCycles(dut.clk, FAULT_FILTER_CLKS // 2)
+    await _clocks(dut, FAULT_FILTER_CLKS // 2)
     dut.fault.value = 0b00
-    await ClockCycles(dut.clk, STOP_LATENCY)
+    await _clocks(dut, STOP_LATENCY)
     assert (int(dut.ledr.value) >> 8) == 0b10, "a fault glitch must not trip the interlock"
-    await ClockCycles(dut.clk, 2 * PWM_PERIOD)
+    await _clocks(dut, 2 * PWM_PERIOD)
     _check_driving(await _watch_armed(dut, 2 * PWM_PERIOD), 2 * PWM_PERIOD, "after a fault glitch")
     await FallingEdge(dut.clk)
     dut.fault.value = 0b01        # axis 1's comparator releases its line: fault
-    await ClockCycles(dut.clk, FAULT_FILTER_CLKS + STOP_LATENCY)
+    await _clocks(dut, FAULT_FILTER_CLKS + STOP_LATENCY)
     assert (int(dut.ledr.value) >> 8) == 0b01, "a lasting fault trips the interlock"
     await _expect_all_low(dut, PWM_PERIOD, "bridge fault")
     dut.fault.value = 0b00
     await _expect_all_low(dut, PWM_PERIOD, "fault gone, not re-armed")
     await _arm(dut)
-    await ClockCycles(dut.clk, 2 * PWM_PERIOD)    # the SoC resumes at a period start
+    await _clocks(dut, 2 * PWM_PERIOD)    # the SoC resumes at a period start
     _check_driving(await _watch_armed(dut, PWM_PERIOD), PWM_PERIOD, "re-armed after fault")
 
     # 4b. Axis 1's fault line opens (its wire breaks): nothing drives header pin 5,
@@ -289,7 +335,7 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
     # moved down and up arms nothing - until the line is driven low again.
     await FallingEdge(dut.clk)
     dut.fault_open.value = 0b11
-    await ClockCycles(dut.clk, FAULT_FILTER_CLKS + STOP_LATENCY)
+    await _clocks(dut, FAULT_FILTER_CLKS + STOP_LATENCY)
     assert str(dut.gpio0_pins.value)[::-1][4] == "1", "an open fault line must read 1 (the weak pull-up)"
     assert (int(dut.ledr.value) >> 8) == 0b01, "an open fault line trips the interlock"
     await _expect_all_low(dut, PWM_PERIOD, "fault line open")
@@ -298,7 +344,7 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
     assert (int(dut.ledr.value) >> 9) == 0, "armed with a fault line open"
     dut.fault_open.value = 0b10                  # the wire mended: the comparator holds it low
     await _arm(dut)
-    await ClockCycles(dut.clk, 2 * PWM_PERIOD)
+    await _clocks(dut, 2 * PWM_PERIOD)
     _check_driving(await _watch_armed(dut, PWM_PERIOD), PWM_PERIOD, "re-armed with the line driven again")
 
     # 5. UART through the header: bytes in on pin 13, the firmware's answer out on pin 14.
@@ -318,8 +364,8 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
     dut.sw.value = int(dut.sw.value) | 0x100
     t0 = tbutil.cycle_now()
     while any(_bridge(dut).values()):
-        await FallingEdge(dut.clk)
-        assert tbutil.cycle_now() - t0 < 3 * WDOG_CYCLES, "a hung firmware still drives the bridges"
+        timeout = Timer(3 * WDOG_CYCLES * CLK_NS, unit="ns")
+        assert await First(timeout, *_bridge_changes(dut)) is not timeout, "a hung firmware still drives the bridges"
     t_off = tbutil.cycle_now() - t0
     dut._log.info(f"hung firmware: bridge inputs low {t_off} clocks after the hang (watchdog {WDOG_CYCLES})")
     # the last feed came up to one loop of careless.c (about 40 clocks) after the switch
@@ -331,7 +377,7 @@ async def board_interlock_and_uart_on_the_header_pins(dut):
     dut.sw.value = int(dut.sw.value) & ~0x100       # the firmware recovers and feeds the watchdog again
     await _expect_all_low(dut, 2 * PWM_PERIOD, "firmware alive again, not re-armed")
     await _arm(dut)
-    await ClockCycles(dut.clk, 2 * PWM_PERIOD)
+    await _clocks(dut, 2 * PWM_PERIOD)
     _check_driving(await _watch_armed(dut, PWM_PERIOD), PWM_PERIOD, "re-armed after the hang")
 
 
@@ -342,7 +388,7 @@ async def _exchange(dut, source, sink, decoder, frame: bytes, cycles: int):
 
     await source.write(frame)
     for _ in range(cycles // 100):
-        await ClockCycles(dut.clk, 100)
+        await _clocks(dut, 100)
         if not sink.empty():
             # list(): FrameDecoder.feed clears its buffer only when resumed
             # after a yield, so it must always be run to the end.
@@ -365,7 +411,7 @@ async def servo_firmware_answers_the_protocol_on_the_header(dut):
 
     source, sink = await _power_up(dut, sw=0x001, baud=SERVO_BAUD)
     decoder = protocol.FrameDecoder()
-    await ClockCycles(dut.clk, SERVO_STARTUP_CLOCKS)
+    await _clocks(dut, SERVO_STARTUP_CLOCKS)
 
     reply = await _exchange(dut, source, sink, decoder, protocol.request("IDENTIFY", 1), 60_000)
     fields = protocol.decode_reply(reply)
@@ -381,7 +427,7 @@ async def servo_firmware_answers_the_protocol_on_the_header(dut):
     reply = await _exchange(dut, source, sink, decoder, protocol.request("SESSION", 2, host_nonce=hn), 150_000)
     sess = auth.open_session(auth.TEST_KEY, hn, protocol.decode_reply(reply))
     dut.key.value = 0xE                       # e-stop pressed and held
-    await ClockCycles(dut.clk, 200)
+    await _clocks(dut, 200)
     reply = await _exchange(dut, source, sink, decoder, sess.request("ENABLE", 3, mask=3, enable=1), 100_000)
     assert protocol.decode_reply(reply)["status"] == protocol.STATUS["STATE"], "ENABLE accepted during e-stop"
     await _expect_all_low(dut, 2000, "e-stop held after ENABLE")
