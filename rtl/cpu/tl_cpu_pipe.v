@@ -65,10 +65,17 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     reg  [31:0] f_out_addr;
     reg         f_discard;       // its answer belongs to a flushed path
     reg  [31:0] f_pc;            // the next address to request
-    reg  [1:0]  q_n;             // instruction queue: entries 0 (head) and 1
-    reg  [31:0] q_insn0, q_insn1, q_pc0, q_pc1;
-    reg         q_err0, q_err1;
-    reg         f_out_btb, q_btb0, q_btb1;   // the word's successor was fetched from the BTB's target
+    // Instruction queue, entries 0 (D's word) to 2: every answer goes into
+    // it, and D decodes its head, so the block RAM's output (in the SoC, the
+    // fabric's) reaches a register before any decode (the RAM's clock-to-out
+    // and its wire take most of a 60 MHz cycle on the proxy).  Three
+    // entries keep one word a cycle flowing while D holds a word, an answer
+    // arrives and the next request goes out.
+    reg  [1:0]  q_n;
+    reg  [31:0] q_insn0, q_insn1, q_insn2, q_pc0, q_pc1, q_pc2;
+    reg         q_err0, q_err1, q_err2;
+    reg         f_out_btb, q_btb0, q_btb1, q_btb2;   // the word's successor was fetched from the BTB's target
+    reg         q_pred0, q_pred1, q_pred2;           // the word is predicted taken (pred_of, on entry)
 
     // Branch target buffer: the jumps D predicted (jal, backward branches),
     // BTB_N entries indexed by pc[BTB_IB+1:2], looked up on f_pc when a
@@ -92,18 +99,19 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
 
     wire resp   = f_out && ibus_ack && !f_discard;     // an answer for the current path
     wire f_hold = f_out && !ibus_ack;
-    // Room for the answer of a new request: whatever D does, the queue can take it.
-    wire f_room = q_n == 2'd0 || (q_n == 2'd1 && !resp);
+    // Room for the answer of a new request (next cycle at the earliest),
+    // whatever D does meanwhile: the queue holds q_n + resp words after this edge.
+    wire f_room = q_n == 2'd0 || q_n == 2'd1 || (q_n == 2'd2 && !resp);
     wire f_new  = !f_hold && f_room;
     assign ibus_req  = !rst && (f_hold || f_new);
     assign ibus_addr = f_hold ? f_out_addr : (pend ? pend_pc : f_pc);
 
     // ==== D: decode ================================================================================
-    wire        d_valid = q_n != 2'd0 || resp;
-    wire [31:0] d_insn  = q_n != 2'd0 ? q_insn0 : ibus_rdata;
-    wire [31:0] d_pc    = q_n != 2'd0 ? q_pc0 : f_out_addr;
-    wire        d_ferr  = q_n != 2'd0 ? q_err0 : ibus_err;
-    wire        d_btb   = q_n != 2'd0 ? q_btb0 : f_out_btb;
+    wire        d_valid = q_n != 2'd0;
+    wire [31:0] d_insn  = q_insn0;
+    wire [31:0] d_pc    = q_pc0;
+    wire        d_ferr  = q_err0;
+    wire        d_btb   = q_btb0;
 
     wire [4:0]  d_rd, d_rs1;
     wire [2:0]  d_funct3;
@@ -131,15 +139,16 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
         pred_of = (w[6:0] == 7'b1101111 && !w[21]) || (w[6:0] == 7'b1100011 && w[31] && !w[8]);
     endfunction
     /* verilator lint_on UNUSEDSIGNAL */
-    // For the queue's head and for the bus word apart, the choice last: the
-    // queue's select and the decode are then side by side, not in series
-    // (the prediction steers the queue and the fetch)
-    wire d_pred   = q_n != 2'd0 ? pred_of(q_insn0) : pred_of(ibus_rdata);
+    // made as the word enters the queue (the prediction steers the queue
+    // and the fetch: from a register, D's other decisions are not in its way)
+    wire f_pred   = pred_of(ibus_rdata);
+    wire d_pred   = q_pred0;
 
     // D never waits: whatever the word is, it moves on when E takes it, so
     // no decision of D's depends on the instruction word but the prediction
     wire e_load;                                // E takes a new instruction (or a bubble) this edge
     wire d_go = d_valid && e_load;              // D moves on (unless a redirect kills it)
+    wire [1:0] q_in = q_n - {1'b0, d_go};       // where an answer goes in this edge
     assign redirect_d    = d_go && d_pred && !d_btb && !redirect;
 
     // ==== register file =====================================================================
@@ -421,27 +430,29 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
                 f_discard <= ibus_req;
             else if (ibus_ack)
                 f_discard <= 1'b0;
-            // ---- instruction queue: D takes the head (or the answer itself when empty) ----
-            // The words load whatever a redirect does (it only empties the queue).
-            if (q_n == 2'd0 || (q_n == 2'd1 && d_go)) begin
-                if (resp) begin
-                    q_insn0 <= ibus_rdata; q_pc0 <= f_out_addr; q_err0 <= ibus_err; q_btb0 <= f_out_btb;
-                end
-            end else if (q_n == 2'd1) begin
-                if (resp) begin
-                    q_insn1 <= ibus_rdata; q_pc1 <= f_out_addr; q_err1 <= ibus_err; q_btb1 <= f_out_btb;
-                end
-            end else if (d_go) begin   // two entries: no request was outstanding
-                q_insn0 <= q_insn1; q_pc0 <= q_pc1; q_err0 <= q_err1; q_btb0 <= q_btb1;
+            // ---- instruction queue: D takes the head; an answer goes in behind ----
+            // what is left.  The words load whatever a redirect does (it only
+            // empties the queue).
+            if (resp && q_in == 2'd0) begin
+                q_insn0 <= ibus_rdata; q_pc0 <= f_out_addr; q_err0 <= ibus_err; q_btb0 <= f_out_btb;
+                q_pred0 <= f_pred;
+            end else if (d_go) begin
+                q_insn0 <= q_insn1; q_pc0 <= q_pc1; q_err0 <= q_err1; q_btb0 <= q_btb1; q_pred0 <= q_pred1;
+            end
+            if (resp && q_in == 2'd1) begin
+                q_insn1 <= ibus_rdata; q_pc1 <= f_out_addr; q_err1 <= ibus_err; q_btb1 <= f_out_btb;
+                q_pred1 <= f_pred;
+            end else if (d_go) begin
+                q_insn1 <= q_insn2; q_pc1 <= q_pc2; q_err1 <= q_err2; q_btb1 <= q_btb2; q_pred1 <= q_pred2;
+            end
+            if (resp && q_in == 2'd2) begin
+                q_insn2 <= ibus_rdata; q_pc2 <= f_out_addr; q_err2 <= ibus_err; q_btb2 <= f_out_btb;
+                q_pred2 <= f_pred;
             end
             if (refetch)
                 q_n <= 2'd0;
-            else if (q_n == 2'd0)
-                q_n <= (resp && !d_go) ? 2'd1 : 2'd0;
-            else if (q_n == 2'd1)
-                q_n <= (d_go && !resp) ? 2'd0 : ((resp && !d_go) ? 2'd2 : 2'd1);
-            else if (d_go)
-                q_n <= 2'd1;
+            else
+                q_n <= q_in + {1'b0, resp};
             // ---- D -> E ----
             if (e_load) begin
                 e_valid <= d_go && !redirect;
