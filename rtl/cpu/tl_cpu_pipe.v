@@ -6,19 +6,20 @@
 // stages with the instruction fetch in front of them:
 //
 //   F  fetch   : ibus request (address f_pc, or the held address of a request
-//                not yet answered); answers go straight to D, or into a
-//                two-entry queue when E holds.  A branch target buffer
-//                sends the request after a jump it knows to the jump's
-//                target (no cycle lost).
-//   D  decode  : the answered word (bus or queue): decoded, register file
-//                read (block RAM, registered read) and operand choices at
-//                the edge into E.  jal and backward branches the BTB did
-//                not know are predicted taken: the fetch requests their
-//                target in the next cycle (1 cycle lost).
+//                not yet answered); every answer lands in a register (L),
+//                then moves into a two-entry queue unless D takes it.  A
+//                branch target buffer sends the request after a jump it
+//                knows to the jump's target (no cycle lost).
+//   D  decode  : the landed word (L, or the queue's head when E held):
+//                decoded, register file read (block RAM, registered read)
+//                and operand choices at the edge into E.  jal and backward
+//                branches the BTB did not know are predicted taken: the
+//                fetch requests their target in the next cycle (2 cycles
+//                lost).
 //   E  execute : operands forwarded from M and W, a load's reader waits
 //                here, ALU, branch comparator, jump/branch targets (jalr,
 //                a taken forward branch or a mispredicted branch redirects
-//                the fetch: 2 cycles lost), effective address,
+//                the fetch: 3 cycles lost), effective address,
 //                multiply/divide (E waits for the unit), every exception
 //                but a data bus error, and interrupts, taken before the
 //                instruction in E executes.
@@ -65,17 +66,21 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     reg  [31:0] f_out_addr;
     reg         f_discard;       // its answer belongs to a flushed path
     reg  [31:0] f_pc;            // the next address to request
-    // Instruction queue, entries 0 (D's word) to 2: every answer goes into
-    // it, and D decodes its head, so the block RAM's output (in the SoC, the
-    // fabric's) reaches a register before any decode (the RAM's clock-to-out
-    // and its wire take most of a 60 MHz cycle on the proxy).  Three
-    // entries keep one word a cycle flowing while D holds a word, an answer
-    // arrives and the next request goes out.
+    // Every answer lands in the landing register l_*, with nothing in front
+    // of it but the bus, so the block RAM's output (in the SoC, its mux
+    // tree and the fabric's) reaches a flip-flop before any decode: the
+    // RAM's clock-to-out and its wire take most of a 60 MHz cycle on the
+    // proxy.  D decodes the older of the queue's head and the landed word;
+    // a landed word D does not take moves into the 2-entry queue (or waits
+    // in place while the queue is full, when no answer can be coming).
+    reg         l_valid;
+    reg  [31:0] l_insn, l_pc;
+    reg         l_err, l_btb;
     reg  [1:0]  q_n;
-    reg  [31:0] q_insn0, q_insn1, q_insn2, q_pc0, q_pc1, q_pc2;
-    reg         q_err0, q_err1, q_err2;
-    reg         f_out_btb, q_btb0, q_btb1, q_btb2;   // the word's successor was fetched from the BTB's target
-    reg         q_pred0, q_pred1, q_pred2;           // the word is predicted taken (pred_of, on entry)
+    reg  [31:0] q_insn0, q_insn1, q_pc0, q_pc1;
+    reg         q_err0, q_err1;
+    reg         f_out_btb, q_btb0, q_btb1;   // the word's successor was fetched from the BTB's target
+    reg         q_pred0, q_pred1;            // the word is predicted taken (pred_of)
 
     // Branch target buffer: the jumps D predicted (jal, backward branches),
     // BTB_N entries indexed by pc[BTB_IB+1:2], looked up on f_pc when a
@@ -100,18 +105,21 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire resp   = f_out && ibus_ack && !f_discard;     // an answer for the current path
     wire f_hold = f_out && !ibus_ack;
     // Room for the answer of a new request (next cycle at the earliest),
-    // whatever D does meanwhile: the queue holds q_n + resp words after this edge.
-    wire f_room = q_n == 2'd0 || q_n == 2'd1 || (q_n == 2'd2 && !resp);
+    // whatever D does meanwhile: the queue and L hold at most
+    // q_n + l_valid + resp words after this edge, and three fit.
+    wire [2:0] f_words = {1'b0, q_n} + {2'b0, l_valid} + {2'b0, resp};
+    wire f_room = f_words <= 3'd2;
     wire f_new  = !f_hold && f_room;
     assign ibus_req  = !rst && (f_hold || f_new);
     assign ibus_addr = f_hold ? f_out_addr : (pend ? pend_pc : f_pc);
 
     // ==== D: decode ================================================================================
-    wire        d_valid = q_n != 2'd0;
-    wire [31:0] d_insn  = q_insn0;
-    wire [31:0] d_pc    = q_pc0;
-    wire        d_ferr  = q_err0;
-    wire        d_btb   = q_btb0;
+    wire        d_q     = q_n != 2'd0;        // the queue's head, else the landed word
+    wire        d_valid = d_q || l_valid;
+    wire [31:0] d_insn  = d_q ? q_insn0 : l_insn;
+    wire [31:0] d_pc    = d_q ? q_pc0 : l_pc;
+    wire        d_ferr  = d_q ? q_err0 : l_err;
+    wire        d_btb   = d_q ? q_btb0 : l_btb;
 
     wire [4:0]  d_rd, d_rs1;
     wire [2:0]  d_funct3;
@@ -139,16 +147,18 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
         pred_of = (w[6:0] == 7'b1101111 && !w[21]) || (w[6:0] == 7'b1100011 && w[31] && !w[8]);
     endfunction
     /* verilator lint_on UNUSEDSIGNAL */
-    // made as the word enters the queue (the prediction steers the queue
-    // and the fetch: from a register, D's other decisions are not in its way)
-    wire f_pred   = pred_of(ibus_rdata);
-    wire d_pred   = q_pred0;
+    // for the queue's head and the landed word apart, the choice last (the
+    // prediction steers the queue and the fetch)
+    wire l_pred   = pred_of(l_insn);
+    wire d_pred   = d_q ? q_pred0 : l_pred;
 
     // D never waits: whatever the word is, it moves on when E takes it, so
     // no decision of D's depends on the instruction word but the prediction
     wire e_load;                                // E takes a new instruction (or a bubble) this edge
     wire d_go = d_valid && e_load;              // D moves on (unless a redirect kills it)
-    wire [1:0] q_in = q_n - {1'b0, d_go};       // where an answer goes in this edge
+    wire [1:0] q_left = q_n - {1'b0, d_go && d_q};   // the queue's words D leaves
+    wire l_take = d_go && !d_q;                       // D takes the landed word
+    wire l_in   = l_valid && !l_take && q_left != 2'd2;   // the landed word moves into the queue
     assign redirect_d    = d_go && d_pred && !d_btb && !redirect;
 
     // ==== register file =====================================================================
@@ -399,6 +409,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             pend_e    <= 1'b0;
             btb_v     <= {BTB_N{1'b0}};
             q_n       <= 2'd0;
+            l_valid   <= 1'b0;
             e_valid   <= 1'b0;
             m_valid   <= 1'b0;
             w_valid   <= 1'b0;
@@ -430,29 +441,28 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
                 f_discard <= ibus_req;
             else if (ibus_ack)
                 f_discard <= 1'b0;
-            // ---- instruction queue: D takes the head; an answer goes in behind ----
-            // what is left.  The words load whatever a redirect does (it only
-            // empties the queue).
-            if (resp && q_in == 2'd0) begin
-                q_insn0 <= ibus_rdata; q_pc0 <= f_out_addr; q_err0 <= ibus_err; q_btb0 <= f_out_btb;
-                q_pred0 <= f_pred;
-            end else if (d_go) begin
+            // ---- instruction queue: D takes the head; the landed word goes in ----
+            // behind what is left.  The words load whatever a redirect does
+            // (it only empties the queue and L).
+            if (!l_valid || l_take || l_in) begin   // (else the queue is full and no answer comes: L waits)
+                l_insn <= ibus_rdata; l_pc <= f_out_addr; l_err <= ibus_err; l_btb <= f_out_btb;
+            end
+            if (refetch)
+                l_valid <= 1'b0;
+            else
+                l_valid <= resp || (l_valid && !l_take && !l_in);
+            if (l_in && q_left == 2'd0) begin
+                q_insn0 <= l_insn; q_pc0 <= l_pc; q_err0 <= l_err; q_btb0 <= l_btb; q_pred0 <= l_pred;
+            end else if (d_go && d_q) begin
                 q_insn0 <= q_insn1; q_pc0 <= q_pc1; q_err0 <= q_err1; q_btb0 <= q_btb1; q_pred0 <= q_pred1;
             end
-            if (resp && q_in == 2'd1) begin
-                q_insn1 <= ibus_rdata; q_pc1 <= f_out_addr; q_err1 <= ibus_err; q_btb1 <= f_out_btb;
-                q_pred1 <= f_pred;
-            end else if (d_go) begin
-                q_insn1 <= q_insn2; q_pc1 <= q_pc2; q_err1 <= q_err2; q_btb1 <= q_btb2; q_pred1 <= q_pred2;
-            end
-            if (resp && q_in == 2'd2) begin
-                q_insn2 <= ibus_rdata; q_pc2 <= f_out_addr; q_err2 <= ibus_err; q_btb2 <= f_out_btb;
-                q_pred2 <= f_pred;
+            if (l_in && q_left == 2'd1) begin
+                q_insn1 <= l_insn; q_pc1 <= l_pc; q_err1 <= l_err; q_btb1 <= l_btb; q_pred1 <= l_pred;
             end
             if (refetch)
                 q_n <= 2'd0;
             else
-                q_n <= q_in + {1'b0, resp};
+                q_n <= q_left + {1'b0, l_in};
             // ---- D -> E ----
             if (e_load) begin
                 e_valid <= d_go && !redirect;
