@@ -395,7 +395,29 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire        d_w2 = m_valid && m_early && m_rd == d_rs2;
     wire        d_rf1 = rf_we && rf_waddr == d_rs1;
     wire        d_rf2 = rf_we && rf_waddr == d_rs2;
-    wire [31:0] d_o2 = d_w2 ? m_result : (d_rs2 == 5'd0 ? 32'd0 : rf_wdata);
+    // The operand registers' next values: D's choices (e_load), or, while E
+    // holds, M's result or the register file's write as they pass.  A load's
+    // word (W's bus answer through the byte lanes) is the last choice in
+    // front of each register, its select from registers: in the SoC the
+    // block RAM's output and its mux tree take most of a cycle already.
+    wire [31:0] rf_wdata_nl = w_csr ? csr_rdata : w_result;   // W's write when it is no load
+    wire        e_hold = !e_load && !gs;
+    wire        h1m = m_valid && m_early && m_rd == e_rs1;
+    wire        h2m = m_valid && m_early && m_rd == e_rs2;
+    wire        h1r = rf_we && rf_waddr == e_rs1;
+    wire        h2r = rf_we && rf_waddr == e_rs2;
+    wire        o1_we = e_load || (e_hold && (h1m || h1r));
+    wire        o2_we = e_load || (e_hold && (h2m || h2r));
+    wire        ob_we = e_load || (e_hold && !e_use_imm && (h2m || h2r));
+    // (where the register file's write is not chosen, the register's select is 0)
+    wire        o1_ld = w_load && (e_load ? !d_w1 && d_rs1 != 5'd0 : !h1m);
+    wire        o2_ld = w_load && (e_load ? !d_w2 && d_rs2 != 5'd0 : !h2m);
+    wire        ob_ld = w_load && (e_load ? !d_flags[7] && !d_w2 && d_rs2 != 5'd0 : !h2m);
+    wire [31:0] o2_d  = d_w2 ? m_result : (d_rs2 == 5'd0 ? 32'd0 : rf_wdata_nl);
+    wire [31:0] o1_nl = e_load ? (d_w1 ? m_result : (d_rs1 == 5'd0 ? 32'd0 : rf_wdata_nl))
+                               : (h1m ? m_result : rf_wdata_nl);
+    wire [31:0] o2_nl = e_load ? o2_d : (h2m ? m_result : rf_wdata_nl);
+    wire [31:0] ob_nl = e_load ? (d_flags[7] ? d_imm : o2_d) : (h2m ? m_result : rf_wdata_nl);
     wire w_btb_same = btb_tag[w_addr[BTB_IB+1:2]] == w_addr[31:BTB_IB+2];   // W's store hits an entry's word
     // E's result can be forwarded from M (the trap check is left out: a
     // trapping instruction's readers never retire)
@@ -489,31 +511,25 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
                 o1_sel <= d_w1 || d_rs1 == 5'd0 || d_rf1;
                 o2_sel <= d_w2 || d_rs2 == 5'd0 || d_rf2;
                 ob_sel <= d_flags[7] || d_w2 || d_rs2 == 5'd0 || d_rf2;
-                o1_pre <= d_w1 ? m_result : (d_rs1 == 5'd0 ? 32'd0 : rf_wdata);
-                o2_pre <= d_o2;
-                ob_pre <= d_flags[7] ? d_imm : d_o2;
             end else if (!gs) begin
                 // E holds (a hazard, a multiply/divide): M's result moves to
                 // W and W writes the register file, so the operands follow
                 f1m <= 1'b0;
                 f2m <= 1'b0;
                 fbm <= 1'b0;
-                if (m_valid && m_early && m_rd == e_rs1) begin
-                    o1_sel <= 1'b1; o1_pre <= m_result;
-                end else if (rf_we && rf_waddr == e_rs1) begin
-                    o1_sel <= 1'b1; o1_pre <= rf_wdata;
-                end
-                if (m_valid && m_early && m_rd == e_rs2) begin
-                    o2_sel <= 1'b1; o2_pre <= m_result;
-                end else if (rf_we && rf_waddr == e_rs2) begin
-                    o2_sel <= 1'b1; o2_pre <= rf_wdata;
-                end
-                if (!e_use_imm && m_valid && m_early && m_rd == e_rs2) begin
-                    ob_sel <= 1'b1; ob_pre <= m_result;
-                end else if (!e_use_imm && rf_we && rf_waddr == e_rs2) begin
-                    ob_sel <= 1'b1; ob_pre <= rf_wdata;
-                end
+                if (h1m || h1r)
+                    o1_sel <= 1'b1;
+                if (h2m || h2r)
+                    o2_sel <= 1'b1;
+                if (!e_use_imm && (h2m || h2r))
+                    ob_sel <= 1'b1;
             end
+            if (o1_we)
+                o1_pre <= o1_ld ? load_data : o1_nl;
+            if (o2_we)
+                o2_pre <= o2_ld ? load_data : o2_nl;
+            if (ob_we)
+                ob_pre <= ob_ld ? load_data : ob_nl;
             // ---- E -> M ----
             if (!gs) begin
                 m_valid <= e_adv;
