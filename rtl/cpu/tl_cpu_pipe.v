@@ -6,19 +6,20 @@
 // stages with the instruction fetch in front of them:
 //
 //   F  fetch   : ibus request (address f_pc, or the held address of a request
-//                not yet answered); answers go straight to D, or into a
-//                two-entry queue when E holds.  A branch target buffer
-//                sends the request after a jump it knows to the jump's
-//                target (no cycle lost).
-//   D  decode  : the answered word (bus or queue): decoded, register file
-//                read (block RAM, registered read) and operand choices at
-//                the edge into E.  jal and backward branches the BTB did
-//                not know are predicted taken: the fetch requests their
-//                target in the next cycle (1 cycle lost).
+//                not yet answered); every answer lands in a register (L),
+//                then moves into a two-entry queue unless D takes it.  A
+//                branch target buffer sends the request after a jump it
+//                knows to the jump's target (no cycle lost).
+//   D  decode  : the landed word (L, or the queue's head when E held):
+//                decoded, register file read (block RAM, registered read)
+//                and operand choices at the edge into E.  jal and backward
+//                branches the BTB did not know are predicted taken: the
+//                fetch requests their target in the next cycle (2 cycles
+//                lost).
 //   E  execute : operands forwarded from M and W, a load's reader waits
 //                here, ALU, branch comparator, jump/branch targets (jalr,
 //                a taken forward branch or a mispredicted branch redirects
-//                the fetch: 2 cycles lost), effective address,
+//                the fetch: 3 cycles lost), effective address,
 //                multiply/divide (E waits for the unit), every exception
 //                but a data bus error, and interrupts, taken before the
 //                instruction in E executes.
@@ -65,10 +66,21 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     reg  [31:0] f_out_addr;
     reg         f_discard;       // its answer belongs to a flushed path
     reg  [31:0] f_pc;            // the next address to request
-    reg  [1:0]  q_n;             // instruction queue: entries 0 (head) and 1
+    // Every answer lands in the landing register l_*, with nothing in front
+    // of it but the bus, so the block RAM's output (in the SoC, its mux
+    // tree and the fabric's) reaches a flip-flop before any decode: the
+    // RAM's clock-to-out and its wire take most of a 60 MHz cycle on the
+    // proxy.  D decodes the older of the queue's head and the landed word;
+    // a landed word D does not take moves into the 2-entry queue (or waits
+    // in place while the queue is full, when no answer can be coming).
+    reg         l_valid;
+    reg  [31:0] l_insn, l_pc;
+    reg         l_err, l_btb;
+    reg  [1:0]  q_n;
     reg  [31:0] q_insn0, q_insn1, q_pc0, q_pc1;
     reg         q_err0, q_err1;
     reg         f_out_btb, q_btb0, q_btb1;   // the word's successor was fetched from the BTB's target
+    reg         q_pred0, q_pred1;            // the word is predicted taken (pred_of)
 
     // Branch target buffer: the jumps D predicted (jal, backward branches),
     // BTB_N entries indexed by pc[BTB_IB+1:2], looked up on f_pc when a
@@ -92,18 +104,22 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
 
     wire resp   = f_out && ibus_ack && !f_discard;     // an answer for the current path
     wire f_hold = f_out && !ibus_ack;
-    // Room for the answer of a new request: whatever D does, the queue can take it.
-    wire f_room = q_n == 2'd0 || (q_n == 2'd1 && !resp);
+    // Room for the answer of a new request (next cycle at the earliest),
+    // whatever D does meanwhile: the queue and L hold at most
+    // q_n + l_valid + resp words after this edge, and three fit.
+    wire [2:0] f_words = {1'b0, q_n} + {2'b0, l_valid} + {2'b0, resp};
+    wire f_room = f_words <= 3'd2;
     wire f_new  = !f_hold && f_room;
     assign ibus_req  = !rst && (f_hold || f_new);
     assign ibus_addr = f_hold ? f_out_addr : (pend ? pend_pc : f_pc);
 
     // ==== D: decode ================================================================================
-    wire        d_valid = q_n != 2'd0 || resp;
-    wire [31:0] d_insn  = q_n != 2'd0 ? q_insn0 : ibus_rdata;
-    wire [31:0] d_pc    = q_n != 2'd0 ? q_pc0 : f_out_addr;
-    wire        d_ferr  = q_n != 2'd0 ? q_err0 : ibus_err;
-    wire        d_btb   = q_n != 2'd0 ? q_btb0 : f_out_btb;
+    wire        d_q     = q_n != 2'd0;        // the queue's head, else the landed word
+    wire        d_valid = d_q || l_valid;
+    wire [31:0] d_insn  = d_q ? q_insn0 : l_insn;
+    wire [31:0] d_pc    = d_q ? q_pc0 : l_pc;
+    wire        d_ferr  = d_q ? q_err0 : l_err;
+    wire        d_btb   = d_q ? q_btb0 : l_btb;
 
     wire [4:0]  d_rd, d_rs1;
     wire [2:0]  d_funct3;
@@ -131,15 +147,18 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
         pred_of = (w[6:0] == 7'b1101111 && !w[21]) || (w[6:0] == 7'b1100011 && w[31] && !w[8]);
     endfunction
     /* verilator lint_on UNUSEDSIGNAL */
-    // For the queue's head and for the bus word apart, the choice last: the
-    // queue's select and the decode are then side by side, not in series
-    // (the prediction steers the queue and the fetch)
-    wire d_pred   = q_n != 2'd0 ? pred_of(q_insn0) : pred_of(ibus_rdata);
+    // for the queue's head and the landed word apart, the choice last (the
+    // prediction steers the queue and the fetch)
+    wire l_pred   = pred_of(l_insn);
+    wire d_pred   = d_q ? q_pred0 : l_pred;
 
     // D never waits: whatever the word is, it moves on when E takes it, so
     // no decision of D's depends on the instruction word but the prediction
     wire e_load;                                // E takes a new instruction (or a bubble) this edge
     wire d_go = d_valid && e_load;              // D moves on (unless a redirect kills it)
+    wire [1:0] q_left = q_n - {1'b0, d_go && d_q};   // the queue's words D leaves
+    wire l_take = d_go && !d_q;                       // D takes the landed word
+    wire l_in   = l_valid && !l_take && q_left != 2'd2;   // the landed word moves into the queue
     assign redirect_d    = d_go && d_pred && !d_btb && !redirect;
 
     // ==== register file =====================================================================
@@ -376,7 +395,29 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire        d_w2 = m_valid && m_early && m_rd == d_rs2;
     wire        d_rf1 = rf_we && rf_waddr == d_rs1;
     wire        d_rf2 = rf_we && rf_waddr == d_rs2;
-    wire [31:0] d_o2 = d_w2 ? m_result : (d_rs2 == 5'd0 ? 32'd0 : rf_wdata);
+    // The operand registers' next values: D's choices (e_load), or, while E
+    // holds, M's result or the register file's write as they pass.  A load's
+    // word (W's bus answer through the byte lanes) is the last choice in
+    // front of each register, its select from registers: in the SoC the
+    // block RAM's output and its mux tree take most of a cycle already.
+    wire [31:0] rf_wdata_nl = w_csr ? csr_rdata : w_result;   // W's write when it is no load
+    wire        e_hold = !e_load && !gs;
+    wire        h1m = m_valid && m_early && m_rd == e_rs1;
+    wire        h2m = m_valid && m_early && m_rd == e_rs2;
+    wire        h1r = rf_we && rf_waddr == e_rs1;
+    wire        h2r = rf_we && rf_waddr == e_rs2;
+    wire        o1_we = e_load || (e_hold && (h1m || h1r));
+    wire        o2_we = e_load || (e_hold && (h2m || h2r));
+    wire        ob_we = e_load || (e_hold && !e_use_imm && (h2m || h2r));
+    // (where the register file's write is not chosen, the register's select is 0)
+    wire        o1_ld = w_load && (e_load ? !d_w1 && d_rs1 != 5'd0 : !h1m);
+    wire        o2_ld = w_load && (e_load ? !d_w2 && d_rs2 != 5'd0 : !h2m);
+    wire        ob_ld = w_load && (e_load ? !d_flags[7] && !d_w2 && d_rs2 != 5'd0 : !h2m);
+    wire [31:0] o2_d  = d_w2 ? m_result : (d_rs2 == 5'd0 ? 32'd0 : rf_wdata_nl);
+    wire [31:0] o1_nl = e_load ? (d_w1 ? m_result : (d_rs1 == 5'd0 ? 32'd0 : rf_wdata_nl))
+                               : (h1m ? m_result : rf_wdata_nl);
+    wire [31:0] o2_nl = e_load ? o2_d : (h2m ? m_result : rf_wdata_nl);
+    wire [31:0] ob_nl = e_load ? (d_flags[7] ? d_imm : o2_d) : (h2m ? m_result : rf_wdata_nl);
     wire w_btb_same = btb_tag[w_addr[BTB_IB+1:2]] == w_addr[31:BTB_IB+2];   // W's store hits an entry's word
     // E's result can be forwarded from M (the trap check is left out: a
     // trapping instruction's readers never retire)
@@ -390,6 +431,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
             pend_e    <= 1'b0;
             btb_v     <= {BTB_N{1'b0}};
             q_n       <= 2'd0;
+            l_valid   <= 1'b0;
             e_valid   <= 1'b0;
             m_valid   <= 1'b0;
             w_valid   <= 1'b0;
@@ -421,27 +463,28 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
                 f_discard <= ibus_req;
             else if (ibus_ack)
                 f_discard <= 1'b0;
-            // ---- instruction queue: D takes the head (or the answer itself when empty) ----
-            // The words load whatever a redirect does (it only empties the queue).
-            if (q_n == 2'd0 || (q_n == 2'd1 && d_go)) begin
-                if (resp) begin
-                    q_insn0 <= ibus_rdata; q_pc0 <= f_out_addr; q_err0 <= ibus_err; q_btb0 <= f_out_btb;
-                end
-            end else if (q_n == 2'd1) begin
-                if (resp) begin
-                    q_insn1 <= ibus_rdata; q_pc1 <= f_out_addr; q_err1 <= ibus_err; q_btb1 <= f_out_btb;
-                end
-            end else if (d_go) begin   // two entries: no request was outstanding
-                q_insn0 <= q_insn1; q_pc0 <= q_pc1; q_err0 <= q_err1; q_btb0 <= q_btb1;
+            // ---- instruction queue: D takes the head; the landed word goes in ----
+            // behind what is left.  The words load whatever a redirect does
+            // (it only empties the queue and L).
+            if (!l_valid || l_take || l_in) begin   // (else the queue is full and no answer comes: L waits)
+                l_insn <= ibus_rdata; l_pc <= f_out_addr; l_err <= ibus_err; l_btb <= f_out_btb;
+            end
+            if (refetch)
+                l_valid <= 1'b0;
+            else
+                l_valid <= resp || (l_valid && !l_take && !l_in);
+            if (l_in && q_left == 2'd0) begin
+                q_insn0 <= l_insn; q_pc0 <= l_pc; q_err0 <= l_err; q_btb0 <= l_btb; q_pred0 <= l_pred;
+            end else if (d_go && d_q) begin
+                q_insn0 <= q_insn1; q_pc0 <= q_pc1; q_err0 <= q_err1; q_btb0 <= q_btb1; q_pred0 <= q_pred1;
+            end
+            if (l_in && q_left == 2'd1) begin
+                q_insn1 <= l_insn; q_pc1 <= l_pc; q_err1 <= l_err; q_btb1 <= l_btb; q_pred1 <= l_pred;
             end
             if (refetch)
                 q_n <= 2'd0;
-            else if (q_n == 2'd0)
-                q_n <= (resp && !d_go) ? 2'd1 : 2'd0;
-            else if (q_n == 2'd1)
-                q_n <= (d_go && !resp) ? 2'd0 : ((resp && !d_go) ? 2'd2 : 2'd1);
-            else if (d_go)
-                q_n <= 2'd1;
+            else
+                q_n <= q_left + {1'b0, l_in};
             // ---- D -> E ----
             if (e_load) begin
                 e_valid <= d_go && !redirect;
@@ -468,31 +511,25 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
                 o1_sel <= d_w1 || d_rs1 == 5'd0 || d_rf1;
                 o2_sel <= d_w2 || d_rs2 == 5'd0 || d_rf2;
                 ob_sel <= d_flags[7] || d_w2 || d_rs2 == 5'd0 || d_rf2;
-                o1_pre <= d_w1 ? m_result : (d_rs1 == 5'd0 ? 32'd0 : rf_wdata);
-                o2_pre <= d_o2;
-                ob_pre <= d_flags[7] ? d_imm : d_o2;
             end else if (!gs) begin
                 // E holds (a hazard, a multiply/divide): M's result moves to
                 // W and W writes the register file, so the operands follow
                 f1m <= 1'b0;
                 f2m <= 1'b0;
                 fbm <= 1'b0;
-                if (m_valid && m_early && m_rd == e_rs1) begin
-                    o1_sel <= 1'b1; o1_pre <= m_result;
-                end else if (rf_we && rf_waddr == e_rs1) begin
-                    o1_sel <= 1'b1; o1_pre <= rf_wdata;
-                end
-                if (m_valid && m_early && m_rd == e_rs2) begin
-                    o2_sel <= 1'b1; o2_pre <= m_result;
-                end else if (rf_we && rf_waddr == e_rs2) begin
-                    o2_sel <= 1'b1; o2_pre <= rf_wdata;
-                end
-                if (!e_use_imm && m_valid && m_early && m_rd == e_rs2) begin
-                    ob_sel <= 1'b1; ob_pre <= m_result;
-                end else if (!e_use_imm && rf_we && rf_waddr == e_rs2) begin
-                    ob_sel <= 1'b1; ob_pre <= rf_wdata;
-                end
+                if (h1m || h1r)
+                    o1_sel <= 1'b1;
+                if (h2m || h2r)
+                    o2_sel <= 1'b1;
+                if (!e_use_imm && (h2m || h2r))
+                    ob_sel <= 1'b1;
             end
+            if (o1_we)
+                o1_pre <= o1_ld ? load_data : o1_nl;
+            if (o2_we)
+                o2_pre <= o2_ld ? load_data : o2_nl;
+            if (ob_we)
+                ob_pre <= ob_ld ? load_data : ob_nl;
             // ---- E -> M ----
             if (!gs) begin
                 m_valid <= e_adv;
