@@ -15,9 +15,12 @@ export PATH := $(CURDIR)/$(VENV)/tools/bin:$(CURDIR)/$(VENV)/bin:$(PATH)
 export VLT_VERSION = $(shell verilator --version 2>/dev/null | cut -d' ' -f2)
 
 # Narrowing: make sim SIM=verilator TB=pwm ; JOBS=1 to run serially.
+# JOBS: one test worker more than the cores, because some tests wait on the
+# wall clock (the simulated board's link and watchdog run in real time) and
+# would otherwise leave a core idle.
 SIM  ?=
 TB   ?=
-JOBS ?= auto
+JOBS ?= $(shell echo $$(( $$(nproc 2>/dev/null || echo 1) + 1 )))
 export TORQUELOOP_SIM := $(SIM)
 PYTEST_K := $(if $(TB),-k "$(TB)",)
 XDIST    := $(if $(filter 1,$(JOBS)),,-n $(JOBS))
