@@ -78,11 +78,9 @@ static void commit_axis(tl_servo_t *s, uint32_t i, const tl_axis_cfg_t *cfg)
 }
 
 /* The period in clock cycles and the link timeout in periods, from global parameters g. */
-TL_FOR_SIZE static void global_cfg(const int32_t *g, uint32_t clk_hz, uint32_t *period_cycles, uint32_t *link_timeout_ticks,
-                                   uint32_t *runaway_odd)
+TL_FOR_SIZE static void global_cfg(const int32_t *g, uint32_t clk_hz, uint32_t *period_cycles, uint32_t *link_timeout_ticks)
 {
     uint32_t period_us = (uint32_t)g[PI(TLP_P_PERIOD_US)];
-    *runaway_odd = tl_runaway_every(period_us) - 1u;
     *period_cycles = (uint32_t)((uint64_t)period_us * clk_hz / 1000000u);
     *link_timeout_ticks = (uint32_t)g[PI(TLP_P_LINK_TIMEOUT_MS)] * 1000u / period_us;
     if (*link_timeout_ticks == 0u)
@@ -96,7 +94,8 @@ TL_FOR_SIZE void tl_params_sync(tl_servo_t *s)
         axis_cfg(s->ax[i].p, (uint32_t)gv(s, TLP_P_PERIOD_US), s->clk_hz, &cfg);
         commit_axis(s, i, &cfg);
     }
-    global_cfg(s->g, s->clk_hz, &s->period_cycles, &s->link_timeout_ticks, &s->runaway_odd);
+    global_cfg(s->g, s->clk_hz, &s->period_cycles, &s->link_timeout_ticks);
+    s->runaway_odd = tl_runaway_every((uint32_t)gv(s, TLP_P_PERIOD_US)) - 1u;
 }
 
 /* The parameter's index, if id names one and axis addresses it (a global one with TLP_GLOBAL_AXIS). */
@@ -208,8 +207,8 @@ static void set_global(tl_servo_t *s, uint8_t id, int k, int32_t v)
     for (uint32_t j = 0; j < TLP_PARAM_COUNT; j++)
         g[j] = s->g[j];
     g[k] = v;
-    uint32_t period_cycles, timeout_ticks, runaway_odd;
-    global_cfg(g, s->clk_hz, &period_cycles, &timeout_ticks, &runaway_odd);
+    uint32_t period_cycles, timeout_ticks;
+    global_cfg(g, s->clk_hz, &period_cycles, &timeout_ticks);
     for (uint32_t i = 0; i < TL_AXES; i++)
         axis_cfg(s->ax[i].p, (uint32_t)g[PI(TLP_P_PERIOD_US)], s->clk_hz, &cfg[i]);
     hal_irq_off();
@@ -220,7 +219,7 @@ static void set_global(tl_servo_t *s, uint8_t id, int k, int32_t v)
         commit_axis(s, i, &cfg[i]);
     s->period_cycles = period_cycles;
     s->link_timeout_ticks = timeout_ticks;
-    s->runaway_odd = runaway_odd;
+    s->runaway_odd = tl_runaway_every((uint32_t)g[PI(TLP_P_PERIOD_US)]) - 1u;
     hal_irq_on();
 }
 
