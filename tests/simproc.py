@@ -7,19 +7,18 @@ from __future__ import annotations
 import json
 import signal
 import subprocess
-import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 
 from torqueloop import cli
+from torqueloop.flow import terminal
 
 
 @contextmanager
 def sim_board(*args: str, env: dict[str, str] | None = None) -> Iterator[str]:
     """``python -m torqueloop.cli <args>`` (whose arguments include ``sim``);
     yields the ``socket://`` URL the board listens on."""
-    p = subprocess.Popen([sys.executable, "-m", "torqueloop.cli", *args], stdout=subprocess.PIPE,
-                         stderr=subprocess.DEVNULL, text=True, env=env)
+    p = terminal.cli(list(args), env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
     try:
         line = p.stdout.readline()
         assert "socket://" in line, line

@@ -27,6 +27,7 @@ import pytest
 from simproc import run_cli as tl
 from simproc import sim_board
 from torqueloop import cli
+from torqueloop.flow import terminal
 from torqueloop.host import serve as hserve
 
 SWITCHES = 20_000
@@ -137,6 +138,37 @@ def test_hold_keeps_the_axis_enabled_until_ctrl_c(url, user_env) -> None:
     assert not st["enabled"] and st["fault_names"] == [], st
 
 
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "kill"])
+def test_a_move_cut_short_disables_the_axis_at_once(url, user_env, sig) -> None:
+    """Ctrl-C (or `kill`) while `move --wait` waits: the axis is disabled there
+    and then, one line says so, exit 130 - not a traceback, and not the link
+    watchdog stopping the motor LINK_TIMEOUT_MS later with a latched LINK fault.
+    The test runner's own SIGINT is ignored while the command starts, as in a
+    background job: the command must hear the Ctrl-C all the same."""
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        p = _start(["-u", url, "move", "3rev", "--trapezoid", "--relative", "--unhomed", "--enable",
+                    "--wait", "20"], user_env)
+    finally:
+        signal.signal(signal.SIGINT, old)
+    try:
+        for line in p.stderr:                               # the progress bar: it is moving
+            if "moving" in line and "0.0 %" not in line:
+                break
+        else:
+            pytest.fail(f"the move never started: {p.stdout.read()}")
+        p.send_signal(sig)
+        out, err = p.communicate(timeout=20)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == cli.EXIT_INTERRUPTED, err
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "torqueloop: interrupted; every axis disabled", err
+    st = json.loads(subprocess.run([sys.executable, "-m", "torqueloop.cli", "-u", url, "--json", "status"],
+                                   env=user_env, capture_output=True, text=True, timeout=60).stdout)["0"]
+    assert not st["enabled"] and st["fault_names"] == [], st
+
+
 def test_plot_without_a_display_refuses_in_one_line(url, user_env) -> None:
     t0 = time.monotonic()
     r = subprocess.run([sys.executable, "-m", "torqueloop.cli", "-u", url, "plot", "--duration", "2"],
@@ -146,8 +178,7 @@ def test_plot_without_a_display_refuses_in_one_line(url, user_env) -> None:
 
 
 def _start(args: list[str], env: dict[str, str]) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "torqueloop.cli", *args], env=env, text=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    return terminal.cli(args, env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
 
 
 def test_server_protocol_errors_are_answers_not_disconnects(url, user_env) -> None:

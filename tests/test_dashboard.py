@@ -28,6 +28,7 @@ from pathlib import Path
 import pytest
 
 from simproc import sim_board
+from torqueloop.flow import terminal
 from torqueloop.host import serve as hserve
 from torqueloop.host.dash.access import Access
 from torqueloop.host.dash.hub import ROW, Hub, Page
@@ -58,8 +59,8 @@ def url(env):
 
 def _serve(url: str, env: dict[str, str], http: str) -> tuple[subprocess.Popen, list[str]]:
     """``torqueloop serve --http``: the process and the lines it printed up to its dashboard's address."""
-    p = subprocess.Popen([sys.executable, "-m", "torqueloop.cli", "-u", url, "serve", "--port", "0", "--quiet",
-                          "--http", http], env=env, text=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    p = terminal.cli(["-u", url, "serve", "--port", "0", "--quiet", "--http", http], env,
+                     stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     lines = [p.stdout.readline()]
     assert "torqueloop server for" in lines[0], lines[0] + (p.stderr.read() if p.poll() is not None else "")
     lines.append(p.stdout.readline())

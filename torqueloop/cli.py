@@ -29,6 +29,7 @@ import os
 import re
 import signal
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import Any, Callable
@@ -133,6 +134,25 @@ class Ctx:
     def close(self) -> None:
         if self._client is not None and not self.shared:
             self._client.close()
+
+    def interrupted(self) -> str:
+        """Ctrl-C (or SIGTERM) cut the command short: nothing it set moving
+        keeps moving.  On the board's own link this process is the board's one
+        client, so every enabled axis is this session's: they are disabled now,
+        not left to the link watchdog (which lets them run LINK_TIMEOUT_MS on
+        and latches a LINK fault).  Through a server, closing the connection
+        makes the server disable the axes this command held.  Returns what
+        was done, for the one line the user sees."""
+        c = self._client
+        if c is None:
+            return "nothing had been sent to the board"
+        if isinstance(c, RemoteClient):
+            return "the server disables the axes this command held"
+        try:
+            c.enable((1 << P.AXIS_COUNT) - 1, False)
+        except (ProtocolError, OSError) as e:
+            return f"could not disable the axes ({e}); the board's link watchdog disables them"
+        return "every axis disabled"
 
 
 def _jsonable(o: Any) -> Any:
@@ -1543,6 +1563,12 @@ def parser() -> argparse.ArgumentParser:
 
 #: exit status (module docstring)
 EXIT_REFUSED, EXIT_BAD_INPUT, EXIT_NO_ANSWER = 1, 2, 3
+EXIT_INTERRUPTED = 130       # what a shell reports for a command ended by SIGINT
+
+
+def _terminated(signum: int, frame: Any) -> None:
+    """SIGTERM (`kill`, a service manager) ends a command the way Ctrl-C does."""
+    raise KeyboardInterrupt
 #: a value the board refuses as such is bad input, whoever checked it (the tool before sending, or the board)
 BAD_INPUT_STATUSES = frozenset({P.STATUS["BAD_ARG"], P.STATUS["RANGE"]})
 
@@ -1580,8 +1606,15 @@ def main(argv: list[str] | None = None, *, client: Client | RemoteClient | None 
     if client is not None:
         ctx._client, ctx.shared = client, True
     ctx.tick = tick or (lambda: None)
+    own_term = client is None and threading.current_thread() is threading.main_thread()
+    prev_term = signal.signal(signal.SIGTERM, _terminated) if own_term else None
     try:
         return args.fn(ctx)
+    except KeyboardInterrupt:
+        if ctx.shared:
+            raise                 # the shell's own Ctrl-C handling (torqueloop/host/shell.py)
+        print(f"torqueloop: interrupted; {ctx.interrupted()}", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except BrokenPipeError as e:
         if not _stdout_closed():
             print(f"torqueloop: {e}", file=sys.stderr)
@@ -1601,6 +1634,8 @@ def main(argv: list[str] | None = None, *, client: Client | RemoteClient | None 
         print(f"torqueloop: {e}", file=sys.stderr)
         return EXIT_REFUSED
     finally:
+        if own_term:
+            signal.signal(signal.SIGTERM, prev_term)
         try:
             ctx.close()
         except OSError:

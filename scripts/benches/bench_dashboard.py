@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from torqueloop.flow import terminal
 from torqueloop.spec import auth
 from torqueloop.spec.repo import REPO_ROOT
 
@@ -38,8 +39,7 @@ def _quick() -> bool:
 
 
 def _start(args: list[str], env: dict[str, str]) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "torqueloop.cli", *args], env=env, text=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+    return terminal.cli(args, env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
 
 
 def _browser():
