@@ -15,9 +15,12 @@ export PATH := $(CURDIR)/$(VENV)/tools/bin:$(CURDIR)/$(VENV)/bin:$(PATH)
 export VLT_VERSION = $(shell verilator --version 2>/dev/null | cut -d' ' -f2)
 
 # Narrowing: make sim SIM=verilator TB=pwm ; JOBS=1 to run serially.
+# JOBS: one test worker more than the cores, because some tests wait on the
+# wall clock (the simulated board's link and watchdog run in real time) and
+# would otherwise leave a core idle.
 SIM  ?=
 TB   ?=
-JOBS ?= auto
+JOBS ?= $(shell echo $$(( $$(nproc 2>/dev/null || echo 1) + 1 )))
 export TORQUELOOP_SIM := $(SIM)
 PYTEST_K := $(if $(TB),-k "$(TB)",)
 XDIST    := $(if $(filter 1,$(JOBS)),,-n $(JOBS))
@@ -50,9 +53,17 @@ lint: $(STAMP) ## Verilator -Wall, GHDL --std=08, Yosys synth check, VHDL/Verilo
 unit: $(STAMP) ## Python unit tests (plant, reference models, tools)
 	$(PY) -m pytest tests $(PYTEST_K) $(XDIST)
 
+# make lint runs beside the tests rather than before them (its Yosys proofs and synth checks would
+# otherwise hold both cores' worth of tests for two minutes); its output follows the tests' and
+# either failing fails make test.
 test: $(STAMP) ## lint + sim + unit: what CI runs
-	$(MAKE) --no-print-directory lint
-	$(PY) -m pytest tb tests $(PYTEST_K) $(XDIST)
+	@mkdir -p build; log=build/lint.$$$$.log; $(MAKE) --no-print-directory lint > $$log 2>&1 & lint=$$!; \
+	$(PY) -m pytest tb tests $(PYTEST_K) $(XDIST); tests=$$?; \
+	wait $$lint; lint=$$?; mv $$log build/lint.log; \
+	echo "---- make lint (ran beside the tests; build/lint.log) ----"; cat build/lint.log; \
+	if [ $$lint -ne 0 ]; then echo "make test: make lint failed"; fi; \
+	if [ $$tests -ne 0 ]; then echo "make test: the tests failed"; fi; \
+	[ $$lint -eq 0 ] && [ $$tests -eq 0 ]
 
 test-durations: $(STAMP) ## fold the last test run's wall times into tests/durations.json (the longest tests start first)
 	$(PY) scripts/test_durations.py

@@ -25,6 +25,7 @@ from __future__ import annotations
 import json
 import os
 import statistics
+import time
 from pathlib import Path
 
 from torqueloop.flow.tools import use_project_tools
@@ -47,6 +48,33 @@ def pytest_configure(config):
     # the controller builds its scheduler after this; a value given on the command line wins
     if getattr(config.option, "maxschedchunk", 0) is None:
         config.option.maxschedchunk = 1
+    _no_reconnect_grace()
+
+
+def _no_reconnect_grace() -> None:
+    """pyserial's socket:// port sleeps 0.3 s after closing its socket ("in
+    case of quick reconnects, give the server some time": the RN-XV's, on a
+    real bench).  The tests run the torqueloop command in their own process
+    hundreds of times against ``torqueloop sim``, which sees the old
+    connection end before it takes the next one, so that sleep was only
+    idle worker time; here it is skipped, in the tests' process only (the
+    tool a user runs keeps it; commands run as subprocesses keep it too)."""
+    try:
+        from serial.urlhandler import protocol_socket
+    except ImportError:
+        return
+
+    class _Time:
+        """The time module for protocol_socket, whose only use of it is that sleep."""
+
+        def __getattr__(self, name: str):
+            return getattr(time, name)
+
+        @staticmethod
+        def sleep(seconds: float) -> None:
+            pass
+
+    protocol_socket.time = _Time()
 
 
 def pytest_collection_modifyitems(session, config, items):
