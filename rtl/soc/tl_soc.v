@@ -28,9 +28,9 @@ module tl_soc #(
     parameter integer CLK_HZ           = `TL_CLK_HZ,
     parameter [31:0]  HART_ID          = 32'd0,
     parameter integer LIMIT_DEBOUNCE_CLKS = 50_000,  // limit switch debounce, 1 ms
-    // the CPU: 0 tl_cpu (multi-cycle), 1 tl_cpu_pipe (pipelined, on a fabric
-    // that takes a request every cycle); docs/cpu.md
-    parameter integer CPU_PIPELINED    = 0
+    // the CPU: 1 tl_cpu_pipe (pipelined, on a fabric that takes a request
+    // every cycle: the board's), 0 tl_cpu (multi-cycle, smaller); docs/cpu.md
+    parameter integer CPU_PIPELINED    = 1
 ) (
     input  wire        clk,
     input  wire        rst,            // synchronous, active high

@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT
 """The CPU cores side by side, the multi-cycle tl_cpu and the pipelined
 tl_cpu_pipe: CPI on a small integer benchmark (tb/cpu/progs/bench.c, -O2),
-cycles per instruction class, Cyclone V resources and logic depth."""
+cycles per instruction class, Cyclone V resources and logic depth.  The
+firmware's control iteration on both cores is bench_firmware's."""
 
 from __future__ import annotations
 
@@ -56,8 +57,6 @@ def run_elf(elf: Path, *extra: str) -> str:
     return proc.stdout
 
 
-#: the control iteration the pipelined core is to fit (docs/cpu.md), cycles
-PIPE_ITERATION_TARGET = 900
 #: the cores: name in scripts/run_elf.py --core -> manifest core
 CORES = {"multi": "cpu", "pipe": "cpu_pipe"}
 
@@ -115,20 +114,6 @@ def main() -> int:
               f"{row['ffs']} FFs, {row['dsp']} DSP blocks, {row['m10k']} M10K, {row['mlab']} MLAB")
         print(f"{name:5s} logic depth: {row.get('lut_levels', '?')} LUT levels (eda.lut_levels: carry hops free); "
               f"{depth} cells by ltp counting every carry-chain cell (without the multiplier: {depth_core})")
-    # the firmware's control iteration on the pipelined core (bench_firmware
-    # measures it on the default core): worst case, two axes PID at 20 kHz
-    from bench import QUICK, load   # scripts/bench.py, which runs this
-    if not QUICK:
-        fw = load(Path(__file__).resolve().with_name("bench_firmware.py"))
-        BUDGET_CYCLES, _measure = fw.BUDGET_CYCLES, fw._measure
-        for mode, short, what in ((0, False, "step moves"), (1, False, "trapezoid moves (2000 counts, accelerating)"),
-                                  (1, True, "trapezoid moves (60 counts, braking)")):
-            m = _measure(50, mode, short, cpu_pipelined=1)
-            cyc, late = m["loop_cycles_max"], m["jitter_cycles_max"]
-            print(f"pipe  control iteration at 20 kHz, both axes PID, {what}: worst {cyc} cycles "
-                  f"({cyc / BUDGET_CYCLES * 100:.0f} % of the {BUDGET_CYCLES}-cycle budget; target {PIPE_ITERATION_TARGET}), "
-                  f"worst interrupt lateness {late} cycles; telemetry {m['telemetry_frames']} frames, "
-                  f"{m['telemetry_dropped']} dropped, faults {m['faults']}")
     return 0
 
 
