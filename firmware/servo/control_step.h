@@ -10,7 +10,8 @@
 #include "control.h"
 
 static inline int64_t clamp64(int64_t v, int64_t lo, int64_t hi) { return v < lo ? lo : (v > hi ? hi : v); }
-static inline int64_t abs64(int64_t v) { return v < 0 ? -v : v; }
+/* x < 0 from the high word alone. */
+static inline bool neg64(int64_t x) { return (int32_t)((uint64_t)x >> 32) < 0; }
 /* Counts between two decoder readings: the 32-bit counter wraps, so the
  * difference is taken modulo 2^32 (a signed subtraction would overflow). */
 static inline int32_t count_diff(int32_t a, int32_t b) { return (int32_t)((uint32_t)a - (uint32_t)b); }
@@ -58,7 +59,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
 {
     int64_t d = c->target_q16 - c->sp_q16;
     int32_t s = (int32_t)(d >> 63);                  /* toward the target: 0 up, -1 down */
-    uint64_t ad = (uint64_t)abs64(d);
+    int64_t ad = (d ^ s) - s;                        /* |d| < 2^48: positions are 32-bit counts in q16 */
     uint32_t a = (uint32_t)c->d.amax_q16;
     int32_t v = (c->prof_v_q16 ^ s) - s;             /* speed toward the target (|v| < 2^31), accelerated: */
     int32_t vs = v + (int32_t)a;
@@ -74,10 +75,12 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
     } else if (TL_UNLIKELY(v < 0)) {
         dvs = vs > 0 ? stop_distance((uint32_t)vs, m, a) : 0u;
     }
-    if (vs > 0 && dvs > ad) {
+    /* Distances and stopping distances are below 2^62 (D(v) < 2^31 (m + 1)): each 64-bit test is
+     * the sign of a difference, one subtraction and one branch. */
+    if (neg64(ad - (int64_t)dvs)) {                  /* D(vs) > d; D is 0 for vs <= 0 */
         uint32_t lo = v > (int32_t)a ? (uint32_t)v - a : 0u;   /* v_allow(d) >= lo when on the curve */
         uint32_t mlo = v > (int32_t)a ? c->prof_m - 1u : 0u;
-        if (lo > 0u && dv - (uint32_t)v > ad) {
+        if (lo > 0u && neg64(ad - (int64_t)(dv - (uint32_t)v))) {
             vs = (int32_t)lo;                        /* cannot stop in time: brake by a */
             m = mlo;
         } else {
@@ -103,7 +106,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
             m = n;
         }
     }
-    if (vs >= 0 && (uint64_t)vs >= ad) {
+    if (!neg64((int64_t)vs - ad)) {                 /* vs >= d: lands (never when vs < 0) */
         c->sp_q16 = c->target_q16;
         c->prof_v_q16 = 0;
         c->prof_m = 0;
