@@ -159,10 +159,10 @@ static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl
             d = d > 0 ? 1 : -1;
             dt = interval;
         }
-        if (TL_UNLIKELY(dt == 0u))
-            dt = 1u;
-        int32_t v = edge_speed(c, d < 0 ? 0u - (uint32_t)d : (uint32_t)d, dt);
-        c->vel_q8 = d < 0 ? -v : v;
+        dt |= (uint32_t)(dt == 0u);                  /* 0 as 1; no branch */
+        int32_t sd = d >> 31;                        /* the direction as a sign mask: no branch */
+        int32_t v = edge_speed(c, (uint32_t)(d ^ sd) - (uint32_t)sd, dt);
+        c->vel_q8 = (v ^ sd) - sd;
         c->pos_ref = pos;
         c->t_ref = edge_time;
         c->moved_last = true;
@@ -260,7 +260,8 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     /* The error, q16 counts: 32 bits within +-32767 counts (the usual case), saturated beyond. */
     int64_t e_q16 = c->sp_q16 - (int64_t)pos * 65536;
     int32_t e = (int32_t)e_q16;
-    bool fits = (int32_t)(e_q16 >> 32) == (e >> 31) && e != INT32_MIN;
+    /* one branch: the high word is the low word's sign, and e is not INT32_MIN */
+    bool fits = (((uint32_t)(e_q16 >> 32) ^ (uint32_t)(e >> 31)) | (uint32_t)(e == INT32_MIN)) == 0u;
     if (TL_LIKELY(fits)) {
         c->err_counts = (e >> 16) + ((e >> 15) & 1);   /* (e + 2^15) >> 16 without overflow */
     } else {
@@ -273,7 +274,7 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
         c->cmd = 0;
         return 0;
     }
-    if (fits && (e < 0 ? -e : e) <= p->deadband_q16)
+    if (fits & ((e < 0 ? -e : e) <= p->deadband_q16))   /* & not &&: one branch */
         e = 0;
     int32_t limit = p->cmd_limit;
     /* eq. (20): P;  eq. (21): + Kd * (0 - v);  eq. (22): + Ki * integral(e) */
@@ -281,7 +282,7 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     if (p->law >= TL_LAW_PD)
         pd_q16 -= mul32(p->kd_q16, c->vel_q8) >> 8;
     int32_t i_q16 = 0;
-    if (p->law == TL_LAW_PID) {
+    if (TL_LIKELY(p->law == TL_LAW_PID)) {
         int32_t e_sign = (e > 0) - (e < 0);
         bool frozen = (c->sat_sign != 0) & (e_sign == c->sat_sign);   /* & not &&: no branch */
         if (TL_UNLIKELY(c->d.friction) && p->izone_q16 != 0 && (e < 0 ? -e : e) <= p->izone_q16)
@@ -313,16 +314,16 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     int32_t pd = (int32_t)pd_q16;
     int32_t cmd;
     if (TL_LIKELY((int32_t)(pd_q16 >> 32) == (pd >> 31) && (uint32_t)pd + 0x40000000u < 0x80000000u)) {
-        int32_t t = pd + i_q16 + 32768;
-        if (t >= (int32_t)c->d.sat_hi_q16) {
-            cmd = limit;
-            c->sat_sign = 1;
-        } else if (t < (int32_t)c->d.sat_lo_q16) {
-            cmd = -limit;
-            c->sat_sign = -1;
-        } else {
+        int32_t t = pd + i_q16 + 32768, lo = (int32_t)c->d.sat_lo_q16;
+        if (TL_LIKELY((uint32_t)t - (uint32_t)lo < (uint32_t)c->d.sat_hi_q16 - (uint32_t)lo)) {   /* lo <= t < hi */
             cmd = t >> 16;
             c->sat_sign = 0;
+        } else if (t >= lo) {
+            cmd = limit;
+            c->sat_sign = 1;
+        } else {
+            cmd = -limit;
+            c->sat_sign = -1;
         }
     } else if (pd_q16 > 0) {
         cmd = limit;
