@@ -37,22 +37,24 @@ static inline uint32_t opaque(uint32_t x)
  * because D(v - a) = D(v) - v, the last speed v was on or inside the braking curve and
  * v_allow lies in [v - a, v + a): n is m(v - a) or one or two more, found by walking D up
  * from D(v - a) segment by segment, and the quotient is a remainder over n + 1 that fits
- * 32 bits.  If a new target or a lower vmax
+ * 32 bits.  D(|v|) itself is carried from sample to sample: no sample multiplies for it while
+ * accelerating or cruising.  If a new target or a lower vmax
  * leaves the axis unable to stop in time (D(v - a) > d), it brakes by a and comes back. */
 static inline uint64_t stop_distance(uint32_t v, uint32_t m, uint32_t a)
 {
     return ((uint64_t)(m + 1u) * (uint64_t)(2u * v - a * m)) >> 1;   /* 2v - a m = v + (v mod a) < 2^31 */
 }
 
-/* floor(x / k), k >= 1: below TL_CTL_SPEED_TAB through the reciprocal table (a multiply,
- * a check and at most one correction: floor(x R / 2^32) with R = floor((2^32 - 1) / k) is
- * the quotient or one less), the hardware divide (35 cycles) beyond. */
-static inline uint32_t div_small(uint32_t x, uint32_t k)
+/* floor(x / k), k >= 1, and the remainder in *rem: below TL_CTL_SPEED_TAB through the
+ * reciprocal table (a multiply, a check and at most one correction: floor(x R / 2^32) with
+ * R = floor((2^32 - 1) / k) is the quotient or one less), the hardware divide (35 cycles) beyond. */
+static inline uint32_t div_small(uint32_t x, uint32_t k, uint32_t *rem)
 {
-    if (k >= TL_CTL_SPEED_TAB)
-        return x / k;
-    uint32_t q = (uint32_t)(((uint64_t)x * tl_ctl_recip[k]) >> 32);
-    return x - q * k >= k ? q + 1u : q;
+    uint32_t q = TL_LIKELY(k < TL_CTL_SPEED_TAB) ? (uint32_t)(((uint64_t)x * tl_ctl_recip[k]) >> 32) : x / k;
+    uint32_t r = x - opaque(q) * k;
+    uint32_t over = (uint32_t)(r >= k);              /* the correction as a mask: no branch */
+    *rem = r - (k & (0u - over));
+    return q + over;
 }
 
 static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
@@ -64,16 +66,20 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
     int32_t v = (c->prof_v_q16 ^ s) - s;             /* speed toward the target (|v| < 2^31), accelerated: */
     int32_t vs = v + (int32_t)a;
     uint32_t m = v >= 0 ? c->prof_m + 1u : (c->prof_m ? c->prof_m - 1u : 0u);
-    /* One product for both tests below: D(v + a) = D(v) + v + a and D(v - a) = D(v) - v
-     * (the sum's first or last term), with m(v) = prof_m for v >= 0. */
-    uint64_t dv = v >= 0 ? stop_distance((uint32_t)v, c->prof_m, a) : 0u;
-    uint64_t dvs = dv + (uint32_t)vs;
+    /* D(|v|) is carried from sample to sample (prof_dv), and both tests below follow from it:
+     * D(v + a) = D(v) + v + a and D(v - a) = D(v) - v (the sum's first or last term). */
+    uint64_t dv = c->prof_dv;
+    uint64_t dvs = dv + (uint32_t)vs, dn;            /* dn: D(|vs|), for the next sample */
     if (vs > c->d.vmax_q16) {
         vs = c->d.vmax_q16;
         m = c->d.m_vmax;
         dvs = vs == v ? dv : stop_distance((uint32_t)vs, m, a);   /* cruising: D(vmax) is D(v) */
+        dn = dvs;
     } else if (TL_UNLIKELY(v < 0)) {
         dvs = vs > 0 ? stop_distance((uint32_t)vs, m, a) : 0u;
+        dn = vs > 0 ? dvs : dv - (0u - (uint32_t)v);  /* D(|v| - a) = D(|v|) - |v| */
+    } else {
+        dn = dvs;
     }
     /* Distances and stopping distances are below 2^62 (D(v) < 2^31 (m + 1)): each 64-bit test is
      * the sign of a difference, one subtraction and one branch. */
@@ -83,6 +89,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
         if (lo > 0u && neg64(ad - (int64_t)(dv - (uint32_t)v))) {
             vs = (int32_t)lo;                        /* cannot stop in time: brake by a */
             m = mlo;
+            dn = dv - (uint32_t)v;
         } else {
             /* v_allow in [lo, vs): D grows by m + 1 per q16 count of speed inside a segment
              * [a m, a (m + 1)) of constant m, from D(lo) in lo's segment mlo, and vs <= a (mlo + 3):
@@ -102,14 +109,17 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
                     base += a;
                 }
             }
-            vs = (int32_t)(base + div_small(r, n + 1u));
+            uint32_t rem;
+            vs = (int32_t)(base + div_small(r, n + 1u, &rem));
             m = n;
+            dn = (uint64_t)ad - rem;                 /* D(base) + (n + 1) q = d - r + (n + 1) q */
         }
     }
     if (!neg64((int64_t)vs - ad)) {                 /* vs >= d: lands (never when vs < 0) */
         c->sp_q16 = c->target_q16;
         c->prof_v_q16 = 0;
         c->prof_m = 0;
+        c->prof_dv = 0;
         c->prof_a_q16 = 0;
         c->moving = false;
         return;
@@ -118,6 +128,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
     c->prof_a_q16 = vs - c->prof_v_q16;   /* at most a, or a drop to a lower vmax: fits 31 bits */
     c->prof_v_q16 = vs;
     c->prof_m = m;
+    c->prof_dv = dn;
     c->sp_q16 += c->prof_v_q16;
 }
 
