@@ -285,7 +285,8 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
         c->cmd = 0;
         return 0;
     }
-    if (fits & ((e < 0 ? -e : e) <= p->deadband_q16))   /* & not &&: one branch */
+    uint32_t ae = (uint32_t)(e ^ (e >> 31)) - (uint32_t)(e >> 31);   /* |e| (e > INT32_MIN here) */
+    if (fits & (ae <= (uint32_t)p->deadband_q16))    /* & not &&: one branch */
         e = 0;
     int32_t limit = p->cmd_limit;
     /* eq. (20): P;  eq. (21): + Kd * (0 - v);  eq. (22): + Ki * integral(e) */
