@@ -286,8 +286,7 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
         return 0;
     }
     uint32_t ae = (uint32_t)(e ^ (e >> 31)) - (uint32_t)(e >> 31);   /* |e| (e > INT32_MIN here) */
-    if (fits & (ae <= (uint32_t)p->deadband_q16))    /* & not &&: one branch */
-        e = 0;
+    e &= (int32_t)((uint32_t)(fits & (ae <= (uint32_t)p->deadband_q16)) - 1u);   /* 0 inside the dead band; no branch */
     int32_t limit = p->cmd_limit;
     /* eq. (20): P;  eq. (21): + Kd * (0 - v);  eq. (22): + Ki * integral(e) */
     int64_t pd_q16 = mul32(p->kp_q16, e) >> 16;
