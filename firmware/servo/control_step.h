@@ -185,14 +185,15 @@ static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl
         if (TL_UNLIKELY(dt > 0x7FFFFFFFu))
             c->t_ref = now - 0x7FFFFFFFu;   /* keep the reference inside the 32-bit window */
         int32_t v = c->vel_q8;
-        uint32_t av = v < 0 ? 0u - (uint32_t)v : (uint32_t)v;
-        /* |v| > bound = floor(m / dt) 2^k (m, k: one count)  <=>  ceil(|v| / 2^k) dt > m,
-         * a multiply: the bound's divide only when it clamps (|v| < 2^31, k <= 30: no overflow) */
-        uint32_t k = c->d.bound_k;
-        uint64_t need = (uint64_t)((av + (1u << k) - 1u) >> k) * dt;   /* one branch: high word or low word over */
-        if ((uint32_t)(need >> 32) | ((uint32_t)need > c->d.bound_m)) {
-            int32_t bound = edge_speed(c, 1u, dt), sv = v >> 31;
-            c->vel_q8 = (bound ^ sv) - sv;
+        if (v != 0) {
+            /* the bound floor(m / dt) 2^k (m, k: one count), one divide: an axis at rest with a
+             * zero estimate divides nothing, one whose estimate decays divides once */
+            int32_t sv = v >> 31;
+            uint32_t av = (uint32_t)(v ^ sv) - (uint32_t)sv;
+            uint32_t q = c->d.bound_m / (dt | (uint32_t)(dt == 0u)), k = c->d.bound_k;   /* dt 0 as 1: no clamp either way */
+            uint32_t bound = q > (0x7FFFFFFFu >> k) ? 0x7FFFFFFFu : q << k;   /* edge_speed(c, 1, dt) */
+            if (av > bound)
+                c->vel_q8 = (int32_t)(bound ^ (uint32_t)sv) - sv;
         }
     }
     c->pos_prev = pos;
