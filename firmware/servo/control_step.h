@@ -184,17 +184,15 @@ static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl
         uint32_t dt = now - c->t_ref;
         if (TL_UNLIKELY(dt > 0x7FFFFFFFu))
             c->t_ref = now - 0x7FFFFFFFu;   /* keep the reference inside the 32-bit window */
-        int32_t v = c->vel_q8;
-        if (v != 0) {
-            /* the bound floor(m / dt) 2^k (m, k: one count), one divide: an axis at rest with a
-             * zero estimate divides nothing, one whose estimate decays divides once */
-            int32_t sv = v >> 31;
-            uint32_t av = (uint32_t)(v ^ sv) - (uint32_t)sv;
-            uint32_t q = c->d.bound_m / (dt | (uint32_t)(dt == 0u)), k = c->d.bound_k;   /* dt 0 as 1: no clamp either way */
-            uint32_t bound = q > (0x7FFFFFFFu >> k) ? 0x7FFFFFFFu : q << k;   /* edge_speed(c, 1, dt) */
-            if (av > bound)
-                c->vel_q8 = (int32_t)(bound ^ (uint32_t)sv) - sv;
-        }
+        /* |v| clamped to the bound floor(m / dt) 2^k (m, k: one count): one divide and no branch
+         * (the bound clamps every period while the estimate decays, the dearest standstill case) */
+        int32_t v = c->vel_q8, sv = v >> 31;
+        uint32_t av = (uint32_t)(v ^ sv) - (uint32_t)sv;
+        uint32_t q = c->d.bound_m / (dt | (uint32_t)(dt == 0u)), k = c->d.bound_k;   /* dt 0 as 1: no clamp either way */
+        uint32_t bound = q > (0x7FFFFFFFu >> k) ? 0x7FFFFFFFu : q << k;   /* edge_speed(c, 1, dt) */
+        uint32_t over = 0u - (uint32_t)(av > bound);
+        av = (av & ~over) | (bound & over);
+        c->vel_q8 = (int32_t)(av ^ (uint32_t)sv) - sv;
     }
     c->pos_prev = pos;
 }
