@@ -269,8 +269,7 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
 {
     /* The error, q16 counts: 32 bits within +-32767 counts (the usual case), saturated beyond. */
     int64_t e_q16 = c->sp_q16 - (int64_t)pos * 65536;
-    int32_t e = (int32_t)e_q16;
-    /* one branch: the high word is the low word's sign, and e is not INT32_MIN */
+    int32_t e = (int32_t)e_q16;   /* fits: the high word is e's sign and e is not INT32_MIN, one branch */
     bool fits = (((uint32_t)(e_q16 >> 32) ^ (uint32_t)(e >> 31)) | (uint32_t)(e == INT32_MIN)) == 0u;
     if (TL_LIKELY(fits)) {
         c->err_counts = (e >> 16) + ((e >> 15) & 1);   /* (e + 2^15) >> 16 without overflow */
