@@ -29,13 +29,16 @@ from torqueloop.spec import regs
 HARNESS = F.FW / "tests" / "tick_harness.c"
 CASES = {"step": (0, 0, 200), "trap": (1, 0, 200), "short": (1, 1, 400)}
 
-# tl_cpu_pipe's cycles per instruction (docs/cpu.md): 1 for ALU, loads, stores, CSR reads and
-# forward branches not taken; a load's result used by the next instruction +2, by the one after +1.
-# jal and backward branches taken are charged D's prediction (2); the branch target buffer makes
-# those it holds 1, which this model leaves out, so it overstates them
+# tl_cpu_pipe's cycles per instruction (docs/cpu.md, with the registered fetch): 1 for ALU, loads,
+# stores, CSR reads and forward branches not taken; a load's result used by the next instruction +2,
+# by the one after +1; a taken forward branch, jalr or a mispredicted backward branch 4; jal and a
+# backward branch taken 3 unless the branch target buffer (8 entries, direct-mapped on pc[4:2], tag
+# pc[31:5], written by every jal and backward branch D predicts) holds them, then 1
 LOAD_USE = {1: 2, 2: 1}
-BRANCH_TAKEN_BACK, BRANCH_TAKEN_FWD, BRANCH_MISS_BACK = 2, 3, 3
-JAL, JALR, CSR_WRITE, MUL, DIV = 2, 3, 5, 3, 35
+BRANCH_TAKEN_FWD, BRANCH_MISS_BACK, JALR = 4, 4, 4
+JUMP_PREDICTED, JUMP_IN_BTB = 3, 1
+CSR_WRITE, MUL, DIV = 6, 3, 35
+BTB_ENTRIES = 8
 
 
 def build(case: str, ticks: int, out: Path, dither: int = 0, kvff: int = 0, kaff: int = 0) -> Path:
@@ -52,16 +55,19 @@ def build(case: str, ticks: int, out: Path, dither: int = 0, kvff: int = 0, kaff
     return elf
 
 
-def cycles_of(insn: int, pc: int, next_pc: int, since_load: int, load_rd: int) -> int:
+def cycles_of(insn: int, pc: int, next_pc: int, since_load: int, load_rd: int, btb: list) -> int:
     op, f3 = insn & 0x7F, (insn >> 12) & 7
     rs1, rs2 = (insn >> 15) & 31, (insn >> 20) & 31
     uses = {rs1, rs2} if op in (0x33, 0x23, 0x63) else ({rs1} if op in (0x13, 0x03, 0x67, 0x73) else set())
     c = 1 + (LOAD_USE.get(since_load, 0) if load_rd and load_rd in uses else 0)
-    if op == 0x63:
-        taken, back = next_pc != (pc + 4) & 0xFFFFFFFF, insn >> 31
-        c += (BRANCH_TAKEN_BACK if taken else BRANCH_MISS_BACK) - 1 if back else (BRANCH_TAKEN_FWD - 1 if taken else 0)
-    elif op == 0x6F:
-        c += JAL - 1
+    if op == 0x6F or (op == 0x63 and insn >> 31):     # jal, backward branch: predicted taken
+        slot = (pc >> 2) % BTB_ENTRIES
+        hit = btb[slot] == pc
+        btb[slot] = pc
+        taken = next_pc != (pc + 4) & 0xFFFFFFFF
+        c += (JUMP_IN_BTB if hit else JUMP_PREDICTED) - 1 if taken else BRANCH_MISS_BACK - 1
+    elif op == 0x63:
+        c += BRANCH_TAKEN_FWD - 1 if next_pc != (pc + 4) & 0xFFFFFFFF else 0
     elif op == 0x67:
         c += JALR - 1
     elif op == 0x33 and insn >> 25 == 1:
@@ -83,6 +89,7 @@ def profile(elf_path: Path) -> list[tuple[int, collections.Counter]]:
     tick, tohost = elf.symbols["tl_servo_tick"], elf.symbols["tohost"]
     ticks, cur, total, ret, active = [], collections.Counter(), 0, 0, False
     load_rd, since = 0, 9
+    btb = [None] * BTB_ENTRIES   # the pc of the jump each entry holds (the BTB outlives a call)
     for _ in range(50_000_000):
         pc = sim.pc
         if not active and pc == tick:
@@ -99,7 +106,7 @@ def profile(elf_path: Path) -> list[tuple[int, collections.Counter]]:
             return ticks
         if active:
             since += 1
-            c = cycles_of(insn, pc, sim.pc, since, load_rd)
+            c = cycles_of(insn, pc, sim.pc, since, load_rd, btb)
             if insn & 0x7F == 0x03:
                 load_rd, since = (insn >> 7) & 31, 0
             cur[pc] += c

@@ -147,7 +147,8 @@ void tl_ctl_apply(tl_ctl_t *c, const tl_ctl_derived_t *d)
 {
     c->d = *d;
     uint32_t v = (uint32_t)(c->prof_v_q16 < 0 ? -c->prof_v_q16 : c->prof_v_q16);
-    c->prof_m = v / (uint32_t)d->amax_q16;   /* the profile's m, for a changed amax */
+    c->prof_m = v / (uint32_t)d->amax_q16;   /* the profile's m and stopping distance, for a changed amax */
+    c->prof_dv = stop_distance(v, c->prof_m, (uint32_t)d->amax_q16);
 }
 
 void tl_ctl_derive(tl_ctl_t *c, const tl_ctl_params_t *p, uint32_t period_us, uint32_t clk_hz)
@@ -166,6 +167,7 @@ void tl_ctl_move(tl_ctl_t *c, int32_t target, bool trapezoid)
         c->sp_q16 = c->target_q16;   /* the paper's step experiment */
         c->prof_v_q16 = 0;
         c->prof_m = 0;
+        c->prof_dv = 0;
         c->prof_a_q16 = 0;
         c->moving = false;
     }
@@ -177,6 +179,7 @@ void tl_ctl_hold(tl_ctl_t *c, int32_t pos)
     c->target_q16 = c->sp_q16;
     c->prof_v_q16 = 0;
     c->prof_m = 0;
+    c->prof_dv = 0;
     c->prof_a_q16 = 0;
     c->moving = false;
 }

@@ -109,6 +109,7 @@ typedef struct {
     int64_t target_q16;
     int32_t prof_v_q16;         /* profile speed, counts per sample q16 (signed) */
     uint32_t prof_m;            /* floor(|prof_v_q16| / amax_q16), kept so no sample divides by amax */
+    uint64_t prof_dv;           /* D(|prof_v_q16|), the distance braking by amax_q16 covers from it (control_step.h) */
     int32_t prof_a_q16;         /* the profile speed's change over the last sample, counts per sample^2 q16
                                    (signed: + speeding up toward +, - braking it; 0 at rest and on landing) */
     bool moving;

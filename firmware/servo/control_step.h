@@ -10,7 +10,8 @@
 #include "control.h"
 
 static inline int64_t clamp64(int64_t v, int64_t lo, int64_t hi) { return v < lo ? lo : (v > hi ? hi : v); }
-static inline int64_t abs64(int64_t v) { return v < 0 ? -v : v; }
+/* x < 0 from the high word alone. */
+static inline bool neg64(int64_t x) { return (int32_t)((uint64_t)x >> 32) < 0; }
 /* Counts between two decoder readings: the 32-bit counter wraps, so the
  * difference is taken modulo 2^32 (a signed subtraction would overflow). */
 static inline int32_t count_diff(int32_t a, int32_t b) { return (int32_t)((uint32_t)a - (uint32_t)b); }
@@ -36,50 +37,59 @@ static inline uint32_t opaque(uint32_t x)
  * because D(v - a) = D(v) - v, the last speed v was on or inside the braking curve and
  * v_allow lies in [v - a, v + a): n is m(v - a) or one or two more, found by walking D up
  * from D(v - a) segment by segment, and the quotient is a remainder over n + 1 that fits
- * 32 bits.  If a new target or a lower vmax
+ * 32 bits.  D(|v|) itself is carried from sample to sample: no sample multiplies for it while
+ * accelerating or cruising.  If a new target or a lower vmax
  * leaves the axis unable to stop in time (D(v - a) > d), it brakes by a and comes back. */
 static inline uint64_t stop_distance(uint32_t v, uint32_t m, uint32_t a)
 {
     return ((uint64_t)(m + 1u) * (uint64_t)(2u * v - a * m)) >> 1;   /* 2v - a m = v + (v mod a) < 2^31 */
 }
 
-/* floor(x / k), k >= 1: below TL_CTL_SPEED_TAB through the reciprocal table (a multiply,
- * a check and at most one correction: floor(x R / 2^32) with R = floor((2^32 - 1) / k) is
- * the quotient or one less), the hardware divide (35 cycles) beyond. */
-static inline uint32_t div_small(uint32_t x, uint32_t k)
+/* floor(x / k), k >= 1, and the remainder in *rem: below TL_CTL_SPEED_TAB through the
+ * reciprocal table (a multiply, a check and at most one correction: floor(x R / 2^32) with
+ * R = floor((2^32 - 1) / k) is the quotient or one less), the hardware divide (35 cycles) beyond. */
+static inline uint32_t div_small(uint32_t x, uint32_t k, uint32_t *rem)
 {
-    if (k >= TL_CTL_SPEED_TAB)
-        return x / k;
-    uint32_t q = (uint32_t)(((uint64_t)x * tl_ctl_recip[k]) >> 32);
-    return x - q * k >= k ? q + 1u : q;
+    uint32_t q = TL_LIKELY(k < TL_CTL_SPEED_TAB) ? (uint32_t)(((uint64_t)x * tl_ctl_recip[k]) >> 32) : x / k;
+    uint32_t r = x - opaque(q) * k;
+    uint32_t over = (uint32_t)(r >= k);              /* the correction as a mask: no branch */
+    *rem = r - (k & (0u - over));
+    return q + over;
 }
 
 static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
 {
     int64_t d = c->target_q16 - c->sp_q16;
     int32_t s = (int32_t)(d >> 63);                  /* toward the target: 0 up, -1 down */
-    uint64_t ad = (uint64_t)abs64(d);
+    int64_t ad = (d ^ s) - s;                        /* |d| < 2^48: positions are 32-bit counts in q16 */
     uint32_t a = (uint32_t)c->d.amax_q16;
     int32_t v = (c->prof_v_q16 ^ s) - s;             /* speed toward the target (|v| < 2^31), accelerated: */
     int32_t vs = v + (int32_t)a;
     uint32_t m = v >= 0 ? c->prof_m + 1u : (c->prof_m ? c->prof_m - 1u : 0u);
-    /* One product for both tests below: D(v + a) = D(v) + v + a and D(v - a) = D(v) - v
-     * (the sum's first or last term), with m(v) = prof_m for v >= 0. */
-    uint64_t dv = v >= 0 ? stop_distance((uint32_t)v, c->prof_m, a) : 0u;
-    uint64_t dvs = dv + (uint32_t)vs;
+    /* D(|v|) is carried from sample to sample (prof_dv), and both tests below follow from it:
+     * D(v + a) = D(v) + v + a and D(v - a) = D(v) - v (the sum's first or last term). */
+    uint64_t dv = c->prof_dv;
+    uint64_t dvs = dv + (uint32_t)vs, dn;            /* dn: D(|vs|), for the next sample */
     if (vs > c->d.vmax_q16) {
         vs = c->d.vmax_q16;
         m = c->d.m_vmax;
         dvs = vs == v ? dv : stop_distance((uint32_t)vs, m, a);   /* cruising: D(vmax) is D(v) */
+        dn = dvs;
     } else if (TL_UNLIKELY(v < 0)) {
         dvs = vs > 0 ? stop_distance((uint32_t)vs, m, a) : 0u;
+        dn = vs > 0 ? dvs : dv - (0u - (uint32_t)v);  /* D(|v| - a) = D(|v|) - |v| */
+    } else {
+        dn = dvs;
     }
-    if (vs > 0 && dvs > ad) {
+    /* Distances and stopping distances are below 2^62 (D(v) < 2^31 (m + 1)): each 64-bit test is
+     * the sign of a difference, one subtraction and one branch. */
+    if (neg64(ad - (int64_t)dvs)) {                  /* D(vs) > d; D is 0 for vs <= 0 */
         uint32_t lo = v > (int32_t)a ? (uint32_t)v - a : 0u;   /* v_allow(d) >= lo when on the curve */
         uint32_t mlo = v > (int32_t)a ? c->prof_m - 1u : 0u;
-        if (lo > 0u && dv - (uint32_t)v > ad) {
+        if (lo > 0u && neg64(ad - (int64_t)(dv - (uint32_t)v))) {
             vs = (int32_t)lo;                        /* cannot stop in time: brake by a */
             m = mlo;
+            dn = dv - (uint32_t)v;
         } else {
             /* v_allow in [lo, vs): D grows by m + 1 per q16 count of speed inside a segment
              * [a m, a (m + 1)) of constant m, from D(lo) in lo's segment mlo, and vs <= a (mlo + 3):
@@ -99,14 +109,17 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
                     base += a;
                 }
             }
-            vs = (int32_t)(base + div_small(r, n + 1u));
+            uint32_t rem;
+            vs = (int32_t)(base + div_small(r, n + 1u, &rem));
             m = n;
+            dn = (uint64_t)ad - rem;                 /* D(base) + (n + 1) q = d - r + (n + 1) q */
         }
     }
-    if (vs >= 0 && (uint64_t)vs >= ad) {
+    if (!neg64((int64_t)vs - ad)) {                 /* vs >= d: lands (never when vs < 0) */
         c->sp_q16 = c->target_q16;
         c->prof_v_q16 = 0;
         c->prof_m = 0;
+        c->prof_dv = 0;
         c->prof_a_q16 = 0;
         c->moving = false;
         return;
@@ -115,6 +128,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
     c->prof_a_q16 = vs - c->prof_v_q16;   /* at most a, or a drop to a lower vmax: fits 31 bits */
     c->prof_v_q16 = vs;
     c->prof_m = m;
+    c->prof_dv = dn;
     c->sp_q16 += c->prof_v_q16;
 }
 
@@ -156,10 +170,10 @@ static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl
             d = d > 0 ? 1 : -1;
             dt = interval;
         }
-        if (TL_UNLIKELY(dt == 0u))
-            dt = 1u;
-        int32_t v = edge_speed(c, d < 0 ? 0u - (uint32_t)d : (uint32_t)d, dt);
-        c->vel_q8 = d < 0 ? -v : v;
+        dt |= (uint32_t)(dt == 0u);                  /* 0 as 1; no branch */
+        int32_t sd = d >> 31;                        /* the direction as a sign mask: no branch */
+        int32_t v = edge_speed(c, (uint32_t)(d ^ sd) - (uint32_t)sd, dt);
+        c->vel_q8 = (v ^ sd) - sd;
         c->pos_ref = pos;
         c->t_ref = edge_time;
         c->moved_last = true;
@@ -170,16 +184,15 @@ static inline __attribute__((always_inline)) void velocity(tl_ctl_t *c, const tl
         uint32_t dt = now - c->t_ref;
         if (TL_UNLIKELY(dt > 0x7FFFFFFFu))
             c->t_ref = now - 0x7FFFFFFFu;   /* keep the reference inside the 32-bit window */
-        int32_t v = c->vel_q8;
-        uint32_t av = v < 0 ? 0u - (uint32_t)v : (uint32_t)v;
-        /* |v| > bound = floor(m / dt) 2^k (m, k: one count)  <=>  ceil(|v| / 2^k) dt > m,
-         * a multiply: the bound's divide only when it clamps (|v| < 2^31, k <= 30: no overflow) */
-        uint32_t k = c->d.bound_k;
-        uint64_t need = (uint64_t)((av + (1u << k) - 1u) >> k) * dt;   /* one branch: high word or low word over */
-        if ((uint32_t)(need >> 32) | ((uint32_t)need > c->d.bound_m)) {
-            int32_t bound = edge_speed(c, 1u, dt), sv = v >> 31;
-            c->vel_q8 = (bound ^ sv) - sv;
-        }
+        /* |v| clamped to the bound floor(m / dt) 2^k (m, k: one count): one divide and no branch
+         * (the bound clamps every period while the estimate decays, the dearest standstill case) */
+        int32_t v = c->vel_q8, sv = v >> 31;
+        uint32_t av = (uint32_t)(v ^ sv) - (uint32_t)sv;
+        uint32_t q = c->d.bound_m / (dt | (uint32_t)(dt == 0u)), k = c->d.bound_k;   /* dt 0 as 1: no clamp either way */
+        uint32_t bound = q > (0x7FFFFFFFu >> k) ? 0x7FFFFFFFu : q << k;   /* edge_speed(c, 1, dt) */
+        uint32_t over = 0u - (uint32_t)(av > bound);
+        av = (av & ~over) | (bound & over);
+        c->vel_q8 = (int32_t)(av ^ (uint32_t)sv) - sv;
     }
     c->pos_prev = pos;
 }
@@ -256,8 +269,8 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
 {
     /* The error, q16 counts: 32 bits within +-32767 counts (the usual case), saturated beyond. */
     int64_t e_q16 = c->sp_q16 - (int64_t)pos * 65536;
-    int32_t e = (int32_t)e_q16;
-    bool fits = (int32_t)(e_q16 >> 32) == (e >> 31) && e != INT32_MIN;
+    int32_t e = (int32_t)e_q16;   /* fits: the high word is e's sign and e is not INT32_MIN, one branch */
+    bool fits = (((uint32_t)(e_q16 >> 32) ^ (uint32_t)(e >> 31)) | (uint32_t)(e == INT32_MIN)) == 0u;
     if (TL_LIKELY(fits)) {
         c->err_counts = (e >> 16) + ((e >> 15) & 1);   /* (e + 2^15) >> 16 without overflow */
     } else {
@@ -270,15 +283,15 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
         c->cmd = 0;
         return 0;
     }
-    if (fits && (e < 0 ? -e : e) <= p->deadband_q16)
-        e = 0;
+    uint32_t ae = (uint32_t)(e ^ (e >> 31)) - (uint32_t)(e >> 31);   /* |e| (e > INT32_MIN here) */
+    e &= (int32_t)((uint32_t)(fits & (ae <= (uint32_t)p->deadband_q16)) - 1u);   /* 0 inside the dead band; no branch */
     int32_t limit = p->cmd_limit;
     /* eq. (20): P;  eq. (21): + Kd * (0 - v);  eq. (22): + Ki * integral(e) */
     int64_t pd_q16 = mul32(p->kp_q16, e) >> 16;
     if (p->law >= TL_LAW_PD)
         pd_q16 -= mul32(p->kd_q16, c->vel_q8) >> 8;
     int32_t i_q16 = 0;
-    if (p->law == TL_LAW_PID) {
+    if (TL_LIKELY(p->law == TL_LAW_PID)) {
         int32_t e_sign = (e > 0) - (e < 0);
         bool frozen = (c->sat_sign != 0) & (e_sign == c->sat_sign);   /* & not &&: no branch */
         if (TL_UNLIKELY(c->d.friction) && p->izone_q16 != 0 && (e < 0 ? -e : e) <= p->izone_q16)
@@ -310,16 +323,16 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     int32_t pd = (int32_t)pd_q16;
     int32_t cmd;
     if (TL_LIKELY((int32_t)(pd_q16 >> 32) == (pd >> 31) && (uint32_t)pd + 0x40000000u < 0x80000000u)) {
-        int32_t t = pd + i_q16 + 32768;
-        if (t >= (int32_t)c->d.sat_hi_q16) {
-            cmd = limit;
-            c->sat_sign = 1;
-        } else if (t < (int32_t)c->d.sat_lo_q16) {
-            cmd = -limit;
-            c->sat_sign = -1;
-        } else {
+        int32_t t = pd + i_q16 + 32768, lo = (int32_t)c->d.sat_lo_q16;
+        if (TL_LIKELY((uint32_t)t - (uint32_t)lo < (uint32_t)c->d.sat_hi_q16 - (uint32_t)lo)) {   /* lo <= t < hi */
             cmd = t >> 16;
             c->sat_sign = 0;
+        } else if (t >= lo) {
+            cmd = limit;
+            c->sat_sign = 1;
+        } else {
+            cmd = -limit;
+            c->sat_sign = -1;
         }
     } else if (pd_q16 > 0) {
         cmd = limit;

@@ -85,13 +85,14 @@ static inline __attribute__((always_inline)) uint16_t enc_check(tl_axis_t *a, in
     /* 0 < vlo < 2^31, dt_q16 < 2^11 (PERIOD_US <= 25 000): one 32 x 32-bit unsigned product */
     int64_t exp = a->enc_exp_q24 + (int64_t)((uint64_t)(uint32_t)vlo * (uint32_t)a->enc.dt_q16);
     int32_t moved = (int32_t)((uint32_t)a->pos - (uint32_t)a->enc_ref);
-    if (dir < 0)
-        moved = (int32_t)(0u - (uint32_t)moved);
+    uint32_t dm = (uint32_t)((int32_t)dir >> 31);   /* -moved against the + direction; no branch */
+    moved = (int32_t)(((uint32_t)moved ^ dm) - dm);
     a->enc_ref = a->pos;
     /* what the encoder is behind the lower bound; ahead of it counts for nothing later */
     int64_t behind = exp - (int64_t)((uint64_t)(int64_t)moved << 24);
     a->enc_exp_q24 = behind > 0 ? behind : 0;
-    return behind > ((int64_t)slack << 24) ? TLP_FAULT_RUNAWAY : 0u;
+    /* behind > slack: the sign of their difference (both well inside 2^62) */
+    return (uint16_t)(((uint64_t)(((int64_t)slack << 24) - behind) >> 63) * TLP_FAULT_RUNAWAY);
 }
 
 #endif
