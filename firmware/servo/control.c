@@ -177,11 +177,7 @@ void tl_ctl_hold(tl_ctl_t *c, int32_t pos)
 {
     c->sp_q16 = (int64_t)pos * 65536;
     c->target_q16 = c->sp_q16;
-    c->prof_v_q16 = 0;
-    c->prof_m = 0;
-    c->prof_dv = 0;
-    c->prof_a_q16 = 0;
-    c->moving = false;
+    profile_rest(c);
 }
 
 /* 2 pi ~ 710 / 113 (error 2.7e-7); the Python side (torqueloop/spec/protocol.py) uses the same. */

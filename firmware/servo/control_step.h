@@ -57,6 +57,16 @@ static inline uint32_t div_small(uint32_t x, uint32_t k, uint32_t *rem)
     return q + over;
 }
 
+/* The profile at rest on the set-point (no speed, no stopping distance, no acceleration). */
+static inline __attribute__((always_inline)) void profile_rest(tl_ctl_t *c)
+{
+    c->prof_v_q16 = 0;
+    c->prof_m = 0;
+    c->prof_dv = 0;
+    c->prof_a_q16 = 0;
+    c->moving = false;
+}
+
 static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
 {
     int64_t d = c->target_q16 - c->sp_q16;
@@ -117,11 +127,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
     }
     if (!neg64((int64_t)vs - ad)) {                 /* vs >= d: lands (never when vs < 0) */
         c->sp_q16 = c->target_q16;
-        c->prof_v_q16 = 0;
-        c->prof_m = 0;
-        c->prof_dv = 0;
-        c->prof_a_q16 = 0;
-        c->moving = false;
+        profile_rest(c);
         return;
     }
     vs = (vs ^ s) - s;
