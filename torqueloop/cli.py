@@ -16,7 +16,8 @@ refused by the board in its state, a fault during the command, or a missing,
 unreadable or wrong key, 2 bad input (a value refused before anything was
 sent or by the board's rules, one line naming the rule, never a traceback),
 3 no answer (nothing listening, the
-connection refused or closed, no reply).
+connection refused or closed, no reply), 130 interrupted (Ctrl-C or SIGTERM:
+the axes disabled first).
 """
 
 from __future__ import annotations
@@ -1564,13 +1565,13 @@ def parser() -> argparse.ArgumentParser:
 #: exit status (module docstring)
 EXIT_REFUSED, EXIT_BAD_INPUT, EXIT_NO_ANSWER = 1, 2, 3
 EXIT_INTERRUPTED = 130       # what a shell reports for a command ended by SIGINT
+#: a value the board refuses as such is bad input, whoever checked it (the tool before sending, or the board)
+BAD_INPUT_STATUSES = frozenset({P.STATUS["BAD_ARG"], P.STATUS["RANGE"]})
 
 
 def _terminated(signum: int, frame: Any) -> None:
     """SIGTERM (`kill`, a service manager) ends a command the way Ctrl-C does."""
     raise KeyboardInterrupt
-#: a value the board refuses as such is bad input, whoever checked it (the tool before sending, or the board)
-BAD_INPUT_STATUSES = frozenset({P.STATUS["BAD_ARG"], P.STATUS["RANGE"]})
 
 
 def _stdout_closed() -> bool:
@@ -1606,7 +1607,7 @@ def main(argv: list[str] | None = None, *, client: Client | RemoteClient | None 
     if client is not None:
         ctx._client, ctx.shared = client, True
     ctx.tick = tick or (lambda: None)
-    own_term = client is None and threading.current_thread() is threading.main_thread()
+    own_term = not ctx.shared and threading.current_thread() is threading.main_thread()
     prev_term = signal.signal(signal.SIGTERM, _terminated) if own_term else None
     try:
         return args.fn(ctx)

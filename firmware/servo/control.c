@@ -165,11 +165,7 @@ void tl_ctl_move(tl_ctl_t *c, int32_t target, bool trapezoid)
         c->moving = true;
     } else {
         c->sp_q16 = c->target_q16;   /* the paper's step experiment */
-        c->prof_v_q16 = 0;
-        c->prof_m = 0;
-        c->prof_dv = 0;
-        c->prof_a_q16 = 0;
-        c->moving = false;
+        profile_rest(c);
     }
 }
 

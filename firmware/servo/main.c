@@ -75,7 +75,7 @@ __attribute__((interrupt("machine"))) static void trap_handler(void)
         uint64_t next = due + period;
         /* The low word of mtime decides whether the next deadline has passed
          * (an overrun is far shorter than 2^31 clocks); the full time only then. */
-        if (__builtin_expect((int32_t)(TL_TIMER_MTIME_LO - (uint32_t)next) >= 0, 0)) {
+        if (TL_UNLIKELY((int32_t)(TL_TIMER_MTIME_LO - (uint32_t)next) >= 0)) {
             /* Overrun: the iteration (plus the link interrupts) took more than a period.
              * Re-anchor instead of firing back-to-back to catch up, which would starve
              * the main loop and the link for good. */
@@ -85,7 +85,7 @@ __attribute__((interrupt("machine"))) static void trap_handler(void)
         }
         deadline = next;
         /* the common path falls through (taken forward branches cost 4 cycles on tl_cpu_pipe) */
-        if (__builtin_expect((uint32_t)(next >> 32) == (uint32_t)(due >> 32), 1))
+        if (TL_LIKELY((uint32_t)(next >> 32) == (uint32_t)(due >> 32)))
             TL_TIMER_MTIMECMP_LO = (uint32_t)next;   /* raising the low word alone never fires early */
         else
             arm_timer(next);

@@ -107,9 +107,13 @@ def build_images(name: str = "blink") -> tuple[Path, Path]:
 @pytest.mark.parametrize("sim", sims_for("soc"))
 def test_soc(sim):
     """The SoC as the board builds it (tl_soc's defaults: the pipelined CPU)."""
+    _run_soc(sim)
+
+
+def _run_soc(sim: str, **parameters: object) -> None:
     rom, ram = build_images()
     run("soc", sim, "test_soc",
-        parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"', "RAM_INIT": f'"{ram}"'})
+        parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"', "RAM_INIT": f'"{ram}"', **parameters})
 
 
 @pytest.mark.parametrize("sim", [s for s in sims_for("soc") if s == "verilator"])
@@ -117,6 +121,4 @@ def test_soc_multi_cycle_cpu(sim):
     """The same program on the SoC with the multi-cycle tl_cpu (CPU_PIPELINED = 0),
     the smaller core a user may still pick: the one SoC-level run that keeps it
     covered (tb/cpu runs both cores on their own)."""
-    rom, ram = build_images()
-    run("soc", sim, "test_soc",
-        parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"', "RAM_INIT": f'"{ram}"', "CPU_PIPELINED": 0})
+    _run_soc(sim, CPU_PIPELINED=0)

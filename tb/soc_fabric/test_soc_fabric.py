@@ -732,11 +732,16 @@ def _images() -> tuple[Path, Path]:
 
 @pytest.mark.parametrize("sim", sims_for("soc_fabric"))
 def test_soc_fabric(sim):
+    _run_fabric(sim, pipelined=False)
+
+
+def _run_fabric(sim: str, pipelined: bool, **kw) -> None:
     rom, ram = _images()
     run("soc_fabric", sim, "test_soc_fabric",
         parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"', "RAM_INIT": f'"{ram}"',
-                    "LIMIT_DEBOUNCE_CLKS": 20},
-        extra_env={"SOC_ROM_HEX": str(rom), "SOC_RAM_HEX": str(ram), "TL_LIMIT_DEBOUNCE": "20"})
+                    "LIMIT_DEBOUNCE_CLKS": 20, **({"PIPELINED": 1} if pipelined else {})},
+        extra_env={"SOC_ROM_HEX": str(rom), "SOC_RAM_HEX": str(ram), "TL_LIMIT_DEBOUNCE": "20",
+                   **({"SOC_FABRIC_PIPELINED": "1"} if pipelined else {})}, **kw)
 
 
 @pytest.mark.parametrize("sim", sims_for("soc_fabric"))
@@ -744,9 +749,5 @@ def test_soc_fabric_pipelined(sim):
     """The fabric as the board builds it (PIPELINED = 1, for tl_cpu_pipe):
     the streaming test only (the others drive the multi-cycle master's
     contract, which may hold a request through its ack)."""
-    rom, ram = _images()
-    run("soc_fabric", sim, "test_soc_fabric", testcase="a_pipelined_master_moves_a_word_every_cycle_on_each_bus",
-        parameters={"RAM_BYTES": RAM_BYTES_TB, "ROM_INIT": f'"{rom}"', "RAM_INIT": f'"{ram}"',
-                    "LIMIT_DEBOUNCE_CLKS": 20, "PIPELINED": 1},
-        extra_env={"SOC_ROM_HEX": str(rom), "SOC_RAM_HEX": str(ram), "TL_LIMIT_DEBOUNCE": "20",
-                   "SOC_FABRIC_PIPELINED": "1"}, build_tag="pipelined")
+    _run_fabric(sim, pipelined=True, testcase="a_pipelined_master_moves_a_word_every_cycle_on_each_bus",
+                build_tag="pipelined")
