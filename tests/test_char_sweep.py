@@ -33,12 +33,12 @@ def breakaway_percent(plant: str) -> float:
     return 100 * a.motor_static_N_m * a.resistance_ohm / (a.ke_V_s_per_rad * (p.bridge.supply_V - a.brush_drop_V))
 
 
-def sweep(tmp_path, capsys, plant: str, *args: str) -> tuple[dict, dict, dict]:
+def sweep(tmp_path, capsys, plant: str, *args: str, speed: float = 1.0) -> tuple[dict, dict, dict]:
     key = tmp_path / "link.key"
     auth.write_key_file(key, auth.new_key())
     env = dict(os.environ, **{auth.KEY_FILE_ENV: str(key)})
     out = tmp_path / "sweep.json"
-    with sim_board("sim", "--port", "0", "--plant", plant, env=env) as url:
+    with sim_board("sim", "--port", "0", "--plant", plant, "--speed", str(speed), env=env) as url:
         base = ["-u", url, "-k", str(key), "--json"]
         capsys.readouterr()
         assert cli.main([*base, "get", "pwm_freq"]) == 0
@@ -56,19 +56,23 @@ def sweep(tmp_path, capsys, plant: str, *args: str) -> tuple[dict, dict, dict]:
     return res, before, st
 
 
-def test_the_lab_plant_s_dead_zone_is_found_in_both_directions(tmp_path, capsys) -> None:
+# speed 0.4: the board lives 0.4 s per second of the host's; the holds are the board's time
+# (its telemetry's clock), so the same dead zone is found as on a board in real time.  With holds
+# counted in host time the board held each duty 0.4 of the hold and read high
+@pytest.mark.parametrize("speed", [1.0, 0.4])
+def test_the_lab_plant_s_dead_zone_is_found_in_both_directions(tmp_path, capsys, speed: float) -> None:
     step = 0.5
     # lab-2025: the hard brush drop the closed form above assumes (lab's brushes are ohmic below a knee)
     res, _, _ = sweep(tmp_path, capsys, "lab-2025", "--carriers", "450", "--start", "2", "--step", str(step),
-                      "--max", "9")
+                      "--max", "9", speed=speed)
     want = breakaway_percent("lab-2025")
     ramps = res["ramps"]
-    print("lab-2025 plant, 450 Hz: expected breakaway %.2f %%; found %s" % (
-        want, [(r["direction"], r["breakaway_percent"], r["stop_percent"]) for r in ramps]))
+    print("lab-2025 plant, 450 Hz, board at %g x real time: expected breakaway %.2f %%; found %s" % (
+        speed, want, [(r["direction"], r["breakaway_percent"], r["stop_percent"]) for r in ramps]))
     assert [r["direction"] for r in ramps] == [1, -1]
     for r in ramps:
         assert not r["fault"] and abs(r["carrier_hz"] - 448.4) < 0.5
-        assert want - step <= r["breakaway_percent"] <= want + 2 * step, r
+        assert want - step <= r["breakaway_percent"] <= want + step, r   # the first step above it, or one below (ripple)
         assert r["stop_percent"] is not None and r["stop_percent"] < r["breakaway_percent"], r
         # on the way up it did not move before the breakaway
         up = r["points"][:[d for d, _ in r["points"]].index(r["breakaway_percent"])]

@@ -179,6 +179,22 @@ def test_cli_drive_both_ways_reads_the_encoder_sign_and_disables(url, capsys) ->
     assert st["0"]["enabled"] == 0 and st["0"]["faults"] == 0
 
 
+def test_cli_drive_lasts_its_time_on_a_board_slower_than_real_time(tmp_path, capsys, monkeypatch) -> None:
+    """--for counts the board's time (its telemetry's clock): a board living a quarter
+    second per second of the host's is driven a whole simulated second, as fast as the
+    one above, and the samples are a tenth of a second of its time apart."""
+    path = tmp_path / "link.key"
+    auth.write_key_file(path, auth.new_key())
+    monkeypatch.setenv(auth.KEY_FILE_ENV, str(path))
+    with sim_board("sim", "--port", "0", "--speed", "0.25", env=dict(os.environ)) as slow:
+        up, _ = run(slow, capsys, "drive", "5%", "--for", "1")
+    print(f"drive 5% for 1 s on a board at 0.25 x real time: {up['moved_counts']:+d} counts in {up['seconds']} s")
+    assert up["moved_counts"] > 100 and up["sign_matches"] and not up["faults"], up
+    assert 1.0 <= up["seconds"] <= 1.2, up
+    gaps = [b["t_s"] - a["t_s"] for a, b in zip(up["samples"], up["samples"][1:])]
+    assert len(up["samples"]) >= 10 and all(0.05 <= g <= 0.15 for g in gaps), gaps
+
+
 def test_cli_drive_sets_and_restores_the_carrier(url, capsys) -> None:
     before, _ = run(url, capsys, "get", "pwm_freq", "--axis", "1")
     res, _ = run(url, capsys, "drive", "10%", "-a", "1", "--pwm-freq", "5000", "--for", "0.5")

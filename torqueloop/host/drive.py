@@ -14,16 +14,16 @@ returns)."""
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 from typing import Callable
 
 from torqueloop.host.client import Client, ProtocolError, describe_faults
+from torqueloop.host.session import BoardTime
 from torqueloop.spec import protocol as P
 from torqueloop.spec import pwm
 from torqueloop.spec.units import BadValue
 
-#: a HEARTBEAT or a poll this often keeps the link watchdog (>= 10 ms, default 500 ms) quiet
+#: the drive's samples, seconds of the board's time apart (its telemetry every so many periods)
 SAMPLE_S = 0.1
 FULL = pwm.full_scale()
 
@@ -94,8 +94,10 @@ def drive(c: Client, axis: int, steps: int, seconds: float,
           on_sample: Callable[[dict], None] | None = None, stop_when: Callable[[dict], bool] | None = None,
           disable: bool = True) -> DriveResult:
     """Enable ``axis`` (if it is not), drive it open-loop at ``steps`` for
-    ``seconds`` of host time (or until ``stop_when(sample)``), polling its
-    status every SAMPLE_S (each poll followed by a HEARTBEAT), then disable it
+    ``seconds`` of the board's time (its telemetry's clock,
+    :class:`~torqueloop.host.session.BoardTime`: a simulated board slower
+    than real time is driven just as long), sampled from the telemetry every
+    SAMPLE_S of it (or until ``stop_when(sample)``), then disable it
     (``disable``) or hold.  A fault ends the drive early (``faults`` in the
     result); Ctrl-C ends it with ``interrupted``.  Either way the axis is
     disabled before this returns or raises."""
@@ -103,25 +105,28 @@ def drive(c: Client, axis: int, steps: int, seconds: float,
     start = st["position"]
     c.enable(1 << axis, True)
     res = DriveResult(axis, steps, start, start, 0.0)
-    t0 = time.monotonic()
+    t0: list[int] = []
+
+    def sample(rec: dict) -> None:
+        a = rec["axes"][axis]
+        t0[:] = t0 or [rec["time_us"]]
+        smp = {"t_s": round(((rec["time_us"] - t0[0]) % (1 << 32)) / 1e6, 3), "position": a["position"],
+               "velocity_cps": a["velocity_q8"] / 256, "pwm_cmd": a["pwm_cmd"], "enabled": a["enabled"],
+               "faults": a["faults"]}
+        res.samples.append(smp)
+        res.end_counts = a["position"]
+        if on_sample:
+            on_sample(smp)
+
+    def ends(rec: dict) -> bool:
+        a = rec["axes"][axis]               # a new fault disables the axis it trips on
+        return bool(a["faults"] & ~st["faults"]) or not a["enabled"] or \
+            (stop_when is not None and stop_when(res.samples[-1]))
+
     try:
-        c.drive(axis, steps)
-        while True:
-            time.sleep(SAMPLE_S)
-            s = c.status(axis)
-            c.heartbeat()
-            now = time.monotonic() - t0
-            sample = {"t_s": round(now, 3), "position": s["position"], "velocity_cps": s["velocity_q8"] / 256,
-                      "pwm_cmd": s["pwm_cmd"], "enabled": s["enabled"], "faults": s["faults"]}
-            res.samples.append(sample)
-            res.end_counts = s["position"]
-            if on_sample:
-                on_sample(sample)
-            if s["faults"] & ~st["faults"] or not s["enabled"]:   # a new fault disables the axis it trips on
-                res.faults = s["faults"]
-                break
-            if now >= seconds or (stop_when is not None and stop_when(sample)):
-                break
+        with BoardTime(c, record_s=SAMPLE_S) as bt:
+            c.drive(axis, steps)
+            bt.hold(seconds, on_record=sample, until=ends)
     except KeyboardInterrupt:
         res.interrupted = True
     finally:
@@ -129,7 +134,7 @@ def drive(c: Client, axis: int, steps: int, seconds: float,
             c.enable(1 << axis, False)
         else:
             c.stop(1 << axis)
-        res.seconds = time.monotonic() - t0
+        res.seconds = res.samples[-1]["t_s"] if res.samples else 0.0
     s = c.status(axis)
     res.end_counts = s["position"]
     res.faults |= s["faults"] & ~st["faults"]

@@ -11,6 +11,7 @@ the firmware refuse exactly the same moves."""
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 from typing import Callable
@@ -106,36 +107,81 @@ class Session:
         long), feeding the link watchdog; ``trigger`` = (t, fn) calls fn once the
         capture spans t seconds; ``on_progress(span)`` after each read.  No
         record for ``silence_s`` seconds is an error.  Returns the records."""
+        with BoardTime(self.client, every=every, silence_s=silence_s) as bt:
+            records = bt.hold(duration, on_record, trigger=trigger, on_progress=on_progress)
+        return records + bt.tail
+
+
+def telemetry_every(c: Client, record_s: float) -> int:
+    """Control periods per telemetry record for about one record every
+    ``record_s`` seconds of board time (PERIOD_US, the board's own)."""
+    return max(1, min(0xFFFF, math.ceil(record_s * 1e6 / c.get_param("PERIOD_US"))))
+
+
+class BoardTime:
+    """Waits counted in the board's time, not the host's: the telemetry
+    stream is on while the ``with`` block runs, and :meth:`hold` lasts until
+    its records' ``time_us`` span the time asked.  A simulated board slower
+    than real time (``torqueloop sim --speed``, ``sim --rtl``, a loaded
+    machine) is held just as long as a real one, so what is read at the end
+    of a hold is what the board did in that time.  Every wait feeds the link
+    watchdog; no record for ``silence_s`` seconds of host time is an error.
+    Records span at most one record interval (``every`` control periods)
+    more than asked."""
+
+    def __init__(self, c: Client, every: int | None = None, record_s: float = 0.02,
+                 silence_s: float = 5.0) -> None:
+        self.client = c
+        self.every = every if every is not None else telemetry_every(c, record_s)
+        self.silence_s = silence_s
+        self.tail: list[dict] = []      # what arrived after the last hold, read when the stream stopped
+
+    def __enter__(self) -> "BoardTime":
+        self.client.take_telemetry()
+        self.client.set_telemetry(self.every)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        c = self.client
+        c.set_telemetry(0)
+        c.pump(0.05)
+        self.tail = c.take_telemetry()
+
+    def hold(self, seconds: float, on_record: Callable[[dict], None] | None = None,
+             until: Callable[[dict], bool] | None = None,
+             trigger: tuple[float, Callable[[], None]] | None = None,
+             on_progress: Callable[[float], None] | None = None) -> list[dict]:
+        """The records from now until they span ``seconds`` of board time, or
+        until ``until(record)`` is true for one (the last one returned).
+        Records the board sent before this call (sampled before whatever the
+        caller just commanded) are dropped."""
         c = self.client
         c.take_telemetry()
-        c.set_telemetry(every)
         records: list[dict] = []
         span = 0.0
-        try:
-            last_keep = last_new = time.monotonic()
-            while span < duration:
-                c.pump(0.02)
-                new = c.take_telemetry()
-                now = time.monotonic()
-                if new:
-                    records += new
-                    last_new = now
-                    span = ((records[-1]["time_us"] - records[0]["time_us"]) % (1 << 32)) / 1e6
-                    for r in new if on_record else ():
+        last_keep = last_new = time.monotonic()
+        while span < seconds:
+            c.pump(0.02)
+            new = c.take_telemetry()
+            now = time.monotonic()
+            if new:
+                last_new = now
+                for r in new:
+                    records.append(r)
+                    span = ((r["time_us"] - records[0]["time_us"]) % (1 << 32)) / 1e6
+                    if on_record:
                         on_record(r)
                     if trigger and span >= trigger[0]:
                         trigger[1]()
                         trigger = None
-                elif now - last_new > silence_s:
-                    raise ProtocolError(f"no telemetry for {now - last_new:.0f} s (board streaming every {every} "
-                                        "periods was requested); check `torqueloop info` counters")
-                if now - last_keep > KEEPALIVE_S:
-                    c.heartbeat()
-                    last_keep = now
-                if on_progress:
-                    on_progress(span)
-        finally:
-            c.set_telemetry(0)
-            c.pump(0.05)
-            records += c.take_telemetry()
+                    if until is not None and until(r):
+                        return records
+            elif now - last_new > self.silence_s:
+                raise ProtocolError(f"no telemetry for {now - last_new:.0f} s (board streaming every "
+                                    f"{self.every} periods was requested); check `torqueloop info` counters")
+            if now - last_keep > KEEPALIVE_S:
+                c.heartbeat()
+                last_keep = now
+            if on_progress:
+                on_progress(span)
         return records

@@ -6,7 +6,9 @@ paper defines it - raise the pulse until the system moves (the breakaway
 duty), then lower it until it stops (the stop duty) - measured with the
 open-loop drive (DRIVE) and the encoder alone.
 
-Each step holds the duty for ``hold_s`` and calls the axis moving when the
+Each step holds the duty for ``hold_s`` of the board's time (its telemetry's
+clock, :class:`~torqueloop.host.session.BoardTime`: a simulated board slower
+than real time is held as long) and calls the axis moving when the
 encoder advanced at least ``move_counts`` in the duty's direction during the
 second half of the hold (the first half lets it speed up or coast down to
 the new duty).  The duty ramps up from ``start`` by ``step`` until it moves (or
@@ -30,13 +32,13 @@ STALL_MS after the setting starts: the reading must come before that.
 
 from __future__ import annotations
 
-import time
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from typing import Callable
 
 from torqueloop.host.client import Client, ProtocolError, describe_faults
 from torqueloop.host.drive import check_ready, steps_for
+from torqueloop.host.session import BoardTime
 from torqueloop.spec import pwm
 
 
@@ -50,58 +52,64 @@ class Ramp:
     fault: str = ""
 
 
-def _moved(c: Client, axis: int, steps: int, hold_s: float) -> tuple[int, int]:
-    """Drive at ``steps`` for ``hold_s`` (a HEARTBEAT at least every 0.1 s); the counts moved in
-    the second half of the hold (the first lets the speed settle at the new duty) and new faults."""
-    faults0 = c.status(axis)["faults"]
+def _moved(c: Client, bt: BoardTime, axis: int, steps: int, hold_s: float, faults0: int) -> tuple[int, int]:
+    """Drive at ``steps`` for ``hold_s`` of the board's time (its telemetry's clock); the counts
+    moved in the second half of the hold (the first lets the speed settle at the new duty), and
+    the faults latched since ``faults0``.  A new fault ends the hold."""
     c.drive(axis, steps)
-    _hold(c, hold_s / 2)
-    p1 = c.status(axis)["position"]
-    _hold(c, hold_s / 2)
-    after = c.status(axis)
-    return after["position"] - p1, after["faults"] & ~faults0
-
-
-def _hold(c: Client, seconds: float) -> None:
-    end = time.monotonic() + seconds
-    while (left := end - time.monotonic()) > 0:
-        time.sleep(min(0.1, left))
-        c.heartbeat()
+    recs = bt.hold(hold_s, until=lambda r: bool(r["axes"][axis]["faults"] & ~faults0))
+    t0 = recs[0]["time_us"]
+    mid = next((r for r in recs if ((r["time_us"] - t0) % (1 << 32)) >= hold_s * 5e5), recs[-1])
+    last = recs[-1]["axes"][axis]
+    return last["position"] - mid["axes"][axis]["position"], last["faults"] & ~faults0
 
 
 def ramp(c: Client, axis: int, direction: int, carrier_hz: float, *, start: float = 1.0, step: float = 0.5,
          stop_at: float = 30.0, hold_s: float = 0.3, move_counts: int = 3) -> Ramp:
     """One up-and-down ramp in ``direction`` at the carrier already set (FDIV)."""
     r = Ramp(carrier_hz, direction, None, None, [])
-    check_ready(c, axis, steps_for(direction * stop_at))
+    faults0 = check_ready(c, axis, steps_for(direction * stop_at))["faults"]
     c.enable(1 << axis, True)
     try:
-        duty = start
-        while duty <= stop_at + 1e-9:
-            moved, fault = _moved(c, axis, steps_for(direction * duty), hold_s)
-            r.points.append((round(duty, 3), moved))
-            if fault:
-                r.fault = describe_faults(fault)
-                return r
-            if moved * direction >= move_counts:
-                r.breakaway_percent = round(duty, 3)
-                break
-            duty += step
-        if r.breakaway_percent is None:
-            return r
-        while duty > 0:
-            duty = max(0.0, duty - step)   # at 0 the bridge brakes: it stops there at the latest
-            moved, fault = _moved(c, axis, steps_for(direction * duty), hold_s)
-            r.points.append((round(duty, 3), moved))
-            if fault:
-                r.fault = describe_faults(fault)
-                return r
-            if moved * direction < move_counts:
-                r.stop_percent = round(duty, 3)
-                break
-        return r
+        with BoardTime(c) as bt:
+            return _ramp(c, bt, r, axis, direction, faults0, start, step, stop_at, hold_s, move_counts)
     finally:
         c.enable(1 << axis, False)
+
+
+def _ramp(c: Client, bt: BoardTime, r: Ramp, axis: int, direction: int, faults0: int, start: float, step: float,
+          stop_at: float, hold_s: float, move_counts: int) -> Ramp:
+    """The duty up from ``start`` until the axis moves, then down until it stops (``ramp``)."""
+
+    def point(duty: float) -> int | None:
+        """The counts moved at ``duty``, or None when a fault ended the ramp."""
+        moved, fault = _moved(c, bt, axis, steps_for(direction * duty), hold_s, faults0)
+        r.points.append((round(duty, 3), moved))
+        if fault:
+            r.fault = describe_faults(fault)
+            return None
+        return moved * direction
+
+    duty = start
+    while duty <= stop_at + 1e-9:
+        moved = point(duty)
+        if moved is None:
+            return r
+        if moved >= move_counts:
+            r.breakaway_percent = round(duty, 3)
+            break
+        duty += step
+    if r.breakaway_percent is None:
+        return r
+    while duty > 0:
+        duty = max(0.0, duty - step)   # at 0 the bridge brakes: it stops there at the latest
+        moved = point(duty)
+        if moved is None:
+            return r
+        if moved < move_counts:
+            r.stop_percent = round(duty, 3)
+            break
+    return r
 
 
 @contextmanager
@@ -186,7 +194,8 @@ def hold_and_read(c: Client, axis: int, clk_hz: int, settings: list[tuple[str, f
             c.enable(1 << axis, True)
             try:
                 c.drive(axis, steps_for(duty))
-                _hold(c, settle_s)
+                with BoardTime(c) as bt:
+                    bt.hold(settle_s)
                 now = c.status(axis)
                 fault = now["faults"] & ~st["faults"]
                 p = GaugePoint(kind, actual, duty, None, None, now["position"] - st["position"],
