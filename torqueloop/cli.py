@@ -562,7 +562,9 @@ def cmd_char_sweep(ctx: Ctx) -> int:
         sign = "+" if r.direction > 0 else "-"
         moves = f"moves from {r.breakaway_percent:g}%" if r.breakaway_percent is not None else \
             f"does not move up to {a.max:g}%"
-        stops = f", stops at {r.stop_percent:g}%" if r.stop_percent is not None else ""
+        stops = f", stops at {r.stop_percent:g}%" if r.stop_percent is not None else \
+            f", still moving at 0% (it coasts longer than half of --hold {a.hold:g} s: a longer hold reads the stop)" \
+            if r.breakaway_percent is not None and not r.fault else ""
         print(f"{r.carrier_hz:9.1f} Hz  {sign}: {moves}{stops}" + (f"  FAULT {r.fault}" if r.fault else ""),
               flush=True)
 
