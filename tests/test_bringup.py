@@ -246,6 +246,36 @@ def test_monitor_move_and_drive_side_by_side_through_serve(url, user_env) -> Non
     assert hserve.find_server(url) is None                  # the state file went with it
 
 
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "kill"])
+def test_stopping_the_server_disables_what_its_clients_hold(url, user_env, sig) -> None:
+    """Ctrl-C (or a service manager's SIGTERM) on `serve` while a client's drive holds an axis
+    and another client streams telemetry: the server disables the axis once, says so in one
+    line, exits 0 with no traceback from the clients' threads; the board is left disabled with
+    no fault (the link watchdog did not have to stop it); the drive ends in one line."""
+    srv = _start(["-u", url, "serve", "--port", "0"], user_env)
+    line = srv.stdout.readline()
+    assert "torqueloop server for" in line, line + srv.stderr.read()
+    mon = _start(["-u", url, "--json", "monitor", "--duration", "30"], user_env)
+    drv = _start(["-u", url, "drive", "5%", "--for", "30"], user_env)
+    try:
+        assert drv.stdout.readline().startswith("t "), "the drive never sampled"  # the axis is enabled, driven
+        srv.send_signal(sig)
+        out, err = srv.communicate(timeout=20)
+    finally:
+        srv.kill()
+    _, derr = drv.communicate(timeout=20)
+    mon.communicate(timeout=20)
+    log = out + err
+    print(log)
+    assert srv.returncode == 0, log
+    assert log.count("disabled axes [0] (server stopping)") == 1 and "could not" not in log, log
+    assert "Traceback" not in log + derr and drv.returncode != 0 and len(derr.strip().splitlines()) <= 2, derr
+    r = subprocess.run([sys.executable, "-m", "torqueloop.cli", "-u", url, "--json", "status", "--axis", "0"],
+                       env=user_env, capture_output=True, text=True, timeout=60)
+    s = json.loads(r.stdout)["0"]
+    assert not s["enabled"] and s["fault_names"] == [], s
+
+
 def test_shell_with_history_completion_and_a_live_plot(url, user_env, tmp_path: Path) -> None:
     pexpect = pytest.importorskip("pexpect")
     frames = tmp_path / "frames.txt"

@@ -219,15 +219,19 @@ class SessionServer:
 
     def shutdown(self) -> None:
         """Disable every held axis and close every connection (Ctrl-C on ``serve``)."""
-        held = [a for a, h in self.holders.items() if h]
         for c in list(self.conns):
             c.alive = False
             try:
                 c.sock.shutdown(socket.SHUT_RDWR)
             except OSError:
                 pass
-        if held:
-            with self.lock:
+        # under the board's lock, as a leaving client's release: each held axis is disabled
+        # once, by whichever comes first, and never after the link is closed
+        with self.lock:
+            held = [a for a, h in self.holders.items() if h]
+            for h in self.holders.values():
+                h.clear()
+            if held:
                 try:
                     self.client.enable(sum(1 << a for a in held), False)
                     self.log(f"serve: disabled axes {held} (server stopping)")
@@ -290,14 +294,14 @@ class SessionServer:
 
     def _release(self, conn: _Conn) -> None:
         self.conns.discard(conn)
-        orphaned = []
-        for a, h in self.holders.items():
-            if conn in h:
-                h.discard(conn)
-                if not h:
-                    orphaned.append(a)
-        if orphaned:
-            with self.lock:
+        with self.lock:                         # (shutdown: the same lock)
+            orphaned = []
+            for a, h in self.holders.items():
+                if conn in h:
+                    h.discard(conn)
+                    if not h:
+                        orphaned.append(a)
+            if orphaned:
                 try:
                     self.client.enable(sum(1 << a for a in orphaned), False)
                     self.log(f"serve: {conn.name} left holding axes {orphaned}: disabled them")
@@ -305,7 +309,11 @@ class SessionServer:
                     self.log(f"serve: could not disable axes {orphaned}: {e}")
         if conn.every:
             conn.every = 0
-            self._retune()
+            if not self._stop.is_set():         # stopping: shutdown() ends the stream itself
+                try:
+                    self._retune()
+                except ProtocolError as e:
+                    self.log(f"serve: {e}")
         lost = f" (it lost {conn.dropped} telemetry lines it did not read in time)" if conn.dropped else ""
         self.log(f"serve: {conn.name} gone{lost}")
 
