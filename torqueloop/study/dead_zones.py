@@ -20,7 +20,7 @@ from torqueloop.characterize.config import CLK_HZ, PWM_BITS
 from torqueloop.characterize.simbench import motion_dead_zones
 from torqueloop.spec.pwm import carrier_hz, divider_for, full_scale
 from torqueloop.study.cache import cached
-from torqueloop.study.engine import Engine
+from torqueloop.study.engine import Engine, Progress
 
 AXES = ("x", "z")
 
@@ -49,12 +49,11 @@ def dead_zones(plant: PlantSpec, freqs_hz: Sequence[float], cache: Path, digest:
     def compute() -> dict[str, Any]:
         say(f"dead zones per carrier: {len(jobs)} motion ramps (raise until the stage moves, lower until it stops) "
             f"on the {engine.name}")
-        rows, t0 = [], time.monotonic()
+        rows, progress = [], Progress([1.0] * len(jobs), engine.workers)
         for k, (_, r) in enumerate(engine.map_unordered(_dz_job, jobs), 1):
             rows.append(r)
-            el = time.monotonic() - t0
             say(f"dead zone {k}/{len(jobs)}: axis {r['axis']} at {r['board_hz']:.4g} Hz: PW0 {r['pw0_counts']} "
-                f"counts ({el:.0f} s so far, about {el / k * (len(jobs) - k):.0f} s left)")
+                f"counts ({progress.line(1.0, r['cpu_s'])})")
         rows.sort(key=lambda r: (r["freq_hz"], r["axis"]))
         pw0 = {str(float(f)): [next(r["pw0_counts"] for r in rows if r["freq_hz"] == f and r["axis"] == a)
                                for a in AXES] for f in freqs_hz}

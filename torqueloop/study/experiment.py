@@ -44,7 +44,7 @@ from torqueloop.sim.experiment import ExperimentConfig, ModelRun, RtlRun
 from torqueloop.spec.repo import REPO_ROOT
 from torqueloop.study import answer, carrier_sweep, stability, table3, uncertainty
 from torqueloop.study.characterization import inputs_digest, run_study
-from torqueloop.study.engine import Engine
+from torqueloop.study.engine import Engine, Progress, human_s
 
 #: the thorough sweep's carriers (``--thorough``)
 SWEEP_HZ = (50.0, 120.0, 300.0, 700.0, 1700.0, 4000.0, 10_000.0, 24_400.0)
@@ -212,6 +212,18 @@ def runs(plan: ExperimentPlan, char: Path, pw0_at: dict[float, tuple[int, int]] 
     return out
 
 
+#: a run's expected cost per simulated second, relative to the fast path's, for the
+#: progress lines' estimate of the time left (measured side by side in one make run on
+#: the 2-core machine, 2026-11-27: an RTL arm with its check 2 320 s for T = 40 s, a
+#: fast-path case 46-53 s, the model arm 9-11 s)
+COST_PER_SIM_S = {"rtl": 37.0, "fast": 1.0, "model": 0.2}
+
+
+def cost(run: Run) -> float:
+    """A run's expected cost (:data:`COST_PER_SIM_S` x its simulated time)."""
+    return COST_PER_SIM_S[run.kind] * run.config.t_end_s
+
+
 def split_cached(jobs: list[Run], cache: "carrier_sweep.RunCache") -> tuple[list[Run], list[tuple[Run, Result]]]:
     """The runs still to run, and the sweep runs ``cache`` already holds with their results."""
     todo, reused = [], []
@@ -296,16 +308,17 @@ def _run_experiment(plan: ExperimentPlan, term) -> int:
          f"then its implementation check), model arm and {len(CASES)} cases per law, "
          f"{n_sweep - len(reused)} sweep runs (T = {plan.sweep_t_end_s:g} s; {len(reused)} more reused from "
          f"{cache.root.name}/, their inputs unchanged)")
-    done, failed, t_pool = 0, [], time.monotonic()
+    done, failed = 0, []
+    progress = Progress([cost(j) for j in jobs], engine.workers)
     for _, (run, result, dt) in engine.map_unordered(execute, jobs):
         done += 1
         if isinstance(result, RunFailed):
             failed.append(f"{run.label()}: {result}")
             _say(f"{done}/{len(jobs)} {run.label()} FAILED after {dt:.0f} s: {result}")
             continue
-        el = time.monotonic() - t_pool
-        _say(f"{done}/{len(jobs)} {run.label()} ({dt:.0f} s; {time.monotonic() - t0:.0f} s so far, "
-             f"about {el / done * (len(jobs) - done):.0f} s left)")
+        left = progress.done(cost(run), dt)
+        _say(f"{done}/{len(jobs)} {run.label()} ({human_s(dt)}; {human_s(time.monotonic() - t0)} so far, "
+             f"about {human_s(left)} left in this stage)")
         if run.key[0] == "sweep":
             cache.put(run.config, result)
         collect(st, run, result)

@@ -44,7 +44,7 @@ from torqueloop.characterize.data import BenchConstants, Sweep
 from torqueloop.characterize.method import MethodError, Thresholds, step5_candidates
 from torqueloop.characterize.simbench import model_waveform, motion_dead_zones, rope_config
 from torqueloop.spec.pwm import carrier_hz, divider_for, full_scale
-from torqueloop.study.engine import Engine
+from torqueloop.study.engine import Engine, Progress
 
 #: the carriers of the stability sweeps: the range where the settle rules put
 #: the crossings (docs/plant.md, "Chosen carrier against the settle rule": z near 200 Hz at a
@@ -201,12 +201,11 @@ def run(plant: PlantSpec, axes: Sequence[str] = ("x", "z"), settles: Sequence[fl
     order = sorted(jobs, key=_cost, reverse=True)   # the longest first: no long job left alone at the end
     say(f"stability: {len(jobs)} sweeps ({len(freqs_hz)} carriers each, plant {plant.label}; "
         f"shuffled order's seed {seed}) on the {engine.name}")
-    t0, rows = time.monotonic(), {}
+    progress, rows = Progress([_cost(j) for j in jobs], engine.workers), {}
     for k, (job, row) in enumerate(engine.map_unordered(run_job, order), 1):
         rows[(job.axis, job.protocol)] = row
-        el = time.monotonic() - t0
         say(f"stability {k}/{len(jobs)} axis {job.axis}, {job.protocol.label}: chosen {_hz(row['freq_hz'])} "
-            f"({row['cpu_s']:.0f} s CPU; {el:.0f} s so far, about {el / k * (len(jobs) - k):.0f} s left)")
+            f"({row['cpu_s']:.0f} s CPU; {progress.line(_cost(job), row['cpu_s'])})")
     return [rows[(j.axis, j.protocol)] for j in jobs]
 
 

@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from sim_models.variants import PlantSpec, effects_of
-from torqueloop.study.engine import Engine
+from torqueloop.study.engine import Engine, Progress
 
 
 @dataclass(frozen=True)
@@ -103,11 +103,10 @@ def run(experiment_plant: PlantSpec, laws: Sequence[str], t_end_s: float, engine
     say(f"Table 3 decomposition: {len(js)} runs (each arm difference added alone to the model arm, T = {t_end_s:g} s) "
         f"on the {engine.name}")
     got: dict[tuple[str, str], dict[str, Any]] = {}
-    t0 = time.monotonic()
+    progress = Progress([1.0] * len(js), engine.workers)
     for k, (job, r) in enumerate(engine.map_unordered(run_job, longest_first(js)), 1):
         got[(job.law, job.row)] = r
-        el = time.monotonic() - t0
-        say(f"table3 {k}/{len(js)} {job.law} {job.row} ({r['cpu_s']:.0f} s CPU; about {el / k * (len(js) - k):.0f} s left)")
+        say(f"table3 {k}/{len(js)} {job.law} {job.row} ({r['cpu_s']:.0f} s CPU; {progress.line(1.0, r['cpu_s'])})")
     out: dict[str, Any] = {}
     for job in js:
         if job.row == "model_arm":

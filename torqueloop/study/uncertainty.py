@@ -30,7 +30,7 @@ from torqueloop.characterize.method import motion_dead_zone
 from torqueloop.characterize.simbench import MotionRamp, model_waveform, record_motion_ramp
 from torqueloop.characterize.config import CLK_HZ, PWM_BITS
 from torqueloop.spec.pwm import divider_for
-from torqueloop.study.engine import Engine
+from torqueloop.study.engine import Engine, Progress
 from torqueloop.study.stability import CarriedBench, Protocol, step5_on
 
 #: name -> (low, high, how it is applied, why this range)
@@ -112,12 +112,11 @@ def run(plant: PlantSpec, draws: int, seed: int, freqs_hz: Sequence[float], sett
     rng = random.Random(seed)
     jobs = [Job(plant, k, tuple(draw(rng).items()), tuple(freqs_hz), settle) for k in range(draws)]
     say(f"uncertainty: {draws} draws of the plant's parameters (Monte Carlo seed {seed}) on the {engine.name}")
-    t0, res = time.monotonic(), []
+    progress, res = Progress([1.0] * draws, engine.workers), []
     for k, (_, r) in enumerate(engine.map_unordered(run_draw, jobs), 1):
         res.append(r)
-        el = time.monotonic() - t0
         say(f"uncertainty {k}/{draws}: " + ", ".join(f"{a} {v['freq_hz'] or 0:.4g} Hz" for a, v in r["axes"].items())
-            + f" ({r['cpu_s']:.0f} s CPU; about {el / k * (draws - k):.0f} s left)")
+            + f" ({r['cpu_s']:.0f} s CPU; {progress.line(1.0, r['cpu_s'])})")
     res.sort(key=lambda r: r["draw"])
     axes = sorted({a for r in res for a in r["axes"]})
     summary = {}
