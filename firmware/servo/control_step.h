@@ -292,9 +292,12 @@ static inline __attribute__((always_inline)) void friction_terms(tl_ctl_t *c, co
 static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, bool run_law)
 {
     /* The error, q16 counts: 32 bits within +-32767 counts (the usual case), saturated beyond. */
-    int64_t e_q16 = c->sp_q16 - (int64_t)pos * 65536;
-    int32_t e = (int32_t)e_q16;   /* fits: the high word is e's sign and e is not INT32_MIN, one branch */
-    bool fits = (((uint32_t)(e_q16 >> 32) ^ (uint32_t)(e >> 31)) | (uint32_t)(e == INT32_MIN)) == 0u;
+    /* sp - pos 2^16 by words: pos 2^16 is (pos >> 16 : pos << 16), no 64-bit shift */
+    uint32_t slo = (uint32_t)c->sp_q16, plo = (uint32_t)pos << 16;
+    int32_t ehi = (int32_t)((uint64_t)c->sp_q16 >> 32) - (pos >> 16) - (int32_t)(slo < plo);
+    int32_t e = (int32_t)(slo - plo);   /* fits: the high word is e's sign and e is not INT32_MIN, one branch */
+    bool fits = (((uint32_t)ehi ^ (uint32_t)(e >> 31)) | (uint32_t)(e == INT32_MIN)) == 0u;
+    int64_t e_q16 = (int64_t)(((uint64_t)(uint32_t)ehi << 32) | (uint32_t)e);
     if (TL_LIKELY(fits)) {
         c->err_counts = (e >> 16) + ((e >> 15) & 1);   /* (e + 2^15) >> 16 without overflow */
     } else {
