@@ -378,7 +378,7 @@ static inline __attribute__((always_inline)) int32_t tl_ctl_step_inline(tl_ctl_t
                                                                        bool run_law)
 {
     velocity(c, p, pos, edge_time, now, interval);
-    if (c->moving)
+    if (TL_LIKELY(c->moving))
         profile(c);
     return law(c, p, pos, run_law);
 }
