@@ -217,6 +217,7 @@ class Axis:
             self.prof_e = abs(d) - self.s_vmax
 
     def _land(self) -> None:
+        """The last sample: on the target, which the speeds sum to."""
         self.sp_q16, self.prof_v_q16, self.prof_a_q16, self.moving = self.target_q16, 0, 0, False
 
     def _profile(self) -> None:
@@ -233,11 +234,11 @@ class Axis:
         v = self.prof_v_q16 * s
         w = 0
         if self.prof_st == OVERRUN:
-            if v - a > 0:
-                w = v - a                  # E = d - S(v) is the same after braking by a
-            else:                          # stopped past the target: turn toward it
-                s = self.prof_s = -s
-                v, self.prof_e, self.prof_st = -v, -self.prof_e, ACCEL
+            w = v - a                      # v > a; E = d - S(v) is the same after braking by a
+            self._out(w * s)
+            if w <= a:                     # the last speed past the target: turn toward it
+                self.prof_s, self.prof_e, self.prof_st = -s, -self.prof_e, ACCEL   # S(w) = 0: E is d
+            return
         if self.prof_st == ACCEL:
             u = min(v + a, vmax)
             # what the sample takes from E: u + S(u) - S(v), which is u + v speeding up by a (S(v + a)
@@ -260,9 +261,13 @@ class Axis:
             if self.prof_p1 == 0 and self.prof_b - a <= 0:
                 self._land()               # the last sample: on the target (the speeds sum to d)
                 return
-        self.prof_a_q16 = w * s - self.prof_v_q16
-        self.prof_v_q16 = w * s
-        self.sp_q16 += self.prof_v_q16
+        self._out(w * s)
+
+    def _out(self, v: int) -> None:
+        """The sample's speed ``v`` (signed) into the set-point."""
+        self.prof_a_q16 = v - self.prof_v_q16
+        self.prof_v_q16 = v
+        self.sp_q16 += v
 
     def _velocity(self, pos: int, edge_time: int, now: int, interval: int) -> None:
         clamp32 = (1 << 31) - 1
