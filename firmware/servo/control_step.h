@@ -105,18 +105,19 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
          * vmax cruising (at or above vmax); 32 bits: u + v < 2^31 (v < vmax <= 2^30 when counted) */
         int32_t u = v + a;
         u = u > vmax ? vmax : u;
-        int32_t step = u + (v & ~(v >> 31) & -(int32_t)(v < vmax));
-        /* the common case in 32 bits: E's low part covers the step; one branch (moving away,
-         * the low part spent, braking: below) */
+        int32_t step = u + (v & -(int32_t)(v < vmax));
+        /* the common case in 32 bits: E's low part covers the step, v >= 0; one branch (moving
+         * away, the low part spent, braking: below) */
         int32_t e = (int32_t)((uint32_t)c->prof_e32 - (uint32_t)step);
-        if (TL_LIKELY((e | (u - 1)) >= 0)) {
+        if (TL_LIKELY((e | v) >= 0)) {
             c->prof_e32 = e;
             profile_out(c, u, s);
             return;
         }
         int32_t b = v & ~(v >> 31);                  /* brake from b = max(v, 0): R = E = d - S(b) < 2b + a */
         uint32_t r = (uint32_t)c->prof_e32;
-        if (TL_UNLIKELY((c->prof_eres != 0) | (u <= 0))) {
+        if (TL_UNLIKELY((c->prof_eres != 0) | (v < 0))) {
+            step = v < 0 ? u : step;                 /* moving away: S(v) counts as 0 (E = d) */
             /* moving away, or the low part spent with more in reserve: in 64 bits */
             int64_t en = profile_e(c) - step;
             if (u <= 0 || !neg64(en)) {              /* braking from u still stops short of the target */
