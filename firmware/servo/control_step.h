@@ -42,13 +42,6 @@ static inline uint64_t stop_sum(uint32_t v, uint32_t a)
     return ((uint64_t)m * (2u * v - a * (m + 1u))) >> 1;   /* m v - a m (m + 1) / 2; 2v < 2^31 */
 }
 
-/* The distance to the target in the frame toward it (s: 0 up, -1 down). */
-static inline int64_t profile_dist(const tl_ctl_t *c, int32_t s)
-{
-    int64_t d = c->target_q16 - c->sp_q16;
-    return (d ^ s) - s;
-}
-
 /* The braking surplus E, and E stored as prof_eres + prof_e32 with as much of it as fits in
  * 0 <= prof_e32 < 2^31 (all of a negative E in prof_eres). */
 static inline int64_t profile_e(const tl_ctl_t *c) { return c->prof_eres + c->prof_e32; }
@@ -127,11 +120,12 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
                 profile_out(c, u, s);
                 return;
             }
-            r = (uint32_t)profile_e(c);
+            r = (uint32_t)c->prof_eres + (uint32_t)c->prof_e32;   /* R < 2^31: the low words give it */
         }
         if (TL_UNLIKELY(v >= vmax)) {                /* braking from vmax: R = d - S(vmax), which E may */
-            b = vmax;                                /* have underestimated on reaching vmax (by <= v) */
-            r = (uint32_t)(profile_dist(c, s) - (int64_t)c->d.s_vmax);
+            b = vmax;                                /* have underestimated on reaching vmax (by <= v); */
+            uint32_t dl = (uint32_t)c->target_q16 - (uint32_t)c->sp_q16;   /* R < 2^31: low words */
+            r = ((dl ^ (uint32_t)s) - (uint32_t)s) - (uint32_t)c->d.s_vmax;
         }
         uint32_t p2 = r >> 1;
         p2 = p2 < (uint32_t)b ? p2 : (uint32_t)b;
