@@ -53,12 +53,12 @@
  * acceleration step stay below 2^31.  16384 counts per sample is 655 000
  * counts/s at the longest period, far beyond the encoders. */
 #define TL_CTL_VMAX_Q16_MAX 0x40000000
+#define TL_CTL_AMAX_Q16_MAX 0x20000000
 /* The profile's regimes: speeding up toward the target or cruising; braking onto it; braking
  * by amax past a target it could not stop for (then it turns back: TL_PROF_ACCEL). */
 #define TL_PROF_ACCEL 0u
 #define TL_PROF_BRAKE 1u
 #define TL_PROF_OVERRUN 2u
-#define TL_CTL_AMAX_Q16_MAX 0x20000000
 /* Counts between two velocity samples beyond this are clamped to it (not physical). */
 #define TL_CTL_DCOUNT_MAX 0x0FFFFFFF
 /* Edge-timestamp speed of n counts over dt cycles, q8 counts/s (docs/firmware.md, "Control"):
