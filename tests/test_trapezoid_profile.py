@@ -9,8 +9,9 @@ follows it bit for bit: tests/test_firmware_host.py):
 * it lands exactly on the target, and a move it can stop for never passes it;
 * a new target mid-move (ahead, behind, closer than the stopping distance) is
   reached the same way: a reversal brakes first, at most AMAX T^2 per sample;
-* a new VMAX or AMAX mid-move: the speed stays within the new limits from then
-  on (a lower VMAX drops the speed to it at once: the velocity limit wins)."""
+* a new VMAX or AMAX mid-move: the speed keeps the new limits from then on,
+  except above a lowered VMAX, where it drops to it at once (the velocity limit
+  wins) or, when it cannot stop from there, brakes toward it by AMAX T^2."""
 
 from __future__ import annotations
 
