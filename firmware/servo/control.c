@@ -98,7 +98,6 @@ uint32_t tl_speed_numerator(uint64_t n, uint32_t *k)
 
 uint32_t tl_ctl_speed_m[TL_CTL_SPEED_TAB];
 uint8_t tl_ctl_speed_k[TL_CTL_SPEED_TAB];
-uint32_t tl_ctl_recip[TL_CTL_SPEED_TAB];
 
 /* The speed table for clock clk_hz (the SoC's clock never changes, so a refill
  * writes the values already there and the control iteration may read it meanwhile). */
@@ -111,7 +110,6 @@ TL_FOR_SIZE static void speed_table(uint32_t clk_hz)
         uint32_t k;
         tl_ctl_speed_m[n] = tl_speed_numerator((uint64_t)n * clk_hz * 256u, &k);
         tl_ctl_speed_k[n] = (uint8_t)k;
-        tl_ctl_recip[n] = n ? 0xFFFFFFFFu / n : 0u;
     }
     filled_for = clk_hz;
 }
@@ -135,7 +133,7 @@ TL_FOR_SIZE void tl_ctl_derived(tl_ctl_derived_t *d, const tl_ctl_params_t *p, u
                                    1, TL_CTL_VMAX_Q16_MAX);
     d->amax_q16 = (int32_t)clamp64(muldiv((uint64_t)(p->amax_cps2 > 0 ? p->amax_cps2 : 0) * period_us * period_us,
                                           16u, 244140625u), 1, TL_CTL_AMAX_Q16_MAX);
-    d->m_vmax = (uint32_t)d->vmax_q16 / (uint32_t)d->amax_q16;
+    d->s_vmax = stop_sum((uint32_t)d->vmax_q16, (uint32_t)d->amax_q16);
     d->euler_k = (int32_t)((256000000u + period_us / 2u) / period_us);
     d->clk_q8 = (uint64_t)clk_hz * 256u;
     speed_table(clk_hz);
@@ -143,12 +141,29 @@ TL_FOR_SIZE void tl_ctl_derived(tl_ctl_derived_t *d, const tl_ctl_params_t *p, u
     d->bound_k = tl_ctl_speed_k[1];
 }
 
+/* The profile's regime and braking surplus from where it is (a new target, vmax or amax; the
+ * oracle's _plan): moving away from the target, E = d (it speeds up toward it); otherwise
+ * E = d - S(v), and E < 0 means it cannot stop in time (TL_PROF_OVERRUN).  One 32-bit divide. */
+static void profile_plan(tl_ctl_t *c)
+{
+    int64_t d = c->target_q16 - c->sp_q16;
+    int32_t s = (int32_t)(d >> 63);
+    int32_t v = (c->prof_v_q16 ^ s) - s;
+    int64_t e = (d ^ s) - s;
+    if (v > 0)
+        e -= (int64_t)stop_sum((uint32_t)v, (uint32_t)c->d.amax_q16);
+    c->prof_s = s;
+    c->prof_st = e < 0 ? TL_PROF_OVERRUN : TL_PROF_ACCEL;
+    if (v > c->d.vmax_q16 && e >= 0)   /* above a lowered vmax: E at vmax, where it drops to */
+        e = ((d ^ s) - s) - (int64_t)c->d.s_vmax;
+    profile_set_e(c, e);
+}
+
 void tl_ctl_apply(tl_ctl_t *c, const tl_ctl_derived_t *d)
 {
     c->d = *d;
-    uint32_t v = (uint32_t)(c->prof_v_q16 < 0 ? -c->prof_v_q16 : c->prof_v_q16);
-    c->prof_m = v / (uint32_t)d->amax_q16;   /* the profile's m and stopping distance, for a changed amax */
-    c->prof_dv = stop_distance(v, c->prof_m, (uint32_t)d->amax_q16);
+    if (c->moving)
+        profile_plan(c);   /* a new vmax or amax mid-move */
 }
 
 void tl_ctl_derive(tl_ctl_t *c, const tl_ctl_params_t *p, uint32_t period_us, uint32_t clk_hz)
@@ -163,6 +178,7 @@ void tl_ctl_move(tl_ctl_t *c, int32_t target, bool trapezoid)
     c->target_q16 = (int64_t)target * 65536;
     if (trapezoid) {
         c->moving = true;
+        profile_plan(c);
     } else {
         c->sp_q16 = c->target_q16;   /* the paper's step experiment */
         profile_rest(c);

@@ -12,8 +12,8 @@
  *   *_q32  32 fractional bits, int64 (integrator: PWM steps)
  * The per-sample arithmetic divides only 32-bit numbers (docs/firmware.md,
  * "Control"): a 64-bit numerator over a 32-bit divisor goes through
- * tl_div64_32, two hardware divides; the only quotients computed per sample
- * are the edge-timestamp velocity and the braking speed of the profile.
+ * tl_div64_32, two hardware divides; the only quotient computed per sample
+ * is the edge-timestamp velocity (the profile carries its braking surplus).
  * PWM command: signed steps -1023..1023, the delta_PW of eq. (1); the PWM
  * block adds the dead zone PW0 and scales to PW_max in hardware. */
 #ifndef TL_CONTROL_H
@@ -54,6 +54,11 @@
  * counts/s at the longest period, far beyond the encoders. */
 #define TL_CTL_VMAX_Q16_MAX 0x40000000
 #define TL_CTL_AMAX_Q16_MAX 0x20000000
+/* The profile's regimes: speeding up toward the target or cruising; braking onto it; braking
+ * by amax past a target it could not stop for (then it turns back: TL_PROF_ACCEL). */
+#define TL_PROF_ACCEL 0u
+#define TL_PROF_BRAKE 1u
+#define TL_PROF_OVERRUN 2u
 /* Counts between two velocity samples beyond this are clamped to it (not physical). */
 #define TL_CTL_DCOUNT_MAX 0x0FFFFFFF
 /* Edge-timestamp speed of n counts over dt cycles, q8 counts/s (docs/firmware.md, "Control"):
@@ -63,8 +68,6 @@
 #define TL_CTL_SPEED_TAB 64u
 extern uint32_t tl_ctl_speed_m[TL_CTL_SPEED_TAB];
 extern uint8_t tl_ctl_speed_k[TL_CTL_SPEED_TAB];
-/* floor((2^32 - 1) / k) for 1 <= k < TL_CTL_SPEED_TAB (control_step.h div_small), filled with the speed table. */
-extern uint32_t tl_ctl_recip[TL_CTL_SPEED_TAB];
 
 typedef struct {
     uint32_t law;
@@ -93,7 +96,7 @@ typedef struct {
     int64_t sat_hi_q16, sat_lo_q16;   /* the command's saturation, as bounds of u_q16 + 2^15 */
     int32_t vmax_q16;           /* counts per sample, q16, 1 .. TL_CTL_VMAX_Q16_MAX */
     int32_t amax_q16;           /* counts per sample^2, q16, 1 .. TL_CTL_AMAX_Q16_MAX */
-    uint32_t m_vmax;            /* floor(vmax_q16 / amax_q16) */
+    uint64_t s_vmax;            /* S(vmax_q16): the distance braking by amax_q16 covers after a sample at vmax (control_step.h) */
     int32_t euler_k;            /* Euler difference: q8 counts/s per count per sample, round(2^8 1e6 / T_us) */
     uint64_t clk_q8;            /* decoder clock, q8: counts/s q8 = counts * clk_q8 / cycles */
     uint32_t bound_m;           /* the standstill bound's numerator and shift: tl_ctl_speed_m/k[1] */
@@ -108,11 +111,17 @@ typedef struct {
     int64_t sp_q16;             /* set-point, counts q16 */
     int64_t target_q16;
     int32_t prof_v_q16;         /* profile speed, counts per sample q16 (signed) */
-    uint32_t prof_m;            /* floor(|prof_v_q16| / amax_q16), kept so no sample divides by amax */
-    uint64_t prof_dv;           /* D(|prof_v_q16|), the distance braking by amax_q16 covers from it (control_step.h) */
     int32_t prof_a_q16;         /* the profile speed's change over the last sample, counts per sample^2 q16
                                    (signed: + speeding up toward +, - braking it; 0 at rest and on landing) */
     bool moving;
+    /* the profile's plan (control_step.h profile, profile_plan): */
+    uint32_t prof_st;           /* TL_PROF_ACCEL, _BRAKE or _OVERRUN */
+    int32_t prof_s;             /* toward the target: 0 up, -1 down */
+    int32_t prof_e32;           /* braking surplus E = d - S(v), counts q16 (d while moving away; < 0 in */
+    int64_t prof_eres;          /* OVERRUN), as prof_eres + prof_e32: 0 <= prof_e32 < 2^31 takes each sample's
+                                   step in 32 bits, refilled from prof_eres >= 0 when it runs out */
+    uint32_t prof_b;            /* BRAKE: the braking speed so far, and the two speeds still to merge in */
+    uint32_t prof_p1, prof_p2;
     int64_t integ_q32;
     bool saturated;             /* last output hit cmd_limit */
     int32_t sat_sign;

@@ -24,118 +24,131 @@ static inline uint32_t opaque(uint32_t x)
     return x;
 }
 
-/* Trapezoidal profile: each sample the speed toward the target rises by at
- * most a, never exceeds vmax, and never exceeds v_allow(d), the speed from
- * which braking by a per sample lands exactly on the target after d; the last
- * step lands on it (never beyond).
- *
- * Braking by a from v covers D(v) = v + (v - a) + ... + (v - m a) = (m + 1)(2v - a m) / 2
- * with m = floor(v / a), increasing in v, and D(v_allow(d)) <= d < D(v_allow(d) + 1), so
- * "v <= v_allow(d)" is "D(v) <= d": no square root.  m is carried from sample to sample
- * (v + a has m + 1, vmax has m_vmax, v_allow has n), so no sample divides by a.  When
- * braking, v_allow(d) = floor((d + a n (n + 1) / 2) / (n + 1)) with n = m(v_allow);
- * because D(v - a) = D(v) - v, the last speed v was on or inside the braking curve and
- * v_allow lies in [v - a, v + a): n is m(v - a) or one or two more, found by walking D up
- * from D(v - a) segment by segment, and the quotient is a remainder over n + 1 that fits
- * 32 bits.  D(|v|) itself is carried from sample to sample: no sample multiplies for it while
- * accelerating or cruising.  If a new target or a lower vmax
- * leaves the axis unable to stop in time (D(v - a) > d), it brakes by a and comes back. */
-static inline uint64_t stop_distance(uint32_t v, uint32_t m, uint32_t a)
+/* Trapezoidal profile (docs/firmware.md, "Fourth pass"; torqueloop/oracles/servo.py _profile is
+ * its definition): each sample the speed toward the target rises by at most a and never exceeds
+ * vmax while the braking surplus E = d - S(v) stays >= 0, S(v) = (v - a) + (v - 2a) + ... the
+ * distance braking by a covers after a sample at speed v - so braking from the new speed still
+ * stops short of the target.  E is carried from sample to sample: E(v + a) = E(v) - (v + a) - v,
+ * cruising E(vmax) = E(vmax) - vmax; no product and no quotient per sample.  When it would go
+ * negative, the axis brakes from the last speed b by a per sample, and the rest R = E = d - S(b)
+ * (< 2b + a) goes into the braking as at most two more speeds p1 >= p2 (p2 <= b), merged in
+ * descending order: no sample changes the speed by more than a, every speed is positive and the
+ * speeds sum to d, so the last one lands exactly on the target.  A new target, vmax or amax plans
+ * again (profile_plan): moving away, it speeds up toward the target (E = d); unable to stop in
+ * time (E < 0), it brakes by a past the target (E stays d - S(v)) and comes back. */
+static inline uint64_t stop_sum(uint32_t v, uint32_t a)
 {
-    return ((uint64_t)(m + 1u) * (uint64_t)(2u * v - a * m)) >> 1;   /* 2v - a m = v + (v mod a) < 2^31 */
+    uint32_t m = v ? (v - 1u) / a : 0u;              /* the positive terms v - j a, j = 1 .. m */
+    return ((uint64_t)m * (2u * v - a * (m + 1u))) >> 1;   /* m v - a m (m + 1) / 2; 2v < 2^31 */
 }
 
-/* floor(x / k), k >= 1, and the remainder in *rem: below TL_CTL_SPEED_TAB through the
- * reciprocal table (a multiply, a check and at most one correction: floor(x R / 2^32) with
- * R = floor((2^32 - 1) / k) is the quotient or one less), the hardware divide (35 cycles) beyond. */
-static inline uint32_t div_small(uint32_t x, uint32_t k, uint32_t *rem)
+/* The braking surplus E, and E stored as prof_eres + prof_e32 with as much of it as fits in
+ * 0 <= prof_e32 < 2^31 (all of a negative E in prof_eres). */
+static inline int64_t profile_e(const tl_ctl_t *c) { return c->prof_eres + c->prof_e32; }
+static inline void profile_set_e(tl_ctl_t *c, int64_t e)
 {
-    uint32_t q = TL_LIKELY(k < TL_CTL_SPEED_TAB) ? (uint32_t)(((uint64_t)x * tl_ctl_recip[k]) >> 32) : x / k;
-    uint32_t r = x - opaque(q) * k;
-    uint32_t over = (uint32_t)(r >= k);              /* the correction as a mask: no branch */
-    *rem = r - (k & (0u - over));
-    return q + over;
+    int32_t lo = e < 0 ? 0 : (e > 0x7FFFFFFF ? 0x7FFFFFFF : (int32_t)e);
+    c->prof_e32 = lo;
+    c->prof_eres = e - lo;
 }
 
-/* The profile at rest on the set-point (no speed, no stopping distance, no acceleration). */
+/* The profile at rest on the set-point (no speed, no acceleration). */
 static inline __attribute__((always_inline)) void profile_rest(tl_ctl_t *c)
 {
     c->prof_v_q16 = 0;
-    c->prof_m = 0;
-    c->prof_dv = 0;
     c->prof_a_q16 = 0;
     c->moving = false;
 }
 
+/* The sample's speed w (toward the target; s: 0 up, -1 down) into the set-point. */
+static inline __attribute__((always_inline)) void profile_out(tl_ctl_t *c, int32_t w, int32_t s)
+{
+    w = (w ^ s) - s;
+    c->prof_a_q16 = w - c->prof_v_q16;   /* at most a, or a drop to a lowered vmax: fits 31 bits */
+    c->prof_v_q16 = w;
+    c->sp_q16 += w;
+}
+
+/* Braking: the next of the braking speeds b - a, b - 2a, ... and the pending p1 >= p2 in
+ * descending order, into w; true when nothing is left after it: the sample lands. */
+static inline __attribute__((always_inline)) bool profile_brake(tl_ctl_t *c, int32_t a, int32_t *w)
+{
+    int32_t nb = (int32_t)c->prof_b - a;
+    uint32_t p1 = c->prof_p1;
+    *w = 0;
+    if (p1 != 0u && (int32_t)p1 >= nb) {             /* the larger pending speed, in its place */
+        *w = (int32_t)p1;
+        c->prof_p1 = p1 = c->prof_p2;
+        c->prof_p2 = 0u;
+    } else if (nb > 0) {
+        *w = nb;
+        c->prof_b = (uint32_t)nb;
+    }
+    return p1 == 0u && (int32_t)c->prof_b <= a;
+}
+
 static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
 {
-    int64_t d = c->target_q16 - c->sp_q16;
-    int32_t s = (int32_t)(d >> 63);                  /* toward the target: 0 up, -1 down */
-    int64_t ad = (d ^ s) - s;                        /* |d| < 2^48: positions are 32-bit counts in q16 */
-    uint32_t a = (uint32_t)c->d.amax_q16;
-    int32_t v = (c->prof_v_q16 ^ s) - s;             /* speed toward the target (|v| < 2^31), accelerated: */
-    int32_t vs = v + (int32_t)a;
-    uint32_t m = v >= 0 ? c->prof_m + 1u : (c->prof_m ? c->prof_m - 1u : 0u);
-    /* D(|v|) is carried from sample to sample (prof_dv), and both tests below follow from it:
-     * D(v + a) = D(v) + v + a and D(v - a) = D(v) - v (the sum's first or last term). */
-    uint64_t dv = c->prof_dv;
-    uint64_t dvs = dv + (uint32_t)vs, dn;            /* dn: D(|vs|), for the next sample */
-    if (vs > c->d.vmax_q16) {
-        vs = c->d.vmax_q16;
-        m = c->d.m_vmax;
-        dvs = vs == v ? dv : stop_distance((uint32_t)vs, m, a);   /* cruising: D(vmax) is D(v) */
-        dn = dvs;
-    } else if (TL_UNLIKELY(v < 0)) {
-        dvs = vs > 0 ? stop_distance((uint32_t)vs, m, a) : 0u;
-        dn = vs > 0 ? dvs : dv - (0u - (uint32_t)v);  /* D(|v| - a) = D(|v|) - |v| */
-    } else {
-        dn = dvs;
-    }
-    /* Distances and stopping distances are below 2^62 (D(v) < 2^31 (m + 1)): each 64-bit test is
-     * the sign of a difference, one subtraction and one branch. */
-    if (neg64(ad - (int64_t)dvs)) {                  /* D(vs) > d; D is 0 for vs <= 0 */
-        uint32_t lo = v > (int32_t)a ? (uint32_t)v - a : 0u;   /* v_allow(d) >= lo when on the curve */
-        uint32_t mlo = v > (int32_t)a ? c->prof_m - 1u : 0u;
-        if (lo > 0u && neg64(ad - (int64_t)(dv - (uint32_t)v))) {
-            vs = (int32_t)lo;                        /* cannot stop in time: brake by a */
-            m = mlo;
-            dn = dv - (uint32_t)v;
-        } else {
-            /* v_allow in [lo, vs): D grows by m + 1 per q16 count of speed inside a segment
-             * [a m, a (m + 1)) of constant m, from D(lo) in lo's segment mlo, and vs <= a (mlo + 3):
-             * at most three segments, then one quotient.  r = d - D(lo) < D(vs) - D(lo) <= 2v + a
-             * < 2^32 (speeds <= 2^30, a < 2^29): 32-bit, so the low words give it exactly. */
-            uint32_t r = (uint32_t)ad - (lo ? (uint32_t)dv - (uint32_t)v : 0u);
-            uint32_t n = mlo, b = a * (n + 1u), base = lo;   /* b: the segment's end (< 2^31) */
-            uint32_t span = (n + 1u) * (b - lo);             /* D over the rest of lo's segment */
-            if (r >= span) {
-                r -= span;
-                n++;
-                base = b;
-                span = (n + 1u) * a;                         /* a (mlo + 2) < 2^32 */
-                if (r >= span) {
-                    r -= span;
-                    n++;
-                    base += a;
-                }
-            }
-            uint32_t rem;
-            vs = (int32_t)(base + div_small(r, n + 1u, &rem));
-            m = n;
-            dn = (uint64_t)ad - rem;                 /* D(base) + (n + 1) q = d - r + (n + 1) q */
+    int32_t s = c->prof_s;                           /* toward the target: 0 up, -1 down */
+    int32_t a = c->d.amax_q16, vmax = c->d.vmax_q16;
+    int32_t v = (c->prof_v_q16 ^ s) - s;             /* speed toward the target (|v| < 2^31) */
+    int32_t w;
+    if (TL_LIKELY(c->prof_st == TL_PROF_ACCEL)) {
+        /* u = min(v + a, vmax) and what it takes from E: u + v speeding up by a or reaching vmax,
+         * vmax cruising (at or above vmax); 32 bits: u + v < 2^31 (v < vmax <= 2^30 when counted) */
+        int32_t u = v + a;
+        u = u > vmax ? vmax : u;
+        int32_t step = u + (v & -(int32_t)(v < vmax));
+        /* the common case in 32 bits: E's low part covers the step, v >= 0; one branch (moving
+         * away, the low part spent, braking: below) */
+        int32_t e = (int32_t)((uint32_t)c->prof_e32 - (uint32_t)step);
+        if (TL_LIKELY((e | v) >= 0)) {
+            c->prof_e32 = e;
+            profile_out(c, u, s);
+            return;
         }
+        int32_t b = v & ~(v >> 31);                  /* brake from b = max(v, 0): R = E = d - S(b) < 2b + a */
+        uint32_t r = (uint32_t)c->prof_e32;
+        if (TL_UNLIKELY((c->prof_eres != 0) | (v < 0))) {
+            step = v < 0 ? u : step;                 /* moving away: S(v) counts as 0 (E = d) */
+            /* moving away, or the low part spent with more in reserve: in 64 bits */
+            int64_t en = profile_e(c) - step;
+            if (u <= 0 || !neg64(en)) {              /* braking from u still stops short of the target */
+                int32_t lo = (uint64_t)en >> 31 ? 0x7FFFFFFF : (int32_t)en;   /* en >= 0 here */
+                c->prof_e32 = lo;
+                c->prof_eres = en - lo;
+                profile_out(c, u, s);
+                return;
+            }
+            r = (uint32_t)c->prof_eres + (uint32_t)c->prof_e32;   /* R < 2^31: the low words give it */
+        }
+        if (TL_UNLIKELY(v >= vmax)) {                /* braking from vmax: R = d - S(vmax), which E may */
+            b = vmax;                                /* have underestimated on reaching vmax (by <= v); */
+            uint32_t dl = (uint32_t)c->target_q16 - (uint32_t)c->sp_q16;   /* R < 2^31: low words */
+            r = ((dl ^ (uint32_t)s) - (uint32_t)s) - (uint32_t)c->d.s_vmax;
+        }
+        uint32_t p2 = r >> 1;
+        p2 = p2 < (uint32_t)b ? p2 : (uint32_t)b;
+        c->prof_p1 = r - p2;
+        c->prof_p2 = p2;
+        c->prof_b = (uint32_t)b;
+        c->prof_st = TL_PROF_BRAKE;
+    } else if (c->prof_st == TL_PROF_OVERRUN) {
+        w = v - a;                                   /* v > a: E = d - S(v) is the same after braking by a */
+        profile_out(c, w, s);
+        if (w <= a) {                                /* the last speed past the target: turn toward it */
+            c->prof_s = ~s;
+            profile_set_e(c, -profile_e(c));         /* S(w) = 0: E is d */
+            c->prof_st = TL_PROF_ACCEL;
+        }
+        return;
     }
-    if (!neg64((int64_t)vs - ad)) {                 /* vs >= d: lands (never when vs < 0) */
+    if (profile_brake(c, a, &w)) {                   /* nothing left: this sample lands */
         c->sp_q16 = c->target_q16;
         profile_rest(c);
         return;
     }
-    vs = (vs ^ s) - s;
-    c->prof_a_q16 = vs - c->prof_v_q16;   /* at most a, or a drop to a lower vmax: fits 31 bits */
-    c->prof_v_q16 = vs;
-    c->prof_m = m;
-    c->prof_dv = dn;
-    c->sp_q16 += c->prof_v_q16;
+    profile_out(c, w, s);
 }
 
 /* |d| counts over dt cycles in q8 counts/s, saturated to INT32_MAX (control.h,
@@ -274,9 +287,12 @@ static inline __attribute__((always_inline)) void friction_terms(tl_ctl_t *c, co
 static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, bool run_law)
 {
     /* The error, q16 counts: 32 bits within +-32767 counts (the usual case), saturated beyond. */
-    int64_t e_q16 = c->sp_q16 - (int64_t)pos * 65536;
-    int32_t e = (int32_t)e_q16;   /* fits: the high word is e's sign and e is not INT32_MIN, one branch */
-    bool fits = (((uint32_t)(e_q16 >> 32) ^ (uint32_t)(e >> 31)) | (uint32_t)(e == INT32_MIN)) == 0u;
+    /* sp - pos 2^16 by words: pos 2^16 is (pos >> 16 : pos << 16), no 64-bit shift */
+    uint32_t slo = (uint32_t)c->sp_q16, plo = (uint32_t)pos << 16;
+    int32_t ehi = (int32_t)((uint64_t)c->sp_q16 >> 32) - (pos >> 16) - (int32_t)(slo < plo);
+    int32_t e = (int32_t)(slo - plo);   /* fits: the high word is e's sign and e is not INT32_MIN, one branch */
+    bool fits = (((uint32_t)ehi ^ (uint32_t)(e >> 31)) | (uint32_t)(e == INT32_MIN)) == 0u;
+    int64_t e_q16 = (int64_t)(((uint64_t)(uint32_t)ehi << 32) | (uint32_t)e);
     if (TL_LIKELY(fits)) {
         c->err_counts = (e >> 16) + ((e >> 15) & 1);   /* (e + 2^15) >> 16 without overflow */
     } else {
@@ -357,7 +373,7 @@ static inline __attribute__((always_inline)) int32_t tl_ctl_step_inline(tl_ctl_t
                                                                        bool run_law)
 {
     velocity(c, p, pos, edge_time, now, interval);
-    if (c->moving)
+    if (TL_LIKELY(c->moving))
         profile(c);
     return law(c, p, pos, run_law);
 }

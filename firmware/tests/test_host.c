@@ -843,7 +843,7 @@ static void test_encoder_wrap(void)
     for (uint32_t mode = 0; mode < 2; mode++) {
         tl_ctl_params_t p = {.law = 1, .kp_q16 = 1000, .cmd_limit = 1023, .vel_mode = mode, .vmax_cps = 1000,
                              .amax_cps2 = 1000};
-        tl_ctl_t c;
+        tl_ctl_t c = {0};
         tl_ctl_derive(&c, &p, 1000, 50000000u);
         int32_t pos = INT32_MAX - 20;
         tl_ctl_reset(&c, pos, 0);
@@ -1021,7 +1021,7 @@ static void test_profile(void)
     for (int n = 0; n < 300; n++) {
         tl_ctl_params_t p = {.law = 1, .kp_q16 = 1000, .cmd_limit = 1023, .vel_mode = 1,
                              .vmax_cps = (int32_t)(1 + rnd() % 200000), .amax_cps2 = (int32_t)(1 + rnd() % 5000000)};
-        tl_ctl_t c;
+        tl_ctl_t c = {0};
         uint32_t period = 200 + rnd() % 24800;
         tl_ctl_derive(&c, &p, period, 50000000u);
         int32_t start = (int32_t)(rnd() % 20000) - 10000, target = (int32_t)(rnd() % 20000) - 10000;

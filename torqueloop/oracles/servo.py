@@ -42,22 +42,17 @@ AMAX_Q16_MAX = 0x2000_0000
 DCOUNT_MAX = 0x0FFF_FFFF
 
 
-def stop_distance(v: int, a: int) -> int:
-    """Distance covered braking by ``a`` per sample from speed ``v`` until the
-    speed would reach zero: v + (v - a) + ... + (v - m a), m = floor(v / a)."""
-    m = v // a
-    return (m + 1) * (2 * v - a * m) // 2
+def stop_sum(v: int, a: int) -> int:
+    """S(v): the distance braking by ``a`` per sample covers after a sample at speed
+    ``v`` (>= 0) until the speed would reach zero: (v - a) + (v - 2a) + ... over the
+    positive terms."""
+    m = max(0, (v - 1) // a)                 # the positive terms v - j a, j = 1 .. m
+    return m * v - a * m * (m + 1) // 2
 
 
-def v_allow(d: int, a: int) -> int:
-    """Fastest speed from which braking by ``a`` per sample stops exactly after
-    ``d``: v + (v - a) + ... + (v - n a) = d, n = largest with a n (n + 1) / 2 <= d."""
-    n = (math.isqrt(8 * (d // a) + 1) - 1) // 2
-    while n > 0 and a * n * (n + 1) // 2 > d:
-        n -= 1
-    while a * (n + 1) * (n + 2) // 2 <= d:
-        n += 1
-    return (d + a * n * (n + 1) // 2) // (n + 1)
+#: the profile's regimes (control.h TL_PROF_*): speeding up or cruising, braking onto the
+#: target, braking by a past a target it could not stop for
+ACCEL, BRAKE, OVERRUN = 0, 1, 2
 
 
 def edge_speed_q8(counts: int, dt: int, clk_hz: int) -> int:
@@ -151,6 +146,15 @@ class Axis:
     prof_v_q16: int = 0
     prof_a_q16: int = 0          # the profile speed's change over the last sample (0 at rest and on landing)
     moving: bool = False
+    # the profile's plan (_plan, _profile): regime, direction toward the target (+1 / -1), the braking
+    # surplus E = d - S(v) (ACCEL; d while moving away; d - S(v) < 0 in OVERRUN), the braking level and
+    # the two speeds still to insert into the braking (BRAKE)
+    prof_st: int = ACCEL
+    prof_s: int = 1
+    prof_e: int = 0
+    prof_b: int = 0
+    prof_p1: int = 0
+    prof_p2: int = 0
     integ_q32: int = 0
     saturated: bool = False
     sat_sign: int = 0
@@ -176,6 +180,8 @@ class Axis:
         self.amax_q16 = min(AMAX_Q16_MAX, max(1, _tdiv(p.amax_cps2 * T * T * 16, 244140625)))
         # the Euler difference's scale, rounded once: q8 counts/s per count per sample
         self.euler_k = (256_000_000 + T // 2) // T
+        self.s_vmax = stop_sum(self.vmax_q16, self.amax_q16)
+        self._plan()    # a new VMAX or AMAX mid-move: planned again from where the profile is
 
     def reset(self, pos: int, now: int) -> None:
         self.sp_q16 = self.target_q16 = pos << 16
@@ -191,34 +197,77 @@ class Axis:
         self.target_q16 = target << 16
         if trapezoid:
             self.moving = True
+            self._plan()
         else:
             self.sp_q16, self.prof_v_q16, self.prof_a_q16, self.moving = self.target_q16, 0, 0, False
 
-    def _profile(self) -> None:
-        """Each sample the speed toward the target rises by at most a, never
-        exceeds vmax nor v_allow(remaining distance); the last step lands on
-        the target.  After a new target (or a lower vmax) that leaves the axis
-        unable to stop in time - stop_distance(v - a) beyond the target - it
-        brakes by a and comes back instead of dropping its speed at once."""
+    def _plan(self) -> None:
+        """The profile's regime from where it is (a new target, VMAX or AMAX): toward the
+        target, moving away from it (speed up toward it, ACCEL with E = d), able to stop
+        before it (ACCEL, E = d - S(v) >= 0) or not (OVERRUN: brake by a past it, then come
+        back)."""
         if not self.moving:
             return
         d = self.target_q16 - self.sp_q16
-        direction = 1 if d >= 0 else -1
-        ad, a = abs(d), self.amax_q16
-        v = self.prof_v_q16 * direction
-        vs = min(v + a, self.vmax_q16)
-        if vs > 0 and stop_distance(vs, a) > ad:
-            lo = v - a if v > a else 0
-            if lo > 0 and stop_distance(lo, a) > ad:
-                vs = lo
-            else:
-                vs = v_allow(ad, a)
-        if 0 <= vs and vs >= ad:
-            self.sp_q16, self.prof_v_q16, self.prof_a_q16, self.moving = self.target_q16, 0, 0, False
+        self.prof_s = 1 if d >= 0 else -1
+        v = self.prof_v_q16 * self.prof_s
+        self.prof_e = abs(d) - (stop_sum(v, self.amax_q16) if v > 0 else 0)
+        self.prof_st = ACCEL if self.prof_e >= 0 else OVERRUN
+        if v > self.vmax_q16 and self.prof_st == ACCEL:   # above a lowered vmax: E at vmax, where it drops to
+            self.prof_e = abs(d) - self.s_vmax
+
+    def _land(self) -> None:
+        """The last sample: on the target, which the speeds sum to."""
+        self.sp_q16, self.prof_v_q16, self.prof_a_q16, self.moving = self.target_q16, 0, 0, False
+
+    def _profile(self) -> None:
+        """One sample of the trapezoid (docs/firmware.md, "Fourth pass"), in the frame
+        toward the target (speed v, distance d): speed up by a to at most vmax while the
+        surplus E = d - S(v) stays >= 0 (braking by a from the new speed still stops
+        short of the target); when it would not, brake from the last speed b by a per
+        sample with the rest R = d - S(b) (< 2 b + a) added as at most two more samples,
+        merged in descending order (so no step changes the speed by more than a), and land
+        exactly on the target with the last one."""
+        if not self.moving:
             return
-        self.prof_a_q16 = vs * direction - self.prof_v_q16
-        self.prof_v_q16 = vs * direction
-        self.sp_q16 += self.prof_v_q16
+        a, vmax, s = self.amax_q16, self.vmax_q16, self.prof_s
+        v = self.prof_v_q16 * s
+        w = 0
+        if self.prof_st == OVERRUN:
+            w = v - a                      # v > a; E = d - S(v) is the same after braking by a
+            self._out(w * s)
+            if w <= a:                     # the last speed past the target: turn toward it
+                self.prof_s, self.prof_e, self.prof_st = -s, -self.prof_e, ACCEL   # S(w) = 0: E is d
+            return
+        if self.prof_st == ACCEL:
+            u = min(v + a, vmax)
+            # what the sample takes from E: u + S(u) - S(v), which is u + v speeding up by a (S(v + a)
+            # = S(v) + v), vmax cruising; reaching vmax, u + v again (S(vmax) <= S(v + a): E falls
+            # below d - S(v) by at most v, so a braking from vmax takes its rest from d, below)
+            e = self.prof_e - (u if v >= vmax else u + max(v, 0))
+            if u <= 0 or e >= 0:
+                self.prof_e, w = e, u
+            else:                          # brake: from b = v, or from vmax
+                b = min(max(v, 0), vmax)
+                r = (self.target_q16 - self.sp_q16) * s - self.s_vmax if b == vmax else self.prof_e
+                self.prof_p2 = min(b, r // 2)
+                self.prof_p1, self.prof_b, self.prof_st = r - self.prof_p2, b, BRAKE
+        if self.prof_st == BRAKE:
+            nb = self.prof_b - a
+            if self.prof_p1 > 0 and self.prof_p1 >= nb:
+                w, self.prof_p1, self.prof_p2 = self.prof_p1, self.prof_p2, 0
+            elif nb > 0:
+                w = self.prof_b = nb
+            if self.prof_p1 == 0 and self.prof_b - a <= 0:
+                self._land()               # the last sample: on the target (the speeds sum to d)
+                return
+        self._out(w * s)
+
+    def _out(self, v: int) -> None:
+        """The sample's speed ``v`` (signed) into the set-point."""
+        self.prof_a_q16 = v - self.prof_v_q16
+        self.prof_v_q16 = v
+        self.sp_q16 += v
 
     def _velocity(self, pos: int, edge_time: int, now: int, interval: int) -> None:
         clamp32 = (1 << 31) - 1
