@@ -20,9 +20,10 @@ board's settings the procedure changes (PW0, PWMAX, PERIOD_US, BRAKE, LAW,
 the telemetry rate) are restored afterwards, whatever happens; the axis is
 disabled at the end, on any fault, and on Ctrl-C.
 
-Time is the client's clock and passes through ``Client.pump``: on a real
-board the wall clock, on the in-process simulated board its simulated clock
-(tests run the procedure in simulated time).
+Every wait is in the board's time, read from its telemetry
+(:class:`~torqueloop.host.session.BoardTime`): a simulated board slower or
+faster than real time (``sim --rtl``, the in-process board of the tests) is
+held as long as a real one.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ import numpy as np
 
 from torqueloop.host import identfit as F
 from torqueloop.host.client import Client, ProtocolError, describe_faults
+from torqueloop.host.session import BoardTime
 from torqueloop.spec import pwm
 from torqueloop.spec.system import SYSTEM
 
@@ -85,17 +87,12 @@ class _Axis:
     def __init__(self, c: Client, plan: Plan) -> None:
         self.c, self.plan, self.a = c, plan, plan.axis
         self.start = c.status(self.a)["position"]
+        self.board = BoardTime(c, every=plan.telemetry_every)      # the stream is the procedure's own
 
     def sleep(self, seconds: float) -> Trace:
-        """Let ``seconds`` pass, feeding the link watchdog, and return the axis's telemetry."""
-        end = self.c.clock() + seconds
-        while True:
-            left = end - self.c.clock()
-            if left <= 0:
-                break
-            self.c.pump(min(0.05, left))
-            self.c.heartbeat()
-        rows = self.c.take_telemetry()
+        """Let ``seconds`` of the board's time pass (its telemetry's clock), feeding the link
+        watchdog, and return the axis's telemetry over them."""
+        rows = self.board.hold(seconds)
         ax = [r["axes"][self.a] for r in rows]
         t = np.unwrap(np.array([r["time_us"] for r in rows], dtype=float), period=2.0**32) * 1e-6   # u32 wraps
         trace = Trace(t, np.array([x["position"] for x in ax], dtype=float),
@@ -143,10 +140,10 @@ def _breakaway(ax: _Axis, sign: int, say) -> float:
                                 f"{'positive' if sign > 0 else 'negative'} direction")
         p0 = ax.position()
         ax.drive(sign * duty)
-        end = ax.c.clock() + plan.probe_s
-        moved = False
-        while ax.c.clock() < end and not moved:
-            ax.sleep(0.02)
+        held, moved = 0.0, False
+        while held < plan.probe_s and not moved:
+            tr = ax.sleep(0.02)
+            held += float(tr.t[-1] - tr.t[0]) if tr.t.size else 0.02
             moved = abs(ax.position() - p0) >= plan.moved_counts
         ax.release()
         say(f"  {'+' if sign > 0 else '-'}{100 * duty:5.1f} %: {'moves' if moved else 'holds'}")

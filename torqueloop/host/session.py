@@ -135,6 +135,7 @@ class BoardTime:
         self.every = every if every is not None else telemetry_every(c, record_s)
         self.silence_s = silence_s
         self.tail: list[dict] = []      # what arrived after the last hold, read when the stream stopped
+        self._kept_us: int | None = None    # the board's time_us at the last HEARTBEAT sent
 
     def __enter__(self) -> "BoardTime":
         self.client.take_telemetry()
@@ -169,6 +170,8 @@ class BoardTime:
                 for r in new:
                     records.append(r)
                     span = ((r["time_us"] - records[0]["time_us"]) % (1 << 32)) / 1e6
+                    if self._kept_us is None:
+                        self._kept_us = r["time_us"]
                     if on_record:
                         on_record(r)
                     if trigger and span >= trigger[0]:
@@ -179,9 +182,13 @@ class BoardTime:
             elif now - last_new > self.silence_s:
                 raise ProtocolError(f"no telemetry for {now - last_new:.0f} s (board streaming every "
                                     f"{self.every} periods was requested); check `torqueloop info` counters")
-            if now - last_keep > KEEPALIVE_S:
+            # the watchdog counts the board's time: a board faster than the host's clock (an
+            # in-process simulation) is fed by its own time too, across holds
+            board = records[-1]["time_us"] if records else None
+            if now - last_keep > KEEPALIVE_S or (board is not None and self._kept_us is not None and
+                                                  ((board - self._kept_us) % (1 << 32)) > KEEPALIVE_S * 1e6):
                 c.heartbeat()
-                last_keep = now
+                last_keep, self._kept_us = now, board
             if on_progress:
                 on_progress(span)
         return records
