@@ -58,6 +58,21 @@ TL_FOR_SIZE void tl_servo_init(tl_servo_t *s)
 uint32_t tl_servo_period_cycles(const tl_servo_t *s) { return s->period_cycles; }
 
 
+/* Faults f found by the checks: latched; the axis stops.  Out of line: the iteration
+ * (both axes written out in one function) keeps one call where the whole response was,
+ * so fewer of its branches jump beyond a conditional branch's 4 KiB reach (a branch
+ * over a jump: 3 cycles more on tl_cpu_pipe, docs/firmware.md "Timing"). */
+static __attribute__((noinline, cold)) void axis_fault(tl_servo_t *s, uint32_t i, uint16_t f)
+{
+    tl_axis_t *a = &s->ax[i];
+    uint16_t fresh = f & (uint16_t)~a->faults;
+    a->faults |= f;
+    if (f & (TLP_FAULT_ENCODER | TLP_FAULT_RUNAWAY))
+        a->home = TLP_HOME_STATE_NOT_HOMED;   /* the position is no longer trusted */
+    if (a->enabled && fresh)
+        tl_axis_disable(s, i);
+}
+
 /* One axis of the control iteration (inlined with a constant i). */
 static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint32_t i, const tick_faults_t *t)
 {
@@ -69,14 +84,8 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
         tl_ctl_hold(&a->c, a->pos);   /* open loop: the set-point follows, no following error */
     uint8_t out = 0;
     uint16_t f = axis_checks(a, i, &e, t, &out);
-    if (TL_UNLIKELY(f)) {
-        uint16_t fresh = f & (uint16_t)~a->faults;
-        a->faults |= f;
-        if (f & (TLP_FAULT_ENCODER | TLP_FAULT_RUNAWAY))
-            a->home = TLP_HOME_STATE_NOT_HOMED;   /* the position is no longer trusted */
-        if (a->enabled && fresh)
-            tl_axis_disable(s, i);
-    }
+    if (TL_UNLIKELY(f))
+        axis_fault(s, i, f);
     /* An old direction-blocking fault lets the axis be driven out; any other stops it. */
     if (TL_UNLIKELY((a->faults & (uint16_t)~TLP_FAULT_DIRECTIONAL) && a->enabled))
         tl_axis_disable(s, i);
