@@ -80,7 +80,11 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
     tl_enc_sample_t e;
     hal_enc_read_inline(i, &e);
     a->pos = wrap_add(e.pos, a->offset);
-    if (TL_UNLIKELY(a->drive))
+    /* drive and enabled read once into locals: the byte stores between would make the compiler
+     * load them again (a char may alias anything).  Only tl_axis_disable clears drive in here,
+     * and it clears enabled too, whose command is then 0 either way. */
+    bool drive = a->drive;
+    if (TL_UNLIKELY(drive))
         tl_ctl_hold(&a->c, a->pos);   /* open loop: the set-point follows, no following error */
     uint8_t out = 0;
     uint16_t f = axis_checks(a, i, &e, t, &out);
@@ -89,13 +93,14 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
     /* An old direction-blocking fault lets the axis be driven out; any other stops it. */
     if (TL_UNLIKELY((a->faults & (uint16_t)~TLP_FAULT_DIRECTIONAL) && a->enabled))
         tl_axis_disable(s, i);
+    bool enabled = a->enabled;   /* after the last change here (homing changes none) */
     bool homing = a->home == TLP_HOME_STATE_HOMING;
     if (__builtin_expect(homing, 0))   /* homing.c, a call: keep the path of an axis under control straight */
         tl_home_tick(a, i, e.now);
-    int32_t cmd = tl_ctl_step_inline(&a->c, &a->ctl, a->pos, e.edge_time, e.now, e.interval, a->enabled);
-    if (TL_UNLIKELY(a->drive))
+    int32_t cmd = tl_ctl_step_inline(&a->c, &a->ctl, a->pos, e.edge_time, e.now, e.interval, enabled);
+    if (TL_UNLIKELY(drive))
         cmd = a->drive_duty;
-    if (TL_UNLIKELY(!a->enabled)) {
+    if (TL_UNLIKELY(!enabled)) {
         cmd = 0;
     } else {
         /* blocked(a): the soft-limit sides from the checks, unless homing moved the position */
