@@ -310,8 +310,6 @@ static inline __attribute__((always_inline)) int32_t law_output(tl_ctl_t *c, int
         cmd = -limit;
         c->sat_sign = -1;
     }
-    c->saturated = c->sat_sign != 0;
-    c->cmd = cmd;
     return cmd;
 }
 
@@ -333,7 +331,6 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     if (TL_UNLIKELY(!run_law || p->law == TL_LAW_OFF)) {
         c->integ_q32 = 0;
         c->dither_n = 0;
-        c->cmd = 0;
         return 0;
     }
     uint32_t ae = (uint32_t)(e ^ (e >> 31)) - (uint32_t)(e >> 31);   /* |e| (e > INT32_MIN here) */

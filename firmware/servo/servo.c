@@ -91,7 +91,8 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
     if (TL_UNLIKELY(f))
         axis_fault(s, i, f);
     /* An old direction-blocking fault lets the axis be driven out; any other stops it. */
-    if (TL_UNLIKELY((a->faults & (uint16_t)~TLP_FAULT_DIRECTIONAL) && a->enabled))
+    uint16_t faults = a->faults;   /* read once: the disabling below and homing change none */
+    if (TL_UNLIKELY((faults & (uint16_t)~TLP_FAULT_DIRECTIONAL) && a->enabled))
         tl_axis_disable(s, i);
     bool enabled = a->enabled;   /* after the last change here (homing changes none) */
     bool homing = a->home == TLP_HOME_STATE_HOMING;
@@ -104,7 +105,7 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
         cmd = 0;
     } else {
         /* blocked(a): the soft-limit sides from the checks, unless homing moved the position */
-        uint8_t b = blocked_with(a, homing ? soft_side(a) : out);
+        uint8_t b = blocked_with(a, faults, homing ? soft_side(a) : out);
         if (TL_UNLIKELY(((b & TLP_LIMIT_NEG) && cmd < 0) || ((b & TLP_LIMIT_POS) && cmd > 0)))
             cmd = 0;
     }
