@@ -61,7 +61,6 @@ void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now)
 {
     tl_ctl_hold(c, pos);
     c->integ_q32 = 0;
-    c->saturated = false;
     c->sat_sign = 0;
     c->vel_q8 = 0;
     c->pos_prev = pos;
@@ -70,7 +69,6 @@ void tl_ctl_reset(tl_ctl_t *c, int32_t pos, uint32_t t_now)
     c->moved_last = false;
     c->err_counts = 0;
     c->dither_n = 0;   /* enabling resets: the dither starts with a positive half-period */
-    c->cmd = 0;
 }
 
 /* floor(x * num / den) for x >= 0 whose quotient by den fits 32 bits, den and

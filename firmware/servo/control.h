@@ -123,15 +123,13 @@ typedef struct {
     uint32_t prof_b;            /* BRAKE: the braking speed so far, and the two speeds still to merge in */
     uint32_t prof_p1, prof_p2;
     int64_t integ_q32;
-    bool saturated;             /* last output hit cmd_limit */
-    int32_t sat_sign;
+    int32_t sat_sign;           /* the last output hit +cmd_limit (1), -cmd_limit (-1), neither (0) */
     int32_t vel_q8;             /* velocity estimate, counts/s q8 */
     int32_t pos_prev;
     int32_t pos_ref;            /* position and decoder time of the last sample that saw a count */
     uint32_t t_ref;
     bool moved_last;            /* the previous sample saw a count */
     int32_t err_counts;         /* last error (rounded counts), for telemetry */
-    int32_t cmd;                /* last PWM command */
     uint32_t dither_n;          /* samples into the dither's period: + while < DITHER_HALF, - after */
 } tl_ctl_t;
 

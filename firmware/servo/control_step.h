@@ -284,6 +284,35 @@ static inline __attribute__((always_inline)) void friction_terms(tl_ctl_t *c, co
     }
 }
 
+/* The law's output (eq. 19/25): u = (pd + i + 2^15) >> 16 rounded and saturated to +-limit,
+ * the saturation's sign kept for the anti-windup.  Bounds within +-2^26 (CMD_LIMIT <= 1023),
+ * |i| < 2^27: with |pd| < 2^30 the sum fits 32 bits; beyond, pd's sign decides. */
+static inline __attribute__((always_inline)) int32_t law_output(tl_ctl_t *c, int64_t pd_q16, int32_t i_q16, int32_t limit)
+{
+    int32_t pd = (int32_t)pd_q16;
+    int32_t cmd;
+    if (TL_LIKELY((int32_t)(pd_q16 >> 32) == (pd >> 31) && (uint32_t)pd + 0x40000000u < 0x80000000u)) {
+        int32_t t = pd + i_q16 + 32768, lo = (int32_t)c->d.sat_lo_q16;
+        if (TL_LIKELY((uint32_t)t - (uint32_t)lo < (uint32_t)c->d.sat_hi_q16 - (uint32_t)lo)) {   /* lo <= t < hi */
+            cmd = t >> 16;
+            c->sat_sign = 0;
+        } else if (t >= lo) {
+            cmd = limit;
+            c->sat_sign = 1;
+        } else {
+            cmd = -limit;
+            c->sat_sign = -1;
+        }
+    } else if (pd_q16 > 0) {
+        cmd = limit;
+        c->sat_sign = 1;
+    } else {
+        cmd = -limit;
+        c->sat_sign = -1;
+    }
+    return cmd;
+}
+
 static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, bool run_law)
 {
     /* The error, q16 counts: 32 bits within +-32767 counts (the usual case), saturated beyond. */
@@ -302,7 +331,6 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     if (TL_UNLIKELY(!run_law || p->law == TL_LAW_OFF)) {
         c->integ_q32 = 0;
         c->dither_n = 0;
-        c->cmd = 0;
         return 0;
     }
     uint32_t ae = (uint32_t)(e ^ (e >> 31)) - (uint32_t)(e >> 31);   /* |e| (e > INT32_MIN here) */
@@ -340,32 +368,7 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     }
     if (TL_UNLIKELY(c->d.friction))
         friction_terms(c, p, &pd_q16, i_q16, e);
-    /* round and saturate (eq. 19/25): u = (pd + i + 2^15) >> 16.  Bounds within +-2^26 (CMD_LIMIT
-     * <= 1023), |i| < 2^27: with |pd| < 2^30 the sum fits 32 bits; beyond, pd's sign decides. */
-    int32_t pd = (int32_t)pd_q16;
-    int32_t cmd;
-    if (TL_LIKELY((int32_t)(pd_q16 >> 32) == (pd >> 31) && (uint32_t)pd + 0x40000000u < 0x80000000u)) {
-        int32_t t = pd + i_q16 + 32768, lo = (int32_t)c->d.sat_lo_q16;
-        if (TL_LIKELY((uint32_t)t - (uint32_t)lo < (uint32_t)c->d.sat_hi_q16 - (uint32_t)lo)) {   /* lo <= t < hi */
-            cmd = t >> 16;
-            c->sat_sign = 0;
-        } else if (t >= lo) {
-            cmd = limit;
-            c->sat_sign = 1;
-        } else {
-            cmd = -limit;
-            c->sat_sign = -1;
-        }
-    } else if (pd_q16 > 0) {
-        cmd = limit;
-        c->sat_sign = 1;
-    } else {
-        cmd = -limit;
-        c->sat_sign = -1;
-    }
-    c->saturated = c->sat_sign != 0;
-    c->cmd = cmd;
-    return cmd;
+    return law_output(c, pd_q16, i_q16, limit);
 }
 
 static inline __attribute__((always_inline)) int32_t tl_ctl_step_inline(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos,

@@ -24,7 +24,6 @@ void tl_axis_disable(tl_servo_t *s, uint32_t i)
     if (a->home == TLP_HOME_STATE_HOMING)
         a->home = TLP_HOME_STATE_NOT_HOMED;
     tl_ctl_hold(&a->c, a->pos);
-    a->c.cmd = 0;
 }
 
 bool tl_any_enabled(const tl_servo_t *s)
@@ -56,7 +55,7 @@ uint32_t tl_fold_latch(tl_servo_t *s)
     return safety & LATCH_BITS;
 }
 
-uint8_t tl_blocked(const tl_axis_t *a) { return blocked_with(a, soft_side(a)); }
+uint8_t tl_blocked(const tl_axis_t *a) { return blocked_with(a, a->faults, soft_side(a)); }
 
 void tl_axes_disable(tl_servo_t *s, uint8_t mask)
 {

@@ -113,7 +113,10 @@ static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, 
         if (lim & TLP_LIMIT_POS)
             f |= TLP_FAULT_LIMIT_POS;
     }
-    if (TL_UNLIKELY(!a->enabled))
+    /* not marked unlikely: the return's block then stays in line and the branch reaches it
+     * directly, where a cold block at the iteration's far end costs the enabled axis a branch
+     * over a jump (out of a conditional branch's 4 KiB reach: 3 cycles on tl_cpu_pipe) */
+    if (!a->enabled)
         return f;
     f |= t->enabled;
     if (TL_UNLIKELY((t->safety & TL_HAL_SAFE_FORCED) && f == 0u))
@@ -155,9 +158,9 @@ static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, 
 
 /* Sides toward which the axis must not be driven: a latched limit fault, a
  * limit switch open now, or soft, the soft-limit side the position is beyond. */
-static inline __attribute__((always_inline)) uint8_t blocked_with(const tl_axis_t *a, uint8_t soft)
+static inline __attribute__((always_inline)) uint8_t blocked_with(const tl_axis_t *a, uint16_t faults, uint8_t soft)
 {
-    return (uint8_t)(a->limits | soft | ((a->faults & TLP_FAULT_LIMIT_NEG) ? TLP_LIMIT_NEG : 0u) |
-                     ((a->faults & TLP_FAULT_LIMIT_POS) ? TLP_LIMIT_POS : 0u));
+    return (uint8_t)(a->limits | soft | ((faults & TLP_FAULT_LIMIT_NEG) ? TLP_LIMIT_NEG : 0u) |
+                     ((faults & TLP_FAULT_LIMIT_POS) ? TLP_LIMIT_POS : 0u));
 }
 #endif

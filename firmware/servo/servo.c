@@ -58,6 +58,21 @@ TL_FOR_SIZE void tl_servo_init(tl_servo_t *s)
 uint32_t tl_servo_period_cycles(const tl_servo_t *s) { return s->period_cycles; }
 
 
+/* Faults f found by the checks: latched; the axis stops.  Out of line: the iteration
+ * (both axes written out in one function) keeps one call where the whole response was,
+ * so fewer of its branches jump beyond a conditional branch's 4 KiB reach (a branch
+ * over a jump: 3 cycles more on tl_cpu_pipe, docs/firmware.md "Timing"). */
+static __attribute__((noinline, cold)) void axis_fault(tl_servo_t *s, uint32_t i, uint16_t f)
+{
+    tl_axis_t *a = &s->ax[i];
+    uint16_t fresh = f & (uint16_t)~a->faults;
+    a->faults |= f;
+    if (f & (TLP_FAULT_ENCODER | TLP_FAULT_RUNAWAY))
+        a->home = TLP_HOME_STATE_NOT_HOMED;   /* the position is no longer trusted */
+    if (a->enabled && fresh)
+        tl_axis_disable(s, i);
+}
+
 /* One axis of the control iteration (inlined with a constant i). */
 static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint32_t i, const tick_faults_t *t)
 {
@@ -65,32 +80,32 @@ static inline __attribute__((always_inline)) void axis_tick(tl_servo_t *s, uint3
     tl_enc_sample_t e;
     hal_enc_read_inline(i, &e);
     a->pos = wrap_add(e.pos, a->offset);
-    if (TL_UNLIKELY(a->drive))
+    /* drive and enabled read once into locals: the byte stores between would make the compiler
+     * load them again (a char may alias anything).  Only tl_axis_disable clears drive in here,
+     * and it clears enabled too, whose command is then 0 either way. */
+    bool drive = a->drive;
+    if (TL_UNLIKELY(drive))
         tl_ctl_hold(&a->c, a->pos);   /* open loop: the set-point follows, no following error */
     uint8_t out = 0;
     uint16_t f = axis_checks(a, i, &e, t, &out);
-    if (TL_UNLIKELY(f)) {
-        uint16_t fresh = f & (uint16_t)~a->faults;
-        a->faults |= f;
-        if (f & (TLP_FAULT_ENCODER | TLP_FAULT_RUNAWAY))
-            a->home = TLP_HOME_STATE_NOT_HOMED;   /* the position is no longer trusted */
-        if (a->enabled && fresh)
-            tl_axis_disable(s, i);
-    }
+    if (TL_UNLIKELY(f))
+        axis_fault(s, i, f);
     /* An old direction-blocking fault lets the axis be driven out; any other stops it. */
-    if (TL_UNLIKELY((a->faults & (uint16_t)~TLP_FAULT_DIRECTIONAL) && a->enabled))
+    uint16_t faults = a->faults;   /* read once: the disabling below and homing change none */
+    if (TL_UNLIKELY((faults & (uint16_t)~TLP_FAULT_DIRECTIONAL) && a->enabled))
         tl_axis_disable(s, i);
+    bool enabled = a->enabled;   /* after the last change here (homing changes none) */
     bool homing = a->home == TLP_HOME_STATE_HOMING;
     if (__builtin_expect(homing, 0))   /* homing.c, a call: keep the path of an axis under control straight */
         tl_home_tick(a, i, e.now);
-    int32_t cmd = tl_ctl_step_inline(&a->c, &a->ctl, a->pos, e.edge_time, e.now, e.interval, a->enabled);
-    if (TL_UNLIKELY(a->drive))
+    int32_t cmd = tl_ctl_step_inline(&a->c, &a->ctl, a->pos, e.edge_time, e.now, e.interval, enabled);
+    if (TL_UNLIKELY(drive))
         cmd = a->drive_duty;
-    if (TL_UNLIKELY(!a->enabled)) {
+    if (TL_UNLIKELY(!enabled)) {
         cmd = 0;
     } else {
         /* blocked(a): the soft-limit sides from the checks, unless homing moved the position */
-        uint8_t b = blocked_with(a, homing ? soft_side(a) : out);
+        uint8_t b = blocked_with(a, faults, homing ? soft_side(a) : out);
         if (TL_UNLIKELY(((b & TLP_LIMIT_NEG) && cmd < 0) || ((b & TLP_LIMIT_POS) && cmd > 0)))
             cmd = 0;
     }

@@ -69,8 +69,8 @@ typedef struct {
     tl_counters_t cnt;
     uint32_t ticks;               /* control periods since start */
     uint32_t link_idle_ticks;     /* control periods since the last valid command */
-    uint16_t telem_every;
-    uint16_t telem_phase;         /* ticks mod telem_every */
+    uint32_t telem_every;         /* TELEMETRY's u16; 32 bits: the iteration's count zero-extends nothing */
+    uint32_t telem_phase;         /* ticks mod telem_every */
     uint16_t telem_seq;
     bool telem_due;
     bool bootloader_req;
