@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from torqueloop.host.client import Client, ProtocolError, describe_faults
-from torqueloop.host.session import BoardTime
+from torqueloop.host.session import BoardTime, board_s
 from torqueloop.spec import protocol as P
 from torqueloop.spec import pwm
 from torqueloop.spec.units import BadValue
@@ -105,12 +105,13 @@ def drive(c: Client, axis: int, steps: int, seconds: float,
     start = st["position"]
     c.enable(1 << axis, True)
     res = DriveResult(axis, steps, start, start, 0.0)
-    t0: list[int] = []
+    t0_us: int | None = None            # the first sample's board time
 
     def sample(rec: dict) -> None:
+        nonlocal t0_us
         a = rec["axes"][axis]
-        t0[:] = t0 or [rec["time_us"]]
-        smp = {"t_s": round(((rec["time_us"] - t0[0]) % (1 << 32)) / 1e6, 3), "position": a["position"],
+        t0_us = rec["time_us"] if t0_us is None else t0_us
+        smp = {"t_s": round(board_s(t0_us, rec["time_us"]), 3), "position": a["position"],
                "velocity_cps": a["velocity_q8"] / 256, "pwm_cmd": a["pwm_cmd"], "enabled": a["enabled"],
                "faults": a["faults"]}
         res.samples.append(smp)

@@ -112,6 +112,12 @@ class Session:
         return records + bt.tail
 
 
+def board_s(t0_us: int, t1_us: int) -> float:
+    """Seconds of the board's time from ``t0_us`` to ``t1_us`` (telemetry ``time_us``, a u32
+    that wraps every 71.6 minutes)."""
+    return ((t1_us - t0_us) % (1 << 32)) / 1e6
+
+
 def telemetry_every(c: Client, record_s: float) -> int:
     """Control periods per telemetry record for about one record every
     ``record_s`` seconds of board time (PERIOD_US, the board's own)."""
@@ -169,7 +175,7 @@ class BoardTime:
                 last_new = now
                 for r in new:
                     records.append(r)
-                    span = ((r["time_us"] - records[0]["time_us"]) % (1 << 32)) / 1e6
+                    span = board_s(records[0]["time_us"], r["time_us"])
                     if self._kept_us is None:
                         self._kept_us = r["time_us"]
                     if on_record:
@@ -186,7 +192,7 @@ class BoardTime:
             # in-process simulation) is fed by its own time too, across holds
             board = records[-1]["time_us"] if records else None
             if now - last_keep > KEEPALIVE_S or (board is not None and self._kept_us is not None and
-                                                  ((board - self._kept_us) % (1 << 32)) > KEEPALIVE_S * 1e6):
+                                                  board_s(self._kept_us, board) > KEEPALIVE_S):
                 c.heartbeat()
                 last_keep, self._kept_us = now, board
             if on_progress:

@@ -38,7 +38,7 @@ from typing import Callable
 
 from torqueloop.host.client import Client, ProtocolError, describe_faults
 from torqueloop.host.drive import check_ready, steps_for
-from torqueloop.host.session import BoardTime
+from torqueloop.host.session import BoardTime, board_s
 from torqueloop.spec import pwm
 
 
@@ -59,7 +59,7 @@ def _moved(c: Client, bt: BoardTime, axis: int, steps: int, hold_s: float, fault
     c.drive(axis, steps)
     recs = bt.hold(hold_s, until=lambda r: bool(r["axes"][axis]["faults"] & ~faults0))
     t0 = recs[0]["time_us"]
-    mid = next((r for r in recs if ((r["time_us"] - t0) % (1 << 32)) >= hold_s * 5e5), recs[-1])
+    mid = next((r for r in recs if board_s(t0, r["time_us"]) >= hold_s / 2), recs[-1])
     last = recs[-1]["axes"][axis]
     return last["position"] - mid["axes"][axis]["position"], last["faults"] & ~faults0
 

@@ -24,7 +24,7 @@ from .. import drive as hdrive
 from ..analysis import in_unit, step_figures
 from ..client import describe_faults, decode_faults
 from ..serve import SessionServer
-from ..session import HOMED, Session
+from ..session import HOMED, Session, board_s
 from .hub import AXIS_FIELDS, ROW, Hub
 
 #: the parameters the page lists, by their friendly names (units.py is their one definition)
@@ -269,7 +269,7 @@ class Actions:
 def _span_s(rows: list[list]) -> float:
     if len(rows) < 2:
         return 0.0
-    return ((rows[-1][2] - rows[0][2]) % (1 << 32)) / 1e6
+    return board_s(rows[0][2], rows[-1][2])
 
 
 __all__ = ["Actions", "PageConn", "PARAM_NAMES", "AXIS_FIELDS"]
