@@ -14,7 +14,6 @@ plus the friction compensation and the dither (``friction_terms``, ``dither_q16`
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from torqueloop.spec.system import SYSTEM
 
