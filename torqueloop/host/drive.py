@@ -105,12 +105,17 @@ def drive(c: Client, axis: int, steps: int, seconds: float,
     start = st["position"]
     c.enable(1 << axis, True)
     res = DriveResult(axis, steps, start, start, 0.0)
-    t0_us: int | None = None            # the first sample's board time
+    t0_us: int | None = None            # the first sample's board time: the drive in effect
 
     def sample(rec: dict) -> None:
         nonlocal t0_us
         a = rec["axes"][axis]
-        t0_us = rec["time_us"] if t0_us is None else t0_us
+        if t0_us is None:
+            # through `serve` records sampled before the DRIVE (the axis not yet enabled or
+            # driven) can still arrive after its reply: the drive's samples start where it shows
+            if not (a["enabled"] and a["pwm_cmd"] == steps) and not a["faults"] & ~st["faults"]:
+                return
+            t0_us = rec["time_us"]
         smp = {"t_s": round(board_s(t0_us, rec["time_us"]), 3), "position": a["position"],
                "velocity_cps": a["velocity_q8"] / 256, "pwm_cmd": a["pwm_cmd"], "enabled": a["enabled"],
                "faults": a["faults"]}
@@ -121,13 +126,16 @@ def drive(c: Client, axis: int, steps: int, seconds: float,
 
     def ends(rec: dict) -> bool:
         a = rec["axes"][axis]               # a new fault disables the axis it trips on
-        return bool(a["faults"] & ~st["faults"]) or not a["enabled"] or \
-            (stop_when is not None and stop_when(res.samples[-1]))
+        return bool(a["faults"] & ~st["faults"]) or (t0_us is not None and (
+            not a["enabled"] or board_s(t0_us, rec["time_us"]) >= seconds
+            or (stop_when is not None and stop_when(res.samples[-1]))))
 
     try:
         with BoardTime(c, record_s=SAMPLE_S) as bt:
             c.drive(axis, steps)
-            bt.hold(seconds, on_record=sample, until=ends)
+            # the time counted from the drive's first sample (ends); the hold's own bound a second
+            # later, should the drive never show (the axis disabled by another client meanwhile)
+            bt.hold(seconds + 1.0, on_record=sample, until=ends)
     except KeyboardInterrupt:
         res.interrupted = True
     finally:
