@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 `default_nettype none
 // M extension: MUL/MULH/MULHSU/MULHU in 3 cycles, DIV/DIVU/REM/REMU in 34
-// (counted from `start` to `done`).
+// (counted from `start` to `done`), or with RADIX4 in 11, 15 or 19.
 //
 // Multiply: operands are registered at `start` as 33-bit signed numbers
 // (sign or zero extended per instruction), each split into a signed high
@@ -20,7 +20,22 @@
 // algorithm, and the quotient's sign correction is skipped for a zero
 // divisor so that DIV x,0 = -1 as the spec requires; -2^31 / -1 gives
 // quotient 2^31 (= -2^31) and remainder 0 naturally.
-module tl_cpu_muldiv (
+//
+// RADIX4 (tl_cpu_pipe): two quotient bits per cycle, the partial remainder
+// compared with d, 2d and 3d at once (three subtractors side by side, 3d
+// registered in a first cycle, DIV3), so a cycle's path is one subtractor and
+// a 4-way select, as long as radix 2's one subtractor and 2-way select.  In
+// the DIV3 cycle the dividend's leading quotient bits are skipped when they
+// are known to be zero: 16 of them when its high half is below the divisor, 8
+// when its top byte is (both compares of registered values, beside the 3d
+// adder).  Cycles from `start` to `done`: 1 + 1 + (32 - skip) / 2 + 1, so 19,
+// 15 or 11; the control loop's divides (a 32-bit numerator over at least 8
+// bits of clock time) take 15.  Division by zero: the partial remainder is
+// never below 3d = 0, so every quotient bit is 1 and the remainder is the
+// dividend, as in radix 2.
+module tl_cpu_muldiv #(
+    parameter RADIX4 = 0
+) (
     input  wire        clk,
     input  wire        rst,
     input  wire        start,      // one-cycle pulse with funct3 and operands valid
@@ -36,7 +51,7 @@ module tl_cpu_muldiv (
     output wire        mul_last,   // MUL2: mul_word is the result
     output wire [31:0] mul_word
 );
-    localparam [2:0] IDLE = 3'd0, MUL1 = 3'd1, MUL2 = 3'd2, DIV = 3'd3, FIN = 3'd4;
+    localparam [2:0] IDLE = 3'd0, MUL1 = 3'd1, MUL2 = 3'd2, DIV = 3'd3, FIN = 3'd4, DIV3 = 3'd5;
     reg [2:0]  state;
     reg [1:0]  op;             // funct3[1:0]: which half / quotient or remainder
     reg [32:0] ma, mb;             // sign/zero-extended multiply operands
@@ -68,6 +83,17 @@ module tl_cpu_muldiv (
     // One restoring step: shift the next dividend bit into the partial remainder.
     wire [32:0] rem_shift = {rem, quo[31]};
     wire [32:0] trial     = rem_shift - {1'b0, divisor};
+    // RADIX4: the next two dividend bits in; rem < divisor, so rs4 < 4 divisor
+    reg  [33:0] div3;                                   // 3 divisor (< 2^34)
+    wire [33:0] rs4 = {rem, quo[31:30]};
+    // (a difference that is not negative is below the divisor: its bits 33..32 are zero)
+    /* verilator lint_off UNUSEDSIGNAL */
+    wire [34:0] t1  = {1'b0, rs4} - {3'b000, divisor};
+    wire [34:0] t2  = {1'b0, rs4} - {2'b00, divisor, 1'b0};
+    wire [34:0] t3  = {1'b0, rs4} - {1'b0, div3};
+    /* verilator lint_on UNUSEDSIGNAL */
+    wire        skip16 = {16'd0, quo[31:16]} < divisor; // quotient bits 31..16 all zero
+    wire        skip8  = {24'd0, quo[31:24]} < divisor; // quotient bits 31..24 all zero
 
     assign busy = state != IDLE;
     assign mul_last = state == MUL2;
@@ -88,11 +114,24 @@ module tl_cpu_muldiv (
                         quo     <= a_neg ? 32'd0 - a : a;   // dividend magnitude, shifted out MSB first
                         divisor <= b_neg ? 32'd0 - b : b;
                         rem     <= 32'd0;
-                        count   <= 6'd32;
+                        count   <= RADIX4 ? 6'd16 : 6'd32;
                         neg_q   <= (a_neg ^ b_neg) && b != 32'd0;
                         neg_r   <= a_neg;
-                        state   <= DIV;
+                        state   <= RADIX4 ? DIV3 : DIV;
                     end
+                end
+                DIV3: begin   // RADIX4 only: 3 divisor, and the leading zero quotient bits skipped
+                    div3 <= {2'b00, divisor} + {1'b0, divisor, 1'b0};
+                    if (skip16) begin
+                        rem   <= {16'd0, quo[31:16]};
+                        quo   <= {quo[15:0], 16'd0};
+                        count <= 6'd8;
+                    end else if (skip8) begin
+                        rem   <= {24'd0, quo[31:24]};
+                        quo   <= {quo[23:0], 8'd0};
+                        count <= 6'd12;
+                    end
+                    state <= DIV;
                 end
                 MUL1: begin
                     p_ll  <= pp_ll;
@@ -106,7 +145,21 @@ module tl_cpu_muldiv (
                     state <= IDLE;
                 end
                 DIV: begin
-                    if (!trial[32]) begin
+                    if (RADIX4 != 0) begin
+                        if (!t3[34]) begin
+                            rem <= t3[31:0];
+                            quo <= {quo[29:0], 2'b11};
+                        end else if (!t2[34]) begin
+                            rem <= t2[31:0];
+                            quo <= {quo[29:0], 2'b10};
+                        end else if (!t1[34]) begin
+                            rem <= t1[31:0];
+                            quo <= {quo[29:0], 2'b01};
+                        end else begin
+                            rem <= rs4[31:0];
+                            quo <= {quo[29:0], 2'b00};
+                        end
+                    end else if (!trial[32]) begin
                         rem <= trial[31:0];
                         quo <= {quo[30:0], 1'b1};
                     end else begin

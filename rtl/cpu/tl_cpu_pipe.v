@@ -284,7 +284,7 @@ module tl_cpu_pipe #(`CPU_CORE_PARAMS) (`CPU_CORE_PORTS);
     wire        md_trap  = e_ferr || irq_pending;
     wire        md_start = e_valid && e_md && !e_md_started && !md_trap && !flush_w && !e_hz;
     /* verilator lint_off PINCONNECTEMPTY */
-    tl_cpu_muldiv u_muldiv (
+    tl_cpu_muldiv #(.RADIX4(1)) u_muldiv (
         .clk(clk), .rst(rst), .start(md_start), .abort(flush_w || (in_md && md_trap && !gs)),
         .funct3(e_funct3), .a(rs1v), .b(rs2v), .busy(), .done(md_done), .result(md_result),
         .mul_last(md_last), .mul_word(md_word)

@@ -1,0 +1,50 @@
+/* SPDX-License-Identifier: MIT */
+# The divider's early exits: DIV, DIVU, REM and REMU on every pair of operands
+# of bit widths around its skip thresholds (1-3, 7-9, 15-17, 23-25, 31, 32 bits;
+# each width's largest and smallest value, as signed operands also negative
+# where bit 31 is set), results in the signature.  The radix-4 divider of
+# tl_cpu_pipe skips 16 or 8 leading quotient bits when the dividend's high half
+# or top byte is below the divisor: these pairs sit on both sides of each.
+    .section .text.init, "ax"
+    .globl _start
+_start:
+    la      x31, results
+    la      x30, operands
+    li      x29, 28             # operand count
+    li      x1, 0               # i
+1:  li      x2, 0               # j
+2:  slli    x3, x1, 2
+    add     x3, x3, x30
+    lw      x4, 0(x3)           # a
+    slli    x3, x2, 2
+    add     x3, x3, x30
+    lw      x5, 0(x3)           # b
+    div     x6, x4, x5
+    sw      x6, 0(x31)
+    divu    x6, x4, x5
+    sw      x6, 4(x31)
+    rem     x6, x4, x5
+    sw      x6, 8(x31)
+    remu    x6, x4, x5
+    sw      x6, 12(x31)
+    addi    x31, x31, 16
+    addi    x2, x2, 1
+    blt     x2, x29, 2b
+    addi    x1, x1, 1
+    blt     x1, x29, 1b
+    li      x1, 1
+    la      x2, tohost
+    sw      x1, 0(x2)
+3:  j       3b
+
+    .section .data
+operands:
+    .word   0x00000001, 0x00000001, 0x00000003, 0x00000002, 0x00000007, 0x00000004, 0x0000007f, 0x00000040, 0x000000ff, 0x00000080, 0x000001ff, 0x00000100, 0x00007fff, 0x00004000, 0x0000ffff, 0x00008000, 0x0001ffff, 0x00010000, 0x007fffff, 0x00400000, 0x00ffffff, 0x00800000, 0x01ffffff, 0x01000000, 0x7fffffff, 0x40000000, 0xffffffff, 0x80000000
+
+    .section .signature, "aw", @progbits
+results: .zero 28 * 28 * 16
+
+    .section .tohost, "aw", @progbits
+    .align  6
+    .globl  tohost
+tohost: .word 0
