@@ -5,7 +5,7 @@ simulator (torqueloop/oracles/rv32.py), each instruction charged the
 pipelined core's cycles (docs/cpu.md, "Cycles per instruction", tl_cpu_pipe),
 the worst period attributed to the functions the iteration inlines.
 
-    python scripts/profile_tick.py [--case step|trap|short] [--ticks N] [--dither AMP] [--kvff Q16] [--kaff Q16] [--lines]
+    python scripts/profile_tick.py [--case step|trap|short|board] [--ticks N] [--dither AMP] [--kvff Q16] [--kaff Q16] [--lines]
 
 A model, not the RTL: the decoder registers are plain memory with no wait
 states, and the interrupt's own bookkeeping around the iteration (main.c) is
@@ -27,7 +27,7 @@ from torqueloop.oracles.rv32 import Memory, Rv32, load_elf, read_elf
 from torqueloop.spec import regs
 
 HARNESS = F.FW / "tests" / "tick_harness.c"
-CASES = {"step": (0, 0, 200), "trap": (1, 0, 200), "short": (1, 1, 400)}
+CASES = {"step": (0, 0, 200), "trap": (1, 0, 200), "short": (1, 1, 400), "board": (2, 0, 10000)}
 
 # tl_cpu_pipe's cycles per instruction (docs/cpu.md, with the registered fetch): 1 for ALU, loads,
 # stores, CSR reads and forward branches not taken; a load's result used by the next instruction +2,
@@ -37,7 +37,7 @@ CASES = {"step": (0, 0, 200), "trap": (1, 0, 200), "short": (1, 1, 400)}
 LOAD_USE = {1: 2, 2: 1}
 BRANCH_TAKEN_FWD, BRANCH_MISS_BACK, JALR = 4, 4, 4
 JUMP_PREDICTED, JUMP_IN_BTB = 3, 1
-CSR_WRITE, MUL, DIV = 6, 3, 35
+CSR_WRITE, MUL = 6, 3
 BTB_ENTRIES = 8
 
 
@@ -55,7 +55,17 @@ def build(case: str, ticks: int, out: Path, dither: int = 0, kvff: int = 0, kaff
     return elf
 
 
-def cycles_of(insn: int, pc: int, next_pc: int, since_load: int, load_rd: int, btb: list) -> int:
+def div_cycles(insn: int, a: int, b: int) -> int:
+    """A divide's cycles on tl_cpu_pipe: its radix-4 divider (rtl/cpu/tl_cpu_muldiv.v) takes 1 + 1 +
+    (32 - skip) / 2 + 1 cycles, skipping 16 leading quotient bits when the dividend's magnitude's high
+    half is below the divisor's, else 8 when its top byte is; E one more."""
+    if not (insn >> 12) & 1:                                   # DIV, REM: magnitudes
+        a, b = (a if a < 1 << 31 else (1 << 32) - a), (b if b < 1 << 31 else (1 << 32) - b)
+    skip = 16 if a >> 16 < b else (8 if a >> 24 < b else 0)
+    return 1 + 1 + 1 + (32 - skip) // 2 + 1
+
+
+def cycles_of(insn: int, pc: int, next_pc: int, since_load: int, load_rd: int, btb: list, div: int = 0) -> int:
     op, f3 = insn & 0x7F, (insn >> 12) & 7
     rs1, rs2 = (insn >> 15) & 31, (insn >> 20) & 31
     uses = {rs1, rs2} if op in (0x33, 0x23, 0x63) else ({rs1} if op in (0x13, 0x03, 0x67, 0x73) else set())
@@ -71,7 +81,7 @@ def cycles_of(insn: int, pc: int, next_pc: int, since_load: int, load_rd: int, b
     elif op == 0x67:
         c += JALR - 1
     elif op == 0x33 and insn >> 25 == 1:
-        c += (MUL if f3 < 4 else DIV) - 1
+        c += (MUL if f3 < 4 else div) - 1
     elif op == 0x73 and (f3 == 1 or (f3 in (2, 3) and rs1 != 0)):
         c += CSR_WRITE - 1
     return c
@@ -98,6 +108,8 @@ def profile(elf_path: Path) -> list[tuple[int, collections.Counter]]:
             active = False
             ticks.append((total, cur))
         insn = mem.load(pc, 4)
+        div = div_cycles(insn, sim.x[(insn >> 15) & 31], sim.x[(insn >> 20) & 31]) \
+            if insn & 0x7F == 0x33 and insn >> 25 == 1 and (insn >> 12) & 7 >= 4 else 0
         sim.step()
         st = sim.last_store
         if st is not None and st[0] == tohost and st[2]:
@@ -106,7 +118,7 @@ def profile(elf_path: Path) -> list[tuple[int, collections.Counter]]:
             return ticks
         if active:
             since += 1
-            c = cycles_of(insn, pc, sim.pc, since, load_rd, btb)
+            c = cycles_of(insn, pc, sim.pc, since, load_rd, btb, div)
             if insn & 0x7F == 0x03:
                 load_rd, since = (insn >> 7) & 31, 0
             cur[pc] += c

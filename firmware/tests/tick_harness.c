@@ -6,6 +6,14 @@
  * counting 300 counts at 125 000 counts/s and then still, telemetry every 16
  * periods (DITHER_AMP > 0: with that square-wave dither, half-period 2 samples; KVFF_Q16,
  * KAFF_Q16 > 0: with that velocity and acceleration feed-forward).
+ * MODE 2, the board image's case (experiment.run_fast_loop with trapezoids):
+ * Table 1's PID gains, the parameters' defaults otherwise (VMAX, AMAX, the
+ * runaway and following checks), VEL_MODE 1, a screw turn each way, and the
+ * decoders driven by a crude closed-loop motor (a first-order speed response to
+ * the command above a breakaway, in integers): slow, sparse counts while the
+ * trapezoid speeds up, each after silent periods, with the commands the
+ * integrator builds against the breakaway.  It exercises the paths, it is not
+ * the plant (the bench's Verilator run with the real plant has the last word).
  * The decoder registers are plain memory on the instruction-set
  * simulator: this file writes them before each tl_servo_tick. */
 #include "servo_internal.h"
@@ -36,12 +44,77 @@
 volatile uint32_t tohost;
 static tl_servo_t s;
 
+#if MODE == 2
+/* The crude motor of MODE 2, per axis: speed v (counts/s q16) approaching
+ * CPS (|cmd| - BREAK) / 1023 in the command's direction with time constant
+ * TAU_US (no motion at or below BREAK once the speed has decayed), position in
+ * counts q32; an edge's time is interpolated within the period. */
+#define M_CPS 23416
+#define M_BREAK 120
+#define M_TAU_US 30000
+typedef struct { int64_t pos_q32, v_q16; uint32_t edge, interval; } motor_t;
+
+static void motor_period(motor_t *m, int32_t cmd, uint32_t now)
+{
+    int32_t mag = cmd < 0 ? -cmd : cmd;
+    int64_t vss = mag > M_BREAK ? ((int64_t)M_CPS * (mag - M_BREAK) << 16) / 1023 : 0;
+    if (cmd < 0)
+        vss = -vss;
+    m->v_q16 += (vss - m->v_q16) * 50 / M_TAU_US;
+    if (vss == 0 && (m->v_q16 < (1 << 16) && m->v_q16 > -(1 << 16)))
+        m->v_q16 = 0;
+    int64_t before = m->pos_q32 >> 32;
+    m->pos_q32 += (m->v_q16 << 16) / 20000;            /* 50 us of speed, counts q32 */
+    int64_t after = m->pos_q32 >> 32;
+    if (after != before && m->v_q16 != 0) {
+        /* the last crossing: the fraction of a count past it over the speed, in clocks */
+        int64_t av = m->v_q16 < 0 ? -m->v_q16 : m->v_q16;
+        uint64_t frac = (uint64_t)(m->v_q16 > 0 ? m->pos_q32 - (after << 32) : ((after + 1) << 32) - m->pos_q32);
+        uint64_t ago = (frac >> 16) * 50000000u / (uint64_t)av;
+        uint32_t e = now - (uint32_t)(ago > 2499u ? 2499u : ago);
+        int64_t n = after > before ? after - before : before - after;
+        m->interval = n > 1 ? (uint32_t)(2500 / n) : e - m->edge;
+        m->edge = e;
+    }
+}
+#endif
+
 int main(void)
 {
     TL_SYS_CLK_HZ = 50000000u;
     tl_servo_init(&s);
     uint8_t why;
     tl_param_set(&s, TLP_GLOBAL_AXIS, TLP_P_PERIOD_US, 50, &why);
+#if MODE == 2
+    static const int32_t kp[2] = {455000, 570000}, kd[2] = {366000, 430000}, ki[2] = {155000, 220000};
+    for (uint8_t ax = 0; ax < TL_AXES; ax++) {
+        tl_param_set(&s, ax, TLP_P_LAW, TL_LAW_PID, &why);
+        tl_param_set(&s, ax, TLP_P_KP_UNM_RAD, kp[ax], &why);
+        tl_param_set(&s, ax, TLP_P_KD_UNMS_RAD, kd[ax], &why);
+        tl_param_set(&s, ax, TLP_P_KI_UNM_RADS, ki[ax], &why);
+        tl_param_set(&s, ax, TLP_P_VEL_MODE, 1, &why);
+    }
+    tl_axes_enable(&s, (1u << TL_AXES) - 1u, &why);
+    s.telem_every = 20;
+    tl_ctl_move(&s.ax[0].c, 8400, true);
+    tl_ctl_move(&s.ax[1].c, -8400, true);
+    motor_t m[2] = {{0, 0, 0u, 2500u}, {0, 0, 0u, 2500u}};
+    uint32_t now = 1000u;
+    for (uint32_t n = 0; n < NTICKS; n++) {
+        now += PERIOD_CYCLES;
+        for (uint32_t ax = 0; ax < TL_AXES; ax++) {
+            uint32_t d = ax ? TL_AXIS1_BASE - TL_AXIS0_BASE : 0u;
+            motor_period(&m[ax], s.ax[ax].cmd, now);
+            TL_REG32(TL_AXIS0_ENC_POS_ADDR + d) = (uint32_t)(int32_t)(m[ax].pos_q32 >> 32);
+            TL_REG32(TL_AXIS0_ENC_EDGE_TIME_ADDR + d) = m[ax].edge;
+            TL_REG32(TL_AXIS0_ENC_EDGE_INTERVAL_ADDR + d) = m[ax].interval;
+            TL_REG32(TL_AXIS0_ENC_TIMESTAMP_ADDR + d) = now;
+        }
+        tl_servo_tick(&s);
+    }
+    tohost = 0x80000000u | s.ax[0].faults | ((uint32_t)s.ax[1].faults << 16);
+    return 0;
+#else
     for (uint8_t ax = 0; ax < TL_AXES; ax++) {
         tl_param_set(&s, ax, TLP_P_LAW, TL_LAW_PID, &why);
         tl_param_set(&s, ax, TLP_P_KD_Q16, 655, &why);
@@ -87,4 +160,5 @@ int main(void)
     }
     tohost = 0x80000000u | s.ax[0].faults | ((uint32_t)s.ax[1].faults << 16);
     return 0;
+#endif
 }
