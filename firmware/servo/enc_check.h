@@ -90,7 +90,7 @@ static inline __attribute__((always_inline)) uint16_t enc_check(tl_axis_t *a, in
     a->enc_ref = a->pos;
     /* what the encoder is behind the lower bound; ahead of it counts for nothing later */
     int64_t behind = exp - (int64_t)((uint64_t)(int64_t)moved << 24);
-    a->enc_exp_q24 = behind > 0 ? behind : 0;
+    a->enc_exp_q24 = behind & ~(behind >> 63);   /* max(behind, 0) without a branch: a healthy axis is ahead */
     /* behind > slack: the sign of their difference (both well inside 2^62) */
     return (uint16_t)(((uint64_t)(((int64_t)slack << 24) - behind) >> 63) * TLP_FAULT_RUNAWAY);
 }
