@@ -56,13 +56,12 @@ def build(case: str, ticks: int, out: Path, dither: int = 0, kvff: int = 0, kaff
 
 
 def div_cycles(insn: int, a: int, b: int) -> int:
-    """A divide's cycles on tl_cpu_pipe: its radix-4 divider (rtl/cpu/tl_cpu_muldiv.v) takes 1 + 1 +
-    (32 - skip) / 2 + 1 cycles, skipping 16 leading quotient bits when the dividend's magnitude's high
-    half is below the divisor's, else 8 when its top byte is; E one more."""
+    """A divide's cycles on tl_cpu_pipe: its two-steps-a-cycle divider (rtl/cpu/tl_cpu_muldiv.v, RADIX4)
+    takes 1 + 16 + 1 cycles, or 1 + 1 + 12 + 1 skipping 8 leading quotient bits when the top byte of
+    the dividend's magnitude is below the divisor; E one more."""
     if not (insn >> 12) & 1:                                   # DIV, REM: magnitudes
         a, b = (a if a < 1 << 31 else (1 << 32) - a), (b if b < 1 << 31 else (1 << 32) - b)
-    skip = 16 if a >> 16 < b else (8 if a >> 24 < b else 0)
-    return 1 + 1 + 1 + (32 - skip) // 2 + 1
+    return 1 + (1 + 1 + 12 + 1 if a >> 24 < b else 1 + 16 + 1)
 
 
 def cycles_of(insn: int, pc: int, next_pc: int, since_load: int, load_rd: int, btb: list, div: int = 0) -> int:

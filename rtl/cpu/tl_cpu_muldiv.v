@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 `default_nettype none
 // M extension: MUL/MULH/MULHSU/MULHU in 3 cycles, DIV/DIVU/REM/REMU in 34
-// (counted from `start` to `done`), or with RADIX4 in 11, 15 or 19.
+// (counted from `start` to `done`), or with RADIX4 in 15 or 18.
 //
 // Multiply: operands are registered at `start` as 33-bit signed numbers
 // (sign or zero extended per instruction), each split into a signed high
@@ -21,18 +21,15 @@
 // divisor so that DIV x,0 = -1 as the spec requires; -2^31 / -1 gives
 // quotient 2^31 (= -2^31) and remainder 0 naturally.
 //
-// RADIX4 (tl_cpu_pipe): two quotient bits per cycle, the partial remainder
-// compared with d, 2d and 3d at once (three subtractors side by side, 3d
-// registered in a first cycle, DIV3), so a cycle's path is one subtractor and
-// a 4-way select, as long as radix 2's one subtractor and 2-way select.  In
-// the DIV3 cycle the dividend's leading quotient bits are skipped when they
-// are known to be zero: 16 of them when its high half is below the divisor, 8
-// when its top byte is (both compares of registered values, beside the 3d
-// adder).  Cycles from `start` to `done`: 1 + 1 + (32 - skip) / 2 + 1, so 19,
-// 15 or 11; the control loop's divides (a 32-bit numerator over at least 8
-// bits of clock time) take 15.  Division by zero: the partial remainder is
-// never below 3d = 0, so every quotient bit is 1 and the remainder is the
-// dividend, as in radix 2.
+// RADIX4 (tl_cpu_pipe): two restoring steps per cycle, the second on the
+// first's partial remainder (two 33-bit subtractors in series), so a divide
+// takes 16 cycles of steps instead of 32.  In its first cycle the dividend's
+// 8 leading quotient bits are skipped instead when they are known to be zero,
+// its top byte (as a magnitude) below the divisor (a compare of registered
+// values beside the steps).  Cycles from `start` to `done`: 1 + 16 + 1 = 18,
+// or 1 + 1 + 12 + 1 = 15 with the skip; the control loop's divides (a 32-bit
+// numerator over at least 8 bits of clock time) take 15.  Division by zero
+// and -2^31 / -1 come out of the two steps as out of radix 2's one.
 module tl_cpu_muldiv #(
     parameter RADIX4 = 0
 ) (
@@ -51,7 +48,7 @@ module tl_cpu_muldiv #(
     output wire        mul_last,   // MUL2: mul_word is the result
     output wire [31:0] mul_word
 );
-    localparam [2:0] IDLE = 3'd0, MUL1 = 3'd1, MUL2 = 3'd2, DIV = 3'd3, FIN = 3'd4, DIV3 = 3'd5;
+    localparam [2:0] IDLE = 3'd0, MUL1 = 3'd1, MUL2 = 3'd2, DIV = 3'd3, FIN = 3'd4;
     reg [2:0]  state;
     reg [1:0]  op;             // funct3[1:0]: which half / quotient or remainder
     reg [32:0] ma, mb;             // sign/zero-extended multiply operands
@@ -83,17 +80,12 @@ module tl_cpu_muldiv #(
     // One restoring step: shift the next dividend bit into the partial remainder.
     wire [32:0] rem_shift = {rem, quo[31]};
     wire [32:0] trial     = rem_shift - {1'b0, divisor};
-    // RADIX4: the next two dividend bits in; rem < divisor, so rs4 < 4 divisor
-    reg  [33:0] div3;                                   // 3 divisor (< 2^34)
-    wire [33:0] rs4 = {rem, quo[31:30]};
-    // (a difference that is not negative is below the divisor: its bits 33..32 are zero)
-    /* verilator lint_off UNUSEDSIGNAL */
-    wire [34:0] t1  = {1'b0, rs4} - {3'b000, divisor};
-    wire [34:0] t2  = {1'b0, rs4} - {2'b00, divisor, 1'b0};
-    wire [34:0] t3  = {1'b0, rs4} - {1'b0, div3};
-    /* verilator lint_on UNUSEDSIGNAL */
-    wire        skip16 = {16'd0, quo[31:16]} < divisor; // quotient bits 31..16 all zero
-    wire        skip8  = {24'd0, quo[31:24]} < divisor; // quotient bits 31..24 all zero
+    // RADIX4: a second step on the first one's partial remainder
+    wire [31:0] rem1      = trial[32] ? rem_shift[31:0] : trial[31:0];
+    wire [32:0] rem_shift2 = {rem1, quo[30]};
+    wire [32:0] trial2    = rem_shift2 - {1'b0, divisor};
+    wire        first     = count == 6'd16;              // RADIX4's first cycle of steps
+    wire        skip8     = {24'd0, quo[31:24]} < divisor; // quotient bits 31..24 all zero
 
     assign busy = state != IDLE;
     assign mul_last = state == MUL2;
@@ -117,21 +109,8 @@ module tl_cpu_muldiv #(
                         count   <= RADIX4 ? 6'd16 : 6'd32;
                         neg_q   <= (a_neg ^ b_neg) && b != 32'd0;
                         neg_r   <= a_neg;
-                        state   <= RADIX4 ? DIV3 : DIV;
+                        state   <= DIV;
                     end
-                end
-                DIV3: begin   // RADIX4 only: 3 divisor, and the leading zero quotient bits skipped
-                    div3 <= {2'b00, divisor} + {1'b0, divisor, 1'b0};
-                    if (skip16) begin
-                        rem   <= {16'd0, quo[31:16]};
-                        quo   <= {quo[15:0], 16'd0};
-                        count <= 6'd8;
-                    end else if (skip8) begin
-                        rem   <= {24'd0, quo[31:24]};
-                        quo   <= {quo[23:0], 8'd0};
-                        count <= 6'd12;
-                    end
-                    state <= DIV;
                 end
                 MUL1: begin
                     p_ll  <= pp_ll;
@@ -145,20 +124,14 @@ module tl_cpu_muldiv #(
                     state <= IDLE;
                 end
                 DIV: begin
-                    if (RADIX4 != 0) begin
-                        if (!t3[34]) begin
-                            rem <= t3[31:0];
-                            quo <= {quo[29:0], 2'b11};
-                        end else if (!t2[34]) begin
-                            rem <= t2[31:0];
-                            quo <= {quo[29:0], 2'b10};
-                        end else if (!t1[34]) begin
-                            rem <= t1[31:0];
-                            quo <= {quo[29:0], 2'b01};
-                        end else begin
-                            rem <= rs4[31:0];
-                            quo <= {quo[29:0], 2'b00};
-                        end
+                    count <= count - 6'd1;
+                    if (RADIX4 != 0 && first && skip8) begin   // 8 zero quotient bits at once
+                        rem   <= {24'd0, quo[31:24]};
+                        quo   <= {quo[23:0], 8'd0};
+                        count <= 6'd12;
+                    end else if (RADIX4 != 0) begin
+                        rem <= trial2[32] ? rem_shift2[31:0] : trial2[31:0];
+                        quo <= {quo[29:0], !trial[32], !trial2[32]};
                     end else if (!trial[32]) begin
                         rem <= trial[31:0];
                         quo <= {quo[30:0], 1'b1};
@@ -166,7 +139,6 @@ module tl_cpu_muldiv #(
                         rem <= rem_shift[31:0];
                         quo <= {quo[30:0], 1'b0};
                     end
-                    count <= count - 6'd1;
                     if (count == 6'd1)
                         state <= FIN;
                 end
