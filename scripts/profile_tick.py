@@ -27,7 +27,7 @@ from torqueloop.oracles.rv32 import Memory, Rv32, load_elf, read_elf
 from torqueloop.spec import regs
 
 HARNESS = F.FW / "tests" / "tick_harness.c"
-CASES = {"step": (0, 0, 200), "trap": (1, 0, 200), "short": (1, 1, 400), "board": (2, 0, 10000)}
+CASES = {"step": (0, 0, 200), "trap": (1, 0, 200), "short": (1, 1, 400), "board": (2, 0, 22000)}
 
 # tl_cpu_pipe's cycles per instruction (docs/cpu.md, with the registered fetch): 1 for ALU, loads,
 # stores, CSR reads and forward branches not taken; a load's result used by the next instruction +2,

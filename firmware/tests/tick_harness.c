@@ -8,7 +8,9 @@
  * KAFF_Q16 > 0: with that velocity and acceleration feed-forward).
  * MODE 2, the board image's case (experiment.run_fast_loop with trapezoids):
  * Table 1's PID gains, the parameters' defaults otherwise (VMAX, AMAX, the
- * runaway and following checks), VEL_MODE 1, a screw turn each way, and the
+ * runaway and following checks; the link watchdog's the longest, nothing
+ * feeds it here), VEL_MODE 1, a screw turn each way (braking planned after
+ * about 20 000 periods, both axes in the same one), and the
  * decoders driven by a crude closed-loop motor (a first-order speed response to
  * the command above a breakaway, in integers): slow, sparse counts while the
  * trapezoid speeds up, each after silent periods, with the commands the
@@ -87,6 +89,7 @@ int main(void)
     tl_param_set(&s, TLP_GLOBAL_AXIS, TLP_P_PERIOD_US, 50, &why);
 #if MODE == 2
     static const int32_t kp[2] = {455000, 570000}, kd[2] = {366000, 430000}, ki[2] = {155000, 220000};
+    tl_param_set(&s, TLP_GLOBAL_AXIS, TLP_P_LINK_TIMEOUT_MS, 60000, &why);   /* nothing feeds the link here */
     for (uint8_t ax = 0; ax < TL_AXES; ax++) {
         tl_param_set(&s, ax, TLP_P_LAW, TL_LAW_PID, &why);
         tl_param_set(&s, ax, TLP_P_KP_UNM_RAD, kp[ax], &why);
