@@ -2,20 +2,11 @@
 # Every M-extension operation on every pair of corner operands
 # (0, 1, -1, 2, -2, 2^31-1, -2^31, 0x55555555, 0xAAAAAAAB, 7, -7), results
 # in the signature: division by zero, -2^31 / -1 and the MULH sign cases.
+#include "pair_loop.h"
     .section .text.init, "ax"
     .globl _start
 _start:
-    la      x31, results
-    la      x30, operands
-    li      x29, 11             # operand count
-    li      x1, 0               # i
-1:  li      x2, 0               # j
-2:  slli    x3, x1, 2
-    add     x3, x3, x30
-    lw      x4, 0(x3)           # a
-    slli    x3, x2, 2
-    add     x3, x3, x30
-    lw      x5, 0(x3)           # b
+    PAIRS_BEGIN 11
     mul     x6, x4, x5
     sw      x6, 0(x31)
     mulh    x6, x4, x5
@@ -37,15 +28,7 @@ _start:
     sw      x0, 32(x31)
     div     x4, x4, x5          # rd = rs1
     sw      x4, 36(x31)
-    addi    x31, x31, 40
-    addi    x2, x2, 1
-    blt     x2, x29, 2b
-    addi    x1, x1, 1
-    blt     x1, x29, 1b
-    li      x1, 1
-    la      x2, tohost
-    sw      x1, 0(x2)
-3:  j       3b
+    PAIRS_END 40
 
     .section .data
 operands:
