@@ -151,7 +151,7 @@ async def interrupts_latency_nesting_and_divide(dut):
 def test_cpu(sim, core):
     env = {"CPU_PROG_TAG": f"{sim}-{core}"}
     if sim == "icarus":
-        env.update(CPU_RANDOM_PROGS="2", CPU_RANDOM_LEN="300", CPU_DIRECTED="traps,muldiv_corners,div_widths,selfmod")
+        env.update(CPU_RANDOM_PROGS="2", CPU_RANDOM_LEN="300", CPU_DIRECTED="traps,muldiv_corners,selfmod")
     else:
         env.update(CPU_RANDOM_PROGS="12", CPU_RANDOM_LEN="3000")
     run("cpu_sim_top", sim, "test_cpu", parameters=CORES[core], extra_env=env)
