@@ -25,6 +25,7 @@ from pathlib import Path
 from torqueloop.flow import firmware as F
 from torqueloop.oracles.rv32 import Memory, Rv32, load_elf, read_elf
 from torqueloop.spec import regs
+from torqueloop.spec.system import SYSTEM
 
 HARNESS = F.FW / "tests" / "tick_harness.c"
 CASES = {"step": (0, 0, 200), "trap": (1, 0, 200), "short": (1, 1, 400), "board": (2, 0, 22000)}
@@ -44,9 +45,13 @@ BTB_ENTRIES = 8
 def build(case: str, ticks: int, out: Path, dither: int = 0, kvff: int = 0, kaff: int = 0) -> Path:
     mode, short, _ = CASES[case]
     elf = out / f"tick_{case}.elf"
+    # the board case's Table 1 PID gains and no-load speeds, from their one definition
+    pid = [v for g in SYSTEM.table1["PID"] for v in g.micro()]
+    board = [f"-DTABLE1_PID={{{','.join(map(str, pid))}}}",
+             f"-DNO_LOAD_CPS={{{','.join(str(a.no_load_cps) for a in SYSTEM.axes)}}}"]
     srcs = [str(s) for s in F.SOURCES if s.name != "main.c"] + [str(HARNESS)]
     cmd = [F.CC, *F.CFLAGS, "-g", f"-DMODE={mode}", f"-DSHORT={short}", f"-DNTICKS={ticks}", f"-DDITHER_AMP={dither}",
-           f"-DKVFF_Q16={kvff}", f"-DKAFF_Q16={kaff}",
+           f"-DKVFF_Q16={kvff}", f"-DKAFF_Q16={kaff}", *board,
            *(f"-I{i}" for i in F.INCLUDES), "-T", str(F.FW / "common" / "link.ld"), "-Wl,--gc-sections",
            "-Wl,--no-warn-rwx-segments", "-o", str(elf), *srcs, F.libgcc()]
     r = subprocess.run(cmd, capture_output=True, text=True)
@@ -64,7 +69,10 @@ def div_cycles(insn: int, a: int, b: int) -> int:
     return 1 + (1 + 1 + 12 + 1 if a >> 24 < b else 1 + 16 + 1)
 
 
-def cycles_of(insn: int, pc: int, next_pc: int, since_load: int, load_rd: int, btb: list, div: int = 0) -> int:
+def cycles_of(insn: int, pc: int, next_pc: int, since_load: int, load_rd: int, btb: list,
+              operands: tuple[int, int] = (0, 0)) -> int:
+    """An instruction's cycles; ``operands``: rs1's and rs2's values before it ran (a divide's
+    cycles depend on them)."""
     op, f3 = insn & 0x7F, (insn >> 12) & 7
     rs1, rs2 = (insn >> 15) & 31, (insn >> 20) & 31
     uses = {rs1, rs2} if op in (0x33, 0x23, 0x63) else ({rs1} if op in (0x13, 0x03, 0x67, 0x73) else set())
@@ -80,7 +88,7 @@ def cycles_of(insn: int, pc: int, next_pc: int, since_load: int, load_rd: int, b
     elif op == 0x67:
         c += JALR - 1
     elif op == 0x33 and insn >> 25 == 1:
-        c += (MUL if f3 < 4 else div) - 1
+        c += (MUL if f3 < 4 else div_cycles(insn, *operands)) - 1
     elif op == 0x73 and (f3 == 1 or (f3 in (2, 3) and rs1 != 0)):
         c += CSR_WRITE - 1
     return c
@@ -107,8 +115,7 @@ def profile(elf_path: Path) -> list[tuple[int, collections.Counter]]:
             active = False
             ticks.append((total, cur))
         insn = mem.load(pc, 4)
-        div = div_cycles(insn, sim.x[(insn >> 15) & 31], sim.x[(insn >> 20) & 31]) \
-            if insn & 0x7F == 0x33 and insn >> 25 == 1 and (insn >> 12) & 7 >= 4 else 0
+        operands = (sim.x[(insn >> 15) & 31], sim.x[(insn >> 20) & 31])
         sim.step()
         st = sim.last_store
         if st is not None and st[0] == tohost and st[2]:
@@ -117,7 +124,7 @@ def profile(elf_path: Path) -> list[tuple[int, collections.Counter]]:
             return ticks
         if active:
             since += 1
-            c = cycles_of(insn, pc, sim.pc, since, load_rd, btb, div)
+            c = cycles_of(insn, pc, sim.pc, since, load_rd, btb, operands)
             if insn & 0x7F == 0x03:
                 load_rd, since = (insn >> 7) & 31, 0
             cur[pc] += c

@@ -46,20 +46,36 @@
 volatile uint32_t tohost;
 static tl_servo_t s;
 
+/* The decoder registers of axis ax as the iteration will read them. */
+static void write_decoder(uint32_t ax, int32_t pos, uint32_t edge, uint32_t interval, uint32_t now)
+{
+    uint32_t d = ax ? TL_AXIS1_BASE - TL_AXIS0_BASE : 0u;
+    TL_REG32(TL_AXIS0_ENC_POS_ADDR + d) = (uint32_t)pos;
+    TL_REG32(TL_AXIS0_ENC_EDGE_TIME_ADDR + d) = edge;
+    TL_REG32(TL_AXIS0_ENC_EDGE_INTERVAL_ADDR + d) = interval;
+    TL_REG32(TL_AXIS0_ENC_TIMESTAMP_ADDR + d) = now;
+}
+
 #if MODE == 2
+/* Table 1's PID gains (KP_UNM_RAD ...) and each axis's no-load speed at full
+ * command (counts/s), passed by scripts/profile_tick.py from
+ * torqueloop/spec/system.toml: TABLE1_PID {kp0, kd0, ki0, kp1, kd1, ki1},
+ * NO_LOAD_CPS {cps0, cps1}. */
+#if !defined(TABLE1_PID) || !defined(NO_LOAD_CPS)
+#error "MODE 2 needs TABLE1_PID and NO_LOAD_CPS (scripts/profile_tick.py passes them)"
+#endif
 /* The crude motor of MODE 2, per axis: speed v (counts/s q16) approaching
- * CPS (|cmd| - BREAK) / 1023 in the command's direction with time constant
+ * cps (|cmd| - BREAK) / 1023 in the command's direction with time constant
  * TAU_US (no motion at or below BREAK once the speed has decayed), position in
  * counts q32; an edge's time is interpolated within the period. */
-#define M_CPS 23416
 #define M_BREAK 120
 #define M_TAU_US 30000
 typedef struct { int64_t pos_q32, v_q16; uint32_t edge, interval; } motor_t;
 
-static void motor_period(motor_t *m, int32_t cmd, uint32_t now)
+static void motor_period(motor_t *m, int32_t cps, int32_t cmd, uint32_t now)
 {
     int32_t mag = cmd < 0 ? -cmd : cmd;
-    int64_t vss = mag > M_BREAK ? ((int64_t)M_CPS * (mag - M_BREAK) << 16) / 1023 : 0;
+    int64_t vss = mag > M_BREAK ? ((int64_t)cps * (mag - M_BREAK) << 16) / 1023 : 0;
     if (cmd < 0)
         vss = -vss;
     m->v_q16 += (vss - m->v_q16) * 50 / M_TAU_US;
@@ -88,13 +104,13 @@ int main(void)
     uint8_t why;
     tl_param_set(&s, TLP_GLOBAL_AXIS, TLP_P_PERIOD_US, 50, &why);
 #if MODE == 2
-    static const int32_t kp[2] = {455000, 570000}, kd[2] = {366000, 430000}, ki[2] = {155000, 220000};
+    static const int32_t gains[2 * 3] = TABLE1_PID, cps[2] = NO_LOAD_CPS;
     tl_param_set(&s, TLP_GLOBAL_AXIS, TLP_P_LINK_TIMEOUT_MS, 60000, &why);   /* nothing feeds the link here */
     for (uint8_t ax = 0; ax < TL_AXES; ax++) {
         tl_param_set(&s, ax, TLP_P_LAW, TL_LAW_PID, &why);
-        tl_param_set(&s, ax, TLP_P_KP_UNM_RAD, kp[ax], &why);
-        tl_param_set(&s, ax, TLP_P_KD_UNMS_RAD, kd[ax], &why);
-        tl_param_set(&s, ax, TLP_P_KI_UNM_RADS, ki[ax], &why);
+        tl_param_set(&s, ax, TLP_P_KP_UNM_RAD, gains[3 * ax], &why);
+        tl_param_set(&s, ax, TLP_P_KD_UNMS_RAD, gains[3 * ax + 1], &why);
+        tl_param_set(&s, ax, TLP_P_KI_UNM_RADS, gains[3 * ax + 2], &why);
         tl_param_set(&s, ax, TLP_P_VEL_MODE, 1, &why);
     }
     tl_axes_enable(&s, (1u << TL_AXES) - 1u, &why);
@@ -106,17 +122,11 @@ int main(void)
     for (uint32_t n = 0; n < NTICKS; n++) {
         now += PERIOD_CYCLES;
         for (uint32_t ax = 0; ax < TL_AXES; ax++) {
-            uint32_t d = ax ? TL_AXIS1_BASE - TL_AXIS0_BASE : 0u;
-            motor_period(&m[ax], s.ax[ax].cmd, now);
-            TL_REG32(TL_AXIS0_ENC_POS_ADDR + d) = (uint32_t)(int32_t)(m[ax].pos_q32 >> 32);
-            TL_REG32(TL_AXIS0_ENC_EDGE_TIME_ADDR + d) = m[ax].edge;
-            TL_REG32(TL_AXIS0_ENC_EDGE_INTERVAL_ADDR + d) = m[ax].interval;
-            TL_REG32(TL_AXIS0_ENC_TIMESTAMP_ADDR + d) = now;
+            motor_period(&m[ax], cps[ax], s.ax[ax].cmd, now);
+            write_decoder(ax, (int32_t)(m[ax].pos_q32 >> 32), m[ax].edge, m[ax].interval, now);
         }
         tl_servo_tick(&s);
     }
-    tohost = 0x80000000u | s.ax[0].faults | ((uint32_t)s.ax[1].faults << 16);
-    return 0;
 #else
     for (uint8_t ax = 0; ax < TL_AXES; ax++) {
         tl_param_set(&s, ax, TLP_P_LAW, TL_LAW_PID, &why);
@@ -152,16 +162,11 @@ int main(void)
             pos = want;
             edge = 1000u + (uint32_t)pos * COUNT_CYCLES;
         }
-        for (uint32_t ax = 0; ax < TL_AXES; ax++) {
-            uint32_t d = ax ? TL_AXIS1_BASE - TL_AXIS0_BASE : 0u;
-            TL_REG32(TL_AXIS0_ENC_POS_ADDR + d) = (uint32_t)(ax ? pos : -pos);
-            TL_REG32(TL_AXIS0_ENC_EDGE_TIME_ADDR + d) = edge;
-            TL_REG32(TL_AXIS0_ENC_EDGE_INTERVAL_ADDR + d) = COUNT_CYCLES;
-            TL_REG32(TL_AXIS0_ENC_TIMESTAMP_ADDR + d) = now;
-        }
+        for (uint32_t ax = 0; ax < TL_AXES; ax++)
+            write_decoder(ax, ax ? pos : -pos, edge, COUNT_CYCLES, now);
         tl_servo_tick(&s);
     }
+#endif
     tohost = 0x80000000u | s.ax[0].faults | ((uint32_t)s.ax[1].faults << 16);
     return 0;
-#endif
 }

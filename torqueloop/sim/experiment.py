@@ -220,12 +220,8 @@ def configure(link: Client, cfg: ExperimentConfig) -> list[dict[str, int]]:
     link.set_param("PERIOD_US", cfg.period_us)
     link.set_param("LINK_TIMEOUT_MS", TIMING.link_timeout_ms)
     for ax in AXES:
-        g = TABLE1[cfg.law][ax]
-        link.set_param("LAW", LAWS[cfg.law], ax)
         link.set_param("COUNTS_PER_REV", COUNTS_PER_REV, ax)
-        link.set_param("KP_UNM_RAD", round(g.kp * 1e6), ax)
-        link.set_param("KD_UNMS_RAD", round(g.kd * 1e6), ax)
-        link.set_param("KI_UNM_RADS", round(g.ki * 1e6), ax)
+        _set_law(link, cfg.law, ax)
         link.set_param("CMD_LIMIT", SYSTEM.pwm_full, ax)
         link.set_param("VEL_MODE", 0, ax)          # the paper's filtered Euler difference
         link.set_param("BRAKE", int(cfg.brake), ax)
@@ -562,6 +558,15 @@ class FastLoopRun:
     cpu_s: float = 0.0
 
 
+def _set_law(link, law: str, ax: int) -> None:
+    """``law`` and its Table 1 gains on axis ``ax`` (the protocol's units: Gains.micro)."""
+    kp, kd, ki = TABLE1[law][ax].micro()
+    link.set_param("LAW", LAWS[law], ax)
+    link.set_param("KP_UNM_RAD", kp, ax)
+    link.set_param("KD_UNMS_RAD", kd, ax)
+    link.set_param("KI_UNM_RADS", ki, ax)
+
+
 def run_fast_loop(period_us: int = 50, seconds: float = 0.5, law: str = "PID", baud_div: int = 53,
                   telemetry_every: int = 20, travel_counts: int = SYSTEM.counts_per_turn, move_mode: int = 0,
                   board_factory=None) -> FastLoopRun:
@@ -586,11 +591,7 @@ def run_fast_loop(period_us: int = 50, seconds: float = 0.5, law: str = "PID", b
         # the run sends nothing that feeds the link watchdog for `seconds`
         link.set_param("LINK_TIMEOUT_MS", max(500, round(seconds * 2000)))
         for ax in AXES:
-            g = TABLE1[law][ax]
-            link.set_param("LAW", LAWS[law], ax)
-            link.set_param("KP_UNM_RAD", round(g.kp * 1e6), ax)
-            link.set_param("KD_UNMS_RAD", round(g.kd * 1e6), ax)
-            link.set_param("KI_UNM_RADS", round(g.ki * 1e6), ax)
+            _set_law(link, law, ax)
             link.set_param("VEL_MODE", 1, ax)
         link.enable(BOTH_AXES)
         start = [link.status(ax)["position"] for ax in AXES]
