@@ -25,10 +25,4 @@ _start:
 operands:
     .word   0x00000001, 0x00000001, 0x00000003, 0x00000002, 0x00000007, 0x00000004, 0x0000007f, 0x00000040, 0x000000ff, 0x00000080, 0x000001ff, 0x00000100, 0x00007fff, 0x00004000, 0x0000ffff, 0x00008000, 0x0001ffff, 0x00010000, 0x007fffff, 0x00400000, 0x00ffffff, 0x00800000, 0x01ffffff, 0x01000000, 0x7fffffff, 0x40000000, 0xffffffff, 0x80000000
 
-    .section .signature, "aw", @progbits
-results: .zero 28 * 28 * 16
-
-    .section .tohost, "aw", @progbits
-    .align  6
-    .globl  tohost
-tohost: .word 0
+    PAIRS_RESULTS 28, 16

@@ -34,11 +34,4 @@ _start:
 operands:
     .word   0, 1, -1, 2, -2, 0x7fffffff, 0x80000000, 0x55555555, 0xaaaaaaab, 7, -7
 
-    .section .signature, "aw", @progbits
-results: .zero 11 * 11 * 40
-
-    .section .tohost, "aw", @progbits
-    .align  6
-    .globl  tohost
-tohost: .word 0
-    .word   0
+    PAIRS_RESULTS 11, 40
