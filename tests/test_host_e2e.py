@@ -71,8 +71,14 @@ def test_info(url, capsys) -> None:
     info, _ = run(url, capsys, "info")
     assert info["build_id"] == f"0x{BUILD_ID:08x}"
     assert info["axis_count"] == 2 and info["clk_hz"] == 50_000_000
-    # the *HELLO* the server sent was seen, skipped and counted
-    assert info["host_counters"]["text_bytes"] >= len("*HELLO*")
+    # The *HELLO* the server sends on connect is either skipped and counted, or gone before the
+    # tool reads: pyserial's socket:// open() empties the input once connected
+    # (reset_input_buffer), and a server that answers the connect before that call loses it
+    # there - a race a loaded machine decided once.  Either way it costs the exchange nothing
+    # (the counting itself: tests/test_host_client.py, with the hello before a reply).
+    hc = info["host_counters"]
+    assert hc["text_bytes"] in (0, len("*HELLO*")), hc
+    assert hc["retries"] == 0 and hc["crc_errors"] == 0 and hc["bad_chunks"] == hc["text_bytes"] // 7, hc
 
 
 def test_set_get_round_trip_in_physical_units(url, capsys) -> None:
