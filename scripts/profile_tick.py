@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import os
 import subprocess
 import sys
 import tempfile
@@ -42,7 +43,7 @@ CSR_WRITE, MUL = 6, 3
 BTB_ENTRIES = 8
 
 
-def build(case: str, ticks: int, out: Path, dither: int = 0, kvff: int = 0, kaff: int = 0) -> Path:
+def build(case: str, ticks: int, out: Path, dither: int = 0, kvff: int = 0, kaff: int = 0, tick0: int = 0) -> Path:
     mode, short, _ = CASES[case]
     elf = out / f"tick_{case}.elf"
     # the board case's Table 1 PID gains and no-load speeds, from their one definition
@@ -51,7 +52,7 @@ def build(case: str, ticks: int, out: Path, dither: int = 0, kvff: int = 0, kaff
              f"-DNO_LOAD_CPS={{{','.join(str(a.no_load_cps) for a in SYSTEM.axes)}}}"]
     srcs = [str(s) for s in F.SOURCES if s.name != "main.c"] + [str(HARNESS)]
     cmd = [F.CC, *F.CFLAGS, "-g", f"-DMODE={mode}", f"-DSHORT={short}", f"-DNTICKS={ticks}", f"-DDITHER_AMP={dither}",
-           f"-DKVFF_Q16={kvff}", f"-DKAFF_Q16={kaff}", *board,
+           f"-DKVFF_Q16={kvff}", f"-DKAFF_Q16={kaff}", f"-DTICK0={tick0}", *board,
            *(f"-I{i}" for i in F.INCLUDES), "-T", str(F.FW / "common" / "link.ld"), "-Wl,--gc-sections",
            "-Wl,--no-warn-rwx-segments", "-o", str(elf), *srcs, F.libgcc()]
     r = subprocess.run(cmd, capture_output=True, text=True)
@@ -159,11 +160,17 @@ def main() -> int:
                     help="KVFF_Q16 on both axes (velocity feed-forward, 0..16777215; default 0: off)")
     ap.add_argument("--kaff", type=int, default=0, metavar="Q16",
                     help="KAFF_Q16 on both axes (acceleration feed-forward, 0..16777215; default 0: off)")
+    ap.add_argument("--tick0", type=int, default=0, metavar="N",
+                    help="the period count the run starts from, 0..3 (default 0): which runaway check "
+                         "(docs/safety.md, 'Runaway at 20 kHz') runs in the periods the moves make dear")
     ap.add_argument("--lines", action="store_true", help="also the source lines, dearest first")
     a = ap.parse_args()
     ticks_n = CASES[a.case][2] if a.ticks is None else a.ticks
     if ticks_n < 1:
         print("profile_tick: --ticks must be at least 1", file=sys.stderr)
+        return 2
+    if not 0 <= a.tick0 <= 3:
+        print("profile_tick: --tick0 must be 0..3", file=sys.stderr)
         return 2
     if not 0 <= a.dither <= 1023:
         print("profile_tick: --dither must be 0..1023 PWM steps", file=sys.stderr)
@@ -173,7 +180,7 @@ def main() -> int:
         return 2
     with tempfile.TemporaryDirectory() as tmp:
         try:
-            elf = build(a.case, ticks_n, Path(tmp), a.dither, a.kvff, a.kaff)
+            elf = build(a.case, ticks_n, Path(tmp), a.dither, a.kvff, a.kaff, a.tick0)
             ticks = profile(elf)
         except RuntimeError as e:
             print(f"profile_tick: {e}", file=sys.stderr)
@@ -200,4 +207,8 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except BrokenPipeError:     # the reader stopped early (`profile_tick.py | head -1`): what it read was printed
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())   # no second error at exit's flush
+        sys.exit(0)

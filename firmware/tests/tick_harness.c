@@ -5,7 +5,8 @@
  * counts at VMAX 50 000, AMAX 5e7, which brakes inside the run), both decoders
  * counting 300 counts at 125 000 counts/s and then still, telemetry every 16
  * periods (DITHER_AMP > 0: with that square-wave dither, half-period 2 samples; KVFF_Q16,
- * KAFF_Q16 > 0: with that velocity and acceleration feed-forward).
+ * KAFF_Q16 > 0: with that velocity and acceleration feed-forward; TICK0: the period
+ * count to start from, which moves the runaway checks' phases against the moves).
  * MODE 2, the board image's case (experiment.run_fast_loop with trapezoids):
  * Table 1's PID gains, the parameters' defaults otherwise (VMAX, AMAX, the
  * runaway and following checks; the link watchdog's the longest, nothing
@@ -38,6 +39,9 @@
 #endif
 #ifndef NTICKS
 #define NTICKS 200
+#endif
+#ifndef TICK0
+#define TICK0 0   /* the period count the run starts from: which runaway check each period runs */
 #endif
 #define PERIOD_CYCLES 2500u   /* 50 us at 50 MHz */
 #define COUNT_CYCLES 400u     /* 8 us per count: 125 000 counts/s */
@@ -115,6 +119,7 @@ int main(void)
     }
     tl_axes_enable(&s, (1u << TL_AXES) - 1u, &why);
     s.telem_every = 20;
+    s.ticks = TICK0;
     tl_ctl_move(&s.ax[0].c, 8400, true);
     tl_ctl_move(&s.ax[1].c, -8400, true);
     motor_t m[2] = {{0, 0, 0u, 2500u}, {0, 0, 0u, 2500u}};
@@ -148,6 +153,7 @@ int main(void)
     }
     tl_axes_enable(&s, (1u << TL_AXES) - 1u, &why);
     s.telem_every = 16;
+    s.ticks = TICK0;
     int32_t target = SHORT ? 60 : 2000;
     tl_ctl_move(&s.ax[0].c, -target, MODE != 0);
     tl_ctl_move(&s.ax[1].c, target, MODE != 0);
