@@ -168,8 +168,9 @@ TL_FOR_SIZE static uint8_t cmd_telemetry(tl_servo_t *s, const uint8_t *q, uint8_
     (void)why;
     (void)rep;
     hal_irq_off();
-    s->telem_every = tl_get_u16(&q[TLP_TELEMETRY_REQ_EVERY]);
-    s->telem_phase = s->telem_every ? (uint16_t)(s->ticks % s->telem_every) : 0u;
+    uint32_t every = tl_get_u16(&q[TLP_TELEMETRY_REQ_EVERY]), ticks = s->ticks;
+    s->telem_every = every;
+    s->telem_next = every ? ticks - ticks % every + every : 0u;   /* records at the multiples of every */
     hal_irq_on();
     return TLP_ST_OK;
 }

@@ -189,11 +189,10 @@ int main(void)
             rx_tail = rx_tail + 1u;
             tl_servo_rx_byte(&servo, b, tx_push);
         }
-        if (servo.telem_due) {
+        if (tl_servo_telemetry_due(&servo)) {
             uint8_t p[TLP_TELEM_LEN];
             uint8_t wire[TLP_MAX_WIRE];
             hal_irq_off();
-            servo.telem_due = false;
             tl_servo_telemetry(&servo, p);
             hal_irq_on();
             uint32_t n = (uint32_t)tl_frame_encode(servo.telem_seq++, TLP_TELEMETRY_CMD, p, TLP_TELEM_LEN,

@@ -75,6 +75,7 @@ static void commit_axis(tl_servo_t *s, uint32_t i, const tl_axis_cfg_t *cfg)
     a->enc = cfg->enc;
     hal_pwm_config(i, (uint32_t)pv(a, TLP_P_FDIV), (uint32_t)pv(a, TLP_P_PW0), (uint32_t)pv(a, TLP_P_PWMAX));
     hal_limit_block(i, pv(a, TLP_P_LIMIT_SW) != 0);
+    a->limit_mask = pv(a, TLP_P_LIMIT_SW) ? (uint8_t)(TLP_LIMIT_NEG | TLP_LIMIT_POS) : 0u;
 }
 
 /* The period in clock cycles and the link timeout in periods, from global parameters g. */

@@ -103,8 +103,8 @@ static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, 
         f |= TLP_FAULT_ENCODER;
         a->illegal_seen = e->illegal;
     }
-    /* the switches when LIMIT_SW is set, as a mask: no branch */
-    uint8_t lim = (uint8_t)(e->limits & (TLP_LIMIT_NEG | TLP_LIMIT_POS) & (0u - (uint32_t)(pv(a, TLP_P_LIMIT_SW) != 0)));
+    /* the switches when LIMIT_SW is set, by its derived mask: no branch */
+    uint8_t lim = (uint8_t)(e->limits & a->limit_mask);
     a->limits = lim;
     if (TL_UNLIKELY(lim)) {
         lim &= (uint8_t)~home_switch(a);

@@ -20,9 +20,8 @@ TL_FOR_SIZE void tl_servo_init(tl_servo_t *s)
     s->ticks = 0;
     s->link_idle_ticks = 0;
     s->telem_every = 0;
-    s->telem_phase = 0;
+    s->telem_next = 0;
     s->telem_seq = 0;
-    s->telem_due = false;
     s->bootloader_req = false;
     s->baud_div_pending = 0;
     s->loop_cycles_max = 0;
@@ -128,11 +127,17 @@ TL_HOT_LAYOUT void tl_servo_tick(tl_servo_t *s)
     _Static_assert(TL_AXES == 2, "the control iteration is written out for two axes");
     axis_tick(s, 0u, &t);
     axis_tick(s, 1u, &t);
-    /* telem_phase = ticks mod telem_every, counted: no divide in the interrupt */
-    if (s->telem_every && ++s->telem_phase >= s->telem_every) {
-        s->telem_phase = 0;
-        s->telem_due = true;
-    }
+}
+
+bool tl_servo_telemetry_due(tl_servo_t *s)
+{
+    uint32_t every = s->telem_every, ticks = s->ticks;   /* one read of the interrupt's count */
+    if (every == 0u || (int32_t)(ticks - s->telem_next) < 0)
+        return false;
+    do
+        s->telem_next += every;
+    while ((int32_t)(ticks - s->telem_next) >= 0);
+    return true;
 }
 
 void tl_servo_telemetry(const tl_servo_t *s, uint8_t *p)

@@ -35,6 +35,7 @@ typedef struct {
     int32_t offset;               /* set by homing */
     int32_t cmd;                  /* PWM command applied since the last tick (direction blocks included) */
     uint8_t limits;               /* TLP_LIMIT_* switches open at the last tick (0 with LIMIT_SW = 0) */
+    uint8_t limit_mask;           /* derived: both TLP_LIMIT_* bits with LIMIT_SW, else 0 */
     uint8_t recover;              /* TLP_LIMIT_* soft-limit side the axis was enabled outside of */
     uint8_t home;                 /* TLP_HOME_STATE_* */
     uint8_t home_phase;
@@ -69,10 +70,9 @@ typedef struct {
     tl_counters_t cnt;
     uint32_t ticks;               /* control periods since start */
     uint32_t link_idle_ticks;     /* control periods since the last valid command */
-    uint32_t telem_every;         /* TELEMETRY's u16; 32 bits: the iteration's count zero-extends nothing */
-    uint32_t telem_phase;         /* ticks mod telem_every */
+    uint32_t telem_every;         /* TELEMETRY's u16, periods between records (0: off) */
+    uint32_t telem_next;          /* the period count the next record is due at (a multiple of telem_every) */
     uint16_t telem_seq;
-    bool telem_due;
     bool bootloader_req;
     uint32_t baud_div_pending;    /* set the UART divisor once the reply is out (0 = none) */
     uint32_t loop_cycles_max;     /* worst control iteration (set by main.c) */
@@ -90,6 +90,10 @@ typedef bool (*tl_tx_fn)(const uint8_t *wire, uint32_t len);
 void tl_servo_init(tl_servo_t *s);
 void tl_servo_tick(tl_servo_t *s);
 void tl_servo_rx_byte(tl_servo_t *s, uint8_t byte, tl_tx_fn tx);
+/* Is a telemetry record due (the main loop's, not the interrupt's: the period count
+ * has reached telem_next)?  True once per due record; the next is due at the next
+ * multiple of telem_every, a record the loop was too late for is skipped. */
+bool tl_servo_telemetry_due(tl_servo_t *s);
 /* Build the telemetry payload (TLP_TELEM_LEN bytes) from the last tick. */
 void tl_servo_telemetry(const tl_servo_t *s, uint8_t *payload);
 uint32_t tl_servo_period_cycles(const tl_servo_t *s);

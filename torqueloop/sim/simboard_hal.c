@@ -147,10 +147,9 @@ void sb_rx(uint32_t now, const uint8_t *data, uint32_t len)
 void sb_tick(void)
 {
     tl_servo_tick(&servo);
-    if (servo.telem_due) {
+    if (tl_servo_telemetry_due(&servo)) {
         uint8_t p[TLP_TELEM_LEN];
         uint8_t wire[TLP_MAX_WIRE];
-        servo.telem_due = false;
         tl_servo_telemetry(&servo, p);
         uint32_t n = (uint32_t)tl_frame_encode(servo.telem_seq++, TLP_TELEMETRY_CMD, p, TLP_TELEM_LEN, wire,
                                                sizeof wire);
