@@ -315,6 +315,11 @@ static inline __attribute__((always_inline)) int32_t law_output(tl_ctl_t *c, int
 
 static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_ctl_params_t *p, int32_t pos, bool run_law)
 {
+    /* The law's kind and the operands of its first products read first: the instructions that use
+     * them would otherwise wait for their loads (2 cycles each on tl_cpu_pipe). */
+    uint32_t kind = p->law;
+    int32_t kd = p->kd_q16, vel = c->vel_q8, ki_e_max = c->d.ki_e_max;
+    int64_t ki_dt = c->d.ki_dt_q32;
     /* The error, q16 counts: 32 bits within +-32767 counts (the usual case), saturated beyond. */
     /* sp - pos 2^16 by words: pos 2^16 is (pos >> 16 : pos << 16), no 64-bit shift */
     uint32_t slo = (uint32_t)c->sp_q16, plo = (uint32_t)pos << 16;
@@ -328,7 +333,7 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
         c->err_counts = sat31((e_q16 + 32768) >> 16);
         e = e_q16 < 0 ? -0x7FFFFFFF : 0x7FFFFFFF;
     }
-    if (TL_UNLIKELY(!run_law || p->law == TL_LAW_OFF)) {
+    if (TL_UNLIKELY(!run_law || kind == TL_LAW_OFF)) {
         c->integ_q32 = 0;
         c->dither_n = 0;
         return 0;
@@ -338,21 +343,21 @@ static inline __attribute__((always_inline)) int32_t law(tl_ctl_t *c, const tl_c
     int32_t limit = p->cmd_limit;
     /* eq. (20): P;  eq. (21): + Kd * (0 - v);  eq. (22): + Ki * integral(e) */
     int64_t pd_q16 = mul32(p->kp_q16, e) >> 16;
-    if (p->law >= TL_LAW_PD)
-        pd_q16 -= mul32(p->kd_q16, c->vel_q8) >> 8;
+    if (kind >= TL_LAW_PD)
+        pd_q16 -= mul32(kd, vel) >> 8;
     int32_t i_q16 = 0;
-    if (TL_LIKELY(p->law == TL_LAW_PID)) {
+    if (TL_LIKELY(kind == TL_LAW_PID)) {
         int32_t e_sign = (e > 0) - (e < 0);
         bool frozen = (c->sat_sign != 0) & (e_sign == c->sat_sign);   /* & not &&: no branch */
         if (TL_UNLIKELY(c->d.friction) && p->izone_q16 != 0 && (e < 0 ? -e : e) <= p->izone_q16)
             frozen = true;   /* the hunting guard */
         if (TL_LIKELY(!frozen)) {
             int32_t ek = e;
-            if (TL_UNLIKELY(e > c->d.ki_e_max))
-                ek = c->d.ki_e_max;
-            else if (TL_UNLIKELY(e < -c->d.ki_e_max))
-                ek = -c->d.ki_e_max;
-            int64_t i = c->integ_q32 + (mul64u32s(c->d.ki_dt_q32, ek) >> 16);
+            if (TL_UNLIKELY(e > ki_e_max))
+                ek = ki_e_max;
+            else if (TL_UNLIKELY(e < -ki_e_max))
+                ek = -ki_e_max;
+            int64_t i = c->integ_q32 + (mul64u32s(ki_dt, ek) >> 16);
             /* clamp to +-cmd_limit q32, whose low word is zero: compare high words */
             int32_t ih = (int32_t)(i >> 32);
             if (TL_UNLIKELY(ih >= limit && (ih > limit || (uint32_t)i != 0u)))
