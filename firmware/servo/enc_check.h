@@ -54,17 +54,19 @@ static inline void enc_check_reset(tl_axis_t *a) { a->enc_dir = 0; }
  * needs 64 bits. */
 static inline __attribute__((always_inline)) uint16_t enc_check(tl_axis_t *a, int32_t cmd0, int32_t slack)
 {
-    int32_t cmd = a->cmd;
+    /* what it reads first: the tests and products would otherwise wait for the loads (2 cycles
+     * on tl_cpu_pipe) */
+    int32_t cmd = a->cmd, vlo = a->enc_vlo_q8, k_q8 = a->enc.k_q8;
+    int8_t edir = a->enc_dir;
     int8_t dir = cmd > cmd0 ? 1 : (cmd < -cmd0 ? -1 : 0);
-    if (TL_UNLIKELY(dir == 0 || dir != a->enc_dir)) {
+    if (TL_UNLIKELY(dir == 0 || dir != edir)) {
         a->enc_dir = dir;
         a->enc_ref = a->pos;
         a->enc_exp_q24 = 0;
         a->enc_vlo_q8 = dir < 0 ? -a->c.vel_q8 : (dir ? a->c.vel_q8 : 0);
         return 0;
     }
-    int32_t v_ss = ((dir > 0 ? cmd : -cmd) - cmd0) * a->enc.k_q8;
-    int32_t vlo = a->enc_vlo_q8;
+    int32_t v_ss = ((dir > 0 ? cmd : -cmd) - cmd0) * k_q8;
     if (v_ss <= vlo) {
         vlo = v_ss;
     } else {

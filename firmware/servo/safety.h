@@ -40,20 +40,22 @@ static inline __attribute__((always_inline)) uint8_t soft_side(const tl_axis_t *
 #define STALL_DV_Q8 (20 * 256)   /* 20 counts/s */
 static inline __attribute__((always_inline)) uint16_t stall_check(tl_axis_t *a)
 {
-    int32_t lim = pv(a, TLP_P_STALL_CMD);
-    int8_t dir = a->cmd >= lim ? 1 : (a->cmd <= -lim ? -1 : 0);
-    if (TL_UNLIKELY(dir == 0 || dir != a->stall_dir)) {
+    /* everything it reads first: the tests would otherwise wait for the loads (2 cycles on tl_cpu_pipe) */
+    int32_t lim = pv(a, TLP_P_STALL_CMD), cmd = a->cmd, ref = a->stall_ref, vr = a->stall_vel_q8, v = a->c.vel_q8;
+    int8_t sdir = a->stall_dir;
+    uint32_t ticks = a->stall_ticks, limit = a->stall_limit_ticks;
+    int8_t dir = cmd >= lim ? 1 : (cmd <= -lim ? -1 : 0);
+    if (TL_UNLIKELY(dir == 0 || dir != sdir)) {
         a->stall_dir = dir;
         a->stall_ref = a->pos;
-        a->stall_vel_q8 = a->c.vel_q8;
+        a->stall_vel_q8 = v;
         a->stall_ticks = 0;
         return 0;
     }
     /* each reference only ever moves on in dir */
-    int32_t moved = (int32_t)((uint32_t)a->pos - (uint32_t)a->stall_ref);
+    int32_t moved = (int32_t)((uint32_t)a->pos - (uint32_t)ref);
     /* the speed's rise in dir, 32-bit: when v is past the reference in dir the difference
      * is below 2^32, exact as an unsigned one */
-    int32_t v = a->c.vel_q8, vr = a->stall_vel_q8;
     bool progress = false;
     if (dir > 0 ? moved > 0 : moved < 0) {
         a->stall_ref = a->pos;
@@ -61,14 +63,15 @@ static inline __attribute__((always_inline)) uint16_t stall_check(tl_axis_t *a)
     }
     if (dir > 0 ? v > vr && (uint32_t)v - (uint32_t)vr > (uint32_t)STALL_DV_Q8
                 : v < vr && (uint32_t)vr - (uint32_t)v > (uint32_t)STALL_DV_Q8) {
-        a->stall_vel_q8 = a->c.vel_q8;
+        a->stall_vel_q8 = v;
         progress = true;
     }
     if (progress) {
         a->stall_ticks = 0;
         return 0;
     }
-    return ++a->stall_ticks >= a->stall_limit_ticks ? TLP_FAULT_RUNAWAY : 0u;
+    a->stall_ticks = ++ticks;
+    return ticks >= limit ? TLP_FAULT_RUNAWAY : 0u;
 }
 
 /* The switch homing is looking for does not trip a limit fault. */
@@ -95,16 +98,21 @@ static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, 
                                                                   const tl_enc_sample_t *e,
                                                                   const tick_faults_t *t, uint8_t *out)
 {
+    /* read first: the tests below would otherwise wait for their loads (2 cycles on tl_cpu_pipe);
+     * nothing before the tests changes them */
+    uint32_t illegal_seen = a->illegal_seen;
+    uint8_t limit_mask = a->limit_mask;
+    bool enabled = a->enabled;
     /* latch_faults, the e-stop input and the bridge input */
     uint16_t f = t->all | latch_bridge(i, t->safety);
     if (TL_UNLIKELY(e->bridge_fault))
         f |= TLP_FAULT_BRIDGE;
-    if (TL_UNLIKELY(e->illegal != a->illegal_seen)) {
+    if (TL_UNLIKELY(e->illegal != illegal_seen)) {
         f |= TLP_FAULT_ENCODER;
         a->illegal_seen = e->illegal;
     }
     /* the switches when LIMIT_SW is set, by its derived mask: no branch */
-    uint8_t lim = (uint8_t)(e->limits & a->limit_mask);
+    uint8_t lim = (uint8_t)(e->limits & limit_mask);
     a->limits = lim;
     if (TL_UNLIKELY(lim)) {
         lim &= (uint8_t)~home_switch(a);
@@ -116,7 +124,7 @@ static inline __attribute__((always_inline)) uint16_t axis_checks(tl_axis_t *a, 
     /* not marked unlikely: the return's block then stays in line and the branch reaches it
      * directly, where a cold block at the iteration's far end costs the enabled axis a branch
      * over a jump (out of a conditional branch's 4 KiB reach: 3 cycles on tl_cpu_pipe) */
-    if (!a->enabled)
+    if (!enabled)
         return f;
     f |= t->enabled;
     if (TL_UNLIKELY((t->safety & TL_HAL_SAFE_FORCED) && f == 0u))
