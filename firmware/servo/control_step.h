@@ -76,7 +76,8 @@ static inline __attribute__((always_inline)) bool profile_brake(tl_ctl_t *c, int
     int32_t nb = (int32_t)c->prof_b - a;
     uint32_t p1 = c->prof_p1;
     *w = 0;
-    if (TL_UNLIKELY(p1 != 0u && (int32_t)p1 >= nb)) {   /* the larger pending speed, in its place */
+    bool pending = (p1 != 0u) & ((int32_t)p1 >= nb);   /* & not &&: one branch */
+    if (TL_UNLIKELY(pending)) {                      /* the larger pending speed, in its place */
         *w = (int32_t)p1;
         c->prof_p1 = p1 = c->prof_p2;
         c->prof_p2 = 0u;
@@ -122,7 +123,7 @@ static inline __attribute__((always_inline)) void profile(tl_ctl_t *c)
             }
             r = (uint32_t)c->prof_eres + (uint32_t)c->prof_e32;   /* R < 2^31: the low words give it */
         }
-        if (v >= vmax) {                             /* braking from vmax: R = d - S(vmax), which E may */
+        if (TL_LIKELY(v >= vmax)) {                  /* braking from vmax: R = d - S(vmax), which E may */
             b = vmax;                                /* have underestimated on reaching vmax (by <= v); */
             uint32_t dl = (uint32_t)c->target_q16 - (uint32_t)c->sp_q16;   /* R < 2^31: low words */
             r = ((dl ^ (uint32_t)s) - (uint32_t)s) - (uint32_t)c->d.s_vmax;
