@@ -3,10 +3,11 @@
  * scripts/profile_tick.py: both axes PID at 20 kHz with the bench's gains,
  * a step (MODE 0) or trapezoid (MODE 1) move of 2000 counts (SHORT 1: 60
  * counts at VMAX 50 000, AMAX 5e7, which brakes inside the run), both decoders
- * counting 300 counts at 125 000 counts/s and then still, telemetry every 16
- * periods (DITHER_AMP > 0: with that square-wave dither, half-period 2 samples; KVFF_Q16,
- * KAFF_Q16 > 0: with that velocity and acceleration feed-forward; TICK0: the period
- * count to start from, which moves the runaway checks' phases against the moves).
+ * counting 300 counts at 125 000 counts/s and then still (the telemetry's
+ * cadence is the main loop's, tl_servo_telemetry_due: not here; DITHER_AMP > 0:
+ * with that square-wave dither, half-period 2 samples; KVFF_Q16, KAFF_Q16 > 0:
+ * with that velocity and acceleration feed-forward; TICK0: the period count to
+ * start from, which moves the runaway checks' phases against the moves).
  * MODE 2, the board image's case (experiment.run_fast_loop with trapezoids):
  * Table 1's PID gains, the parameters' defaults otherwise (VMAX, AMAX, the
  * runaway and following checks; the link watchdog's the longest, nothing
@@ -118,7 +119,6 @@ int main(void)
         tl_param_set(&s, ax, TLP_P_VEL_MODE, 1, &why);
     }
     tl_axes_enable(&s, (1u << TL_AXES) - 1u, &why);
-    s.telem_every = 20;
     s.ticks = TICK0;
     tl_ctl_move(&s.ax[0].c, 8400, true);
     tl_ctl_move(&s.ax[1].c, -8400, true);
@@ -152,7 +152,6 @@ int main(void)
         }
     }
     tl_axes_enable(&s, (1u << TL_AXES) - 1u, &why);
-    s.telem_every = 16;
     s.ticks = TICK0;
     int32_t target = SHORT ? 60 : 2000;
     tl_ctl_move(&s.ax[0].c, -target, MODE != 0);
