@@ -1114,6 +1114,37 @@ static int ctl_main(void)
     return 0;
 }
 
+/* Telemetry's cadence (tl_servo_telemetry_due, the main loop's): a record due at each
+ * multiple of TELEMETRY's every, once; a loop too late for some records gets one, the next
+ * again at a multiple; 0 stops them. */
+static void test_telemetry_cadence(void)
+{
+    fresh();
+    ticks(37);
+    uint8_t q[2];
+    tl_put_u16(q, 20);
+    CHECK(send_cmd(TLP_CMD_TELEMETRY, q, 2) == TLP_ST_OK, "telemetry every 20");
+    uint32_t due[8], n = 0;
+    for (int k = 0; k < 60; k++) {
+        ticks(1);
+        if (tl_servo_telemetry_due(&sv) && n < 8)
+            due[n++] = sv.ticks;
+        CHECK(!tl_servo_telemetry_due(&sv), "a record is due once (period %u)", sv.ticks);
+    }
+    CHECK(n == 3 && due[0] == 40 && due[1] == 60 && due[2] == 80, "due at 40, 60, 80: %u records, first %u",
+          n, n ? due[0] : 0u);
+    ticks(45);   /* 142: the loop missed 100, 120 and 140 */
+    CHECK(tl_servo_telemetry_due(&sv) && !tl_servo_telemetry_due(&sv), "a late loop gets one record");
+    ticks(17);
+    CHECK(!tl_servo_telemetry_due(&sv), "none before 160");
+    ticks(1);
+    CHECK(tl_servo_telemetry_due(&sv), "the next at 160, a multiple again");
+    tl_put_u16(q, 0);
+    CHECK(send_cmd(TLP_CMD_TELEMETRY, q, 2) == TLP_ST_OK, "telemetry off");
+    ticks(100);
+    CHECK(!tl_servo_telemetry_due(&sv), "off: none due");
+}
+
 int main(int argc, char **argv)
 {
     if (argc >= 2 && strcmp(argv[1], "ctl") == 0)
@@ -1137,6 +1168,7 @@ int main(int argc, char **argv)
     test_servo_auth();
     test_servo_flood();
     test_profile();
+    test_telemetry_cadence();
     printf("%u checks, %u failures\n", checks, failures);
     return failures ? 1 : 0;
 }
