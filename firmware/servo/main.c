@@ -135,6 +135,9 @@ static bool tx_push_reserve(const uint8_t *wire, uint32_t len, uint32_t reserve)
 
 static bool tx_push(const uint8_t *wire, uint32_t len) { return tx_push_reserve(wire, len, 0u); }
 
+/* telemetry leaves room for a reply: a busy stream never starves the commands */
+static bool tx_push_telemetry(const uint8_t *wire, uint32_t len) { return tx_push_reserve(wire, len, TLP_MAX_WIRE); }
+
 static void tx_pump(void)
 {
     while (tx_tail != tx_head && (TL_UART_STATUS & TL_UART_STATUS_TX_READY_MSK)) {
@@ -189,18 +192,7 @@ int main(void)
             rx_tail = rx_tail + 1u;
             tl_servo_rx_byte(&servo, b, tx_push);
         }
-        if (tl_servo_telemetry_due(&servo)) {
-            uint8_t p[TLP_TELEM_LEN];
-            uint8_t wire[TLP_MAX_WIRE];
-            hal_irq_off();
-            tl_servo_telemetry(&servo, p);
-            hal_irq_on();
-            uint32_t n = (uint32_t)tl_frame_encode(servo.telem_seq++, TLP_TELEMETRY_CMD, p, TLP_TELEM_LEN,
-                                                   wire, sizeof wire);
-            /* telemetry leaves room for a reply: a busy stream never starves the commands */
-            if (!tx_push_reserve(wire, n, TLP_MAX_WIRE) && servo.cnt.tx_dropped != 0xFFFFu)
-                servo.cnt.tx_dropped++;
-        }
+        tl_servo_stream_telemetry(&servo, tx_push_telemetry);
         tx_pump();
         uint32_t period = tl_servo_period_cycles(&servo);
         if (period != tick_period) {

@@ -140,6 +140,20 @@ bool tl_servo_telemetry_due(tl_servo_t *s)
     return true;
 }
 
+void tl_servo_stream_telemetry(tl_servo_t *s, tl_tx_fn tx)
+{
+    if (!tl_servo_telemetry_due(s))
+        return;
+    uint8_t p[TLP_TELEM_LEN];
+    uint8_t wire[TLP_MAX_WIRE];
+    hal_irq_off();   /* one period's values, not two */
+    tl_servo_telemetry(s, p);
+    hal_irq_on();
+    uint32_t n = (uint32_t)tl_frame_encode(s->telem_seq++, TLP_TELEMETRY_CMD, p, TLP_TELEM_LEN, wire, sizeof wire);
+    if (!tx(wire, n) && s->cnt.tx_dropped != 0xFFFFu)
+        s->cnt.tx_dropped++;
+}
+
 void tl_servo_telemetry(const tl_servo_t *s, uint8_t *p)
 {
     tl_put_u32(&p[TLP_TELEM_TIME_US], (uint32_t)((uint64_t)s->ticks * (uint32_t)gv(s, TLP_P_PERIOD_US)));

@@ -94,6 +94,9 @@ void tl_servo_rx_byte(tl_servo_t *s, uint8_t byte, tl_tx_fn tx);
  * has reached telem_next)?  True once per due record; the next is due at the next
  * multiple of telem_every, a record the loop was too late for is skipped. */
 bool tl_servo_telemetry_due(tl_servo_t *s);
+/* The main loop's telemetry: when a record is due, the last tick's values (taken with the
+ * interrupt off) framed and handed to tx; a record tx refuses is counted (tx_dropped). */
+void tl_servo_stream_telemetry(tl_servo_t *s, tl_tx_fn tx);
 /* Build the telemetry payload (TLP_TELEM_LEN bytes) from the last tick. */
 void tl_servo_telemetry(const tl_servo_t *s, uint8_t *payload);
 uint32_t tl_servo_period_cycles(const tl_servo_t *s);

@@ -147,15 +147,7 @@ void sb_rx(uint32_t now, const uint8_t *data, uint32_t len)
 void sb_tick(void)
 {
     tl_servo_tick(&servo);
-    if (tl_servo_telemetry_due(&servo)) {
-        uint8_t p[TLP_TELEM_LEN];
-        uint8_t wire[TLP_MAX_WIRE];
-        tl_servo_telemetry(&servo, p);
-        uint32_t n = (uint32_t)tl_frame_encode(servo.telem_seq++, TLP_TELEMETRY_CMD, p, TLP_TELEM_LEN, wire,
-                                               sizeof wire);
-        if (!tx(wire, n) && servo.cnt.tx_dropped != 0xFFFFu)
-            servo.cnt.tx_dropped++;
-    }
+    tl_servo_stream_telemetry(&servo, tx);
     if (servo.baud_div_pending) {
         baud_div = servo.baud_div_pending;
         servo.baud_div_pending = 0;
